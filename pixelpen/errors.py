@@ -1,0 +1,82 @@
+"""The one exception hierarchy of pixelpen: every error a user can meet derives from PixelpenError."""
+
+from __future__ import annotations
+
+
+class PixelpenError(Exception):
+    """Base of every error pixelpen raises on purpose."""
+
+
+class ConfigError(PixelpenError, ValueError):
+    """A setting, option or profile value is missing, unknown or out of range."""
+
+
+class URLError(ConfigError):
+    """A device URL could not be understood (unknown scheme, bad option, bad target)."""
+
+
+class ParseError(PixelpenError, ValueError):
+    """Input text or bytes are malformed; says where (source, line/column or byte offset) and what."""
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        source: str | None = None,
+        line: int | None = None,
+        column: int | None = None,
+        offset: int | None = None,
+        token: object = None,
+    ) -> None:
+        self.message = message
+        self.source = source
+        self.line = line
+        self.column = column
+        self.offset = offset
+        self.token = token
+        super().__init__(self._format())
+
+    def _format(self) -> str:
+        where = []
+        if self.source:
+            where.append(str(self.source))
+        if self.line is not None:
+            where.append(f"line {self.line}" + (f", column {self.column}" if self.column is not None else ""))
+        if self.offset is not None:
+            where.append(f"byte offset {self.offset}")
+        text = self.message
+        if self.token is not None:
+            text += f" (found {self.token!r})"
+        return f"{': '.join([', '.join(where), text]) if where else text}"
+
+
+class ProtocolError(PixelpenError):
+    """A device answered with an error: carries the device's own code and the command that caused it."""
+
+    def __init__(self, message: str, *, code: object = None, command: object = None, device: str | None = None) -> None:
+        self.code = code
+        self.command = command
+        self.device = device
+        parts = [message]
+        if code is not None:
+            parts.append(f"device code {code}")
+        if command is not None:
+            parts.append(f"command {command!r}")
+        prefix = f"{device}: " if device else ""
+        super().__init__(prefix + "; ".join(parts))
+
+
+class LinkError(PixelpenError, OSError):
+    """The transport failed: timeout, disconnect, a port that cannot be opened."""
+
+
+class LinkTimeout(LinkError, TimeoutError):
+    """A read or write did not complete within its timeout."""
+
+
+class Disconnected(LinkError, ConnectionError):
+    """The device went away (unplugged, link dropped, power lost)."""
+
+
+class TraceMismatch(LinkError):
+    """A replayed trace diverged from what the program sent: says at which byte."""

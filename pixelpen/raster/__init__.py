@@ -1,0 +1,1 @@
+"""Raster engine: scan conversion into a numpy framebuffer, pixel formats, colour, image operations, damage."""

@@ -1,0 +1,1 @@
+"""Simulators written from the devices' documentation, reached through the same transports as real hardware."""

@@ -1,0 +1,173 @@
+"""The device URL grammar, parsed in one place.
+
+    URL     := scheme ":" target [ "?" options ]
+    target  := "[" nested-url "]" | text-without-"?"
+    options := key "=" value { "&" key "=" value }     (a bare key means "true")
+
+The scheme names a device model, a file type or ``sim``.  A target that is itself a URL
+with its own query (a pyserial URL such as ``rfc2217://host:4000?logging=debug``) is
+enclosed in square brackets, so the two queries never mix::
+
+    hp7475a:[rfc2217://plotter-host:4000?logging=debug]?paper=a3
+    hp7475a:/dev/ttyUSB0?baud=9600&paper=a4
+    sim:hp7475a?paper=a4
+    png:out/scene.png?size=800x600
+
+Brackets nest, so ``[socket://[::1]:4000]`` keeps its IPv6 brackets.  Values are
+percent-decoded.  A target without brackets ends at the first ``?``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Iterable, Mapping, TypeVar
+from urllib.parse import quote, unquote
+
+from .errors import URLError
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class DeviceURL:
+    """A parsed device URL: scheme, target and the options given after ``?``."""
+
+    scheme: str
+    target: str
+    options: Mapping[str, str] = field(default_factory=dict)
+    text: str = ""
+
+    def __str__(self) -> str:
+        return self.text or format_url(self.scheme, self.target, self.options)
+
+
+def parse_url(url: str) -> DeviceURL:
+    """Split ``scheme:target?options`` into its parts (see the module docstring)."""
+    if not isinstance(url, str) or not url:
+        raise URLError(f"a device URL must be a non-empty string like 'svg:out.svg', got {url!r}")
+    scheme, sep, rest = url.partition(":")
+    if not sep or not scheme:
+        raise URLError(f"{url!r}: expected 'scheme:target', e.g. 'png:out.png' or 'sim:hp7475a'")
+    if not scheme.replace("-", "").replace("_", "").replace(".", "").isalnum():
+        raise URLError(f"{url!r}: scheme {scheme!r} may hold only letters, digits, '-', '_' and '.'")
+    scheme = scheme.lower()
+    if rest.startswith("["):
+        end = _matching_bracket(rest, url)
+        target, tail = rest[1:end], rest[end + 1 :]
+        if tail and not tail.startswith("?"):
+            raise URLError(f"{url!r}: after ']' expected '?options' or the end, found {tail!r}")
+        query = tail[1:]
+    else:
+        raw_target, _, query = rest.partition("?")
+        target = unquote(raw_target)
+    return DeviceURL(scheme, target, _parse_query(query, url), url)
+
+
+def _matching_bracket(rest: str, url: str) -> int:
+    depth = 0
+    for i, ch in enumerate(rest):
+        if ch == "[":
+            depth += 1
+        elif ch == "]":
+            depth -= 1
+            if depth == 0:
+                return i
+    raise URLError(f"{url!r}: '[' at the start of the target has no matching ']'")
+
+
+def _parse_query(query: str, url: str) -> dict[str, str]:
+    options: dict[str, str] = {}
+    if not query:
+        return options
+    for part in query.split("&"):
+        if not part:
+            continue
+        key, eq, value = part.partition("=")
+        key = unquote(key).strip().lower()
+        if not key:
+            raise URLError(f"{url!r}: empty option name in {part!r}")
+        if key in options:
+            raise URLError(f"{url!r}: option {key!r} given twice")
+        options[key] = unquote(value) if eq else "true"
+    return options
+
+
+def format_url(scheme: str, target: str, options: Mapping[str, object] | None = None) -> str:
+    """Build a URL string that :func:`parse_url` reads back to the same parts."""
+    needs_brackets = "?" in target or target.startswith("[")
+    text = f"{scheme}:" + (f"[{target}]" if needs_brackets else quote(target, safe="/:@.-_~,=+;!$'()*\\ "))
+    if options:
+        text += "?" + "&".join(f"{quote(str(k))}={quote(str(v), safe='/:.,-_x')}" for k, v in options.items())
+    return text
+
+
+class Options:
+    """Typed access to a URL's options that refuses unknown ones, naming those it knows."""
+
+    def __init__(self, url: DeviceURL, known: Iterable[str]) -> None:
+        self.url = url
+        self.known = sorted(set(known))
+        unknown = sorted(set(url.options) - set(self.known))
+        if unknown:
+            hint = ""
+            if "://" in url.target or any(k in {"logging", "timeout", "baudrate"} for k in unknown):
+                hint = " (options of a nested port URL go inside brackets: scheme:[rfc2217://host:port?logging=debug])"
+            raise URLError(
+                f"{url}: unknown option(s) {', '.join(unknown)} for scheme {url.scheme!r}; "
+                f"known: {', '.join(self.known) or 'none'}{hint}"
+            )
+
+    def get(self, key: str, convert: Callable[[str], T], default: T) -> T:
+        """Return option ``key`` converted, or ``default``; a bad value names the option and URL."""
+        if key not in self.url.options:
+            return default
+        raw = self.url.options[key]
+        try:
+            return convert(raw)
+        except (ValueError, TypeError) as exc:
+            raise URLError(f"{self.url}: option {key}={raw!r} is not valid: {exc}") from None
+
+    def __contains__(self, key: str) -> bool:
+        return key in self.url.options
+
+
+def parse_bool(text: str) -> bool:
+    """Read an option value as a boolean (1/0, true/false, yes/no, on/off)."""
+    low = text.strip().lower()
+    if low in {"1", "true", "yes", "on"}:
+        return True
+    if low in {"0", "false", "no", "off"}:
+        return False
+    raise ValueError(f"expected true/false, got {text!r}")
+
+
+_MM_PER = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "px": 25.4 / 96}
+PAPER_MM = {
+    "a5": (148.0, 210.0), "a4": (210.0, 297.0), "a3": (297.0, 420.0), "a2": (420.0, 594.0),
+    "letter": (215.9, 279.4), "a": (215.9, 279.4), "tabloid": (279.4, 431.8), "b": (279.4, 431.8),
+}
+
+
+def parse_size(text: str, default_unit: str = "px") -> tuple[float, float, str]:
+    """Read ``WxH[unit]`` (``800x600``, ``210x297mm``) or a paper name (``a4``) as (w, h, unit)."""
+    low = text.strip().lower()
+    if low in PAPER_MM:
+        w, h = PAPER_MM[low]
+        return w, h, "mm"
+    unit = default_unit
+    for u in _MM_PER:
+        if low.endswith(u):
+            unit, low = u, low[: -len(u)]
+            break
+    w_text, sep, h_text = low.partition("x")
+    if not sep:
+        raise ValueError(f"expected WIDTHxHEIGHT[unit] or a paper name ({', '.join(PAPER_MM)}), got {text!r}")
+    w, h = float(w_text), float(h_text)
+    if not (w > 0 and h > 0) or w != w or h != h:
+        raise ValueError(f"size must be positive, got {text!r}")
+    return w, h, unit
+
+
+def to_mm(value: float, unit: str) -> float:
+    """Convert a length in ``unit`` (mm, cm, in, pt, px at 96 dpi) to millimetres."""
+    return value * _MM_PER[unit]

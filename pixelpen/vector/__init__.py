@@ -1,0 +1,1 @@
+"""Vector engine: display lists of pen strokes, hatching, stroke text, SVG import, path optimisation, motion model."""
