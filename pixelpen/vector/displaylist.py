@@ -24,6 +24,8 @@ class DisplayList:
     layers: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
     layer_names: dict[int, str] = field(default_factory=dict)
     unit_mm: float = 1.0
+    pen_colours: dict[int, str] = field(default_factory=dict)
+    """Colour (``#rrggbb``) of each pen number used, for previews; missing pens draw black."""
 
     def __post_init__(self) -> None:
         self.points = np.ascontiguousarray(self.points, dtype=np.float64).reshape(-1, 2)
@@ -44,6 +46,7 @@ class DisplayList:
         layers: Sequence[int] | int = 0,
         layer_names: dict[int, str] | None = None,
         unit_mm: float = 1.0,
+        pen_colours: dict[int, str] | None = None,
     ) -> "DisplayList":
         """Build a display list from a sequence of (N, 2) arrays (empty arrays are skipped)."""
         polys = [np.asarray(p, dtype=np.float64).reshape(-1, 2) for p in polylines]
@@ -53,7 +56,7 @@ class DisplayList:
         points = np.concatenate([polys[i] for i in keep]) if keep else np.zeros((0, 2))
         pen_arr = np.broadcast_to(np.asarray(pens, dtype=np.int32), (len(polys),))[keep] if polys else np.zeros(0, np.int32)
         layer_arr = np.broadcast_to(np.asarray(layers, dtype=np.int32), (len(polys),))[keep] if polys else np.zeros(0, np.int32)
-        return cls(points, offsets, pen_arr, layer_arr, dict(layer_names or {}), unit_mm)
+        return cls(points, offsets, pen_arr, layer_arr, dict(layer_names or {}), unit_mm, dict(pen_colours or {}))
 
     def __len__(self) -> int:
         return len(self.offsets) - 1
@@ -121,7 +124,10 @@ class DisplayList:
         src_start = self.offsets[order][stroke_of_point]
         src_len = lengths[stroke_of_point]
         idx = np.where(rev[stroke_of_point], src_start + src_len - 1 - k, src_start + k)
-        return DisplayList(self.points[idx], new_offsets, self.pens[order], self.layers[order], dict(self.layer_names), self.unit_mm)
+        return DisplayList(
+            self.points[idx], new_offsets, self.pens[order], self.layers[order],
+            dict(self.layer_names), self.unit_mm, dict(self.pen_colours),
+        )
 
     def select(self, mask: np.ndarray) -> "DisplayList":
         """A new display list with only the strokes where ``mask`` is true (order kept)."""
@@ -134,12 +140,14 @@ class DisplayList:
         if not lists:
             return DisplayList()
         names: dict[int, str] = {}
+        colours: dict[int, str] = {}
         for d in lists:
             names.update(d.layer_names)
+            colours.update(d.pen_colours)
         pts = np.concatenate([d.points for d in lists])
         base = np.cumsum([0] + [len(d.points) for d in lists[:-1]])
         offsets = np.concatenate([[0]] + [d.offsets[1:] + b for d, b in zip(lists, base)])
         return DisplayList(
             pts, offsets, np.concatenate([d.pens for d in lists]), np.concatenate([d.layers for d in lists]),
-            names, lists[0].unit_mm,
+            names, lists[0].unit_mm, colours,
         )
