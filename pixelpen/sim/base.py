@@ -1,0 +1,81 @@
+"""What every simulated device offers its transports: bytes in, bytes out, time, faults; and the model registry."""
+
+from __future__ import annotations
+
+from typing import Callable, Protocol, runtime_checkable
+
+from ..clock import Clock
+from ..errors import URLError
+
+
+@runtime_checkable
+class WireDevice(Protocol):
+    """The device side of a wire protocol, as a transport (pty, pyserial URL, pyusb backend) sees it.
+
+    The transport calls ``advance_to(clock.now())`` before it looks at the device, feeds host bytes
+    with ``receive`` (only while ``ready_to_receive`` when hardware handshake is on), and drains the
+    device's answers with ``take_output``.  Devices keep time on ``clock``: a simulated plot takes the
+    device's real time unless the clock is a SimulatedClock.
+    """
+
+    model: str
+    clock: Clock
+
+    def receive(self, data: bytes) -> None:
+        """Accept bytes from the host (any chunking; a full buffer behaves as the device's does)."""
+
+    def take_output(self) -> bytes:
+        """Return and forget the bytes the device has sent to the host so far."""
+
+    def advance_to(self, t: float) -> None:
+        """Run the device (execute buffered commands, move the pen) up to clock time ``t``."""
+
+    @property
+    def ready_to_receive(self) -> bool:
+        """Hardware handshake line (CTS/DTR as the device drives it): True while it can take bytes."""
+
+    def next_event_time(self) -> float | None:
+        """Clock time at which the device's state next changes by itself (None: idle until fed)."""
+
+    def inject(self, fault: str) -> None:
+        """Apply a device-level fault now: 'power-loss', 'paper-lever', 'pause-button', 'reset'."""
+
+    def close(self) -> None:
+        """Stop the device and release what it holds (its paper stays readable)."""
+
+
+SimulatorFactory = Callable[..., WireDevice]
+_REGISTRY: dict[str, SimulatorFactory] = {}
+
+
+def register_simulator(model: str, factory: SimulatorFactory) -> None:
+    """Make ``model`` available to ``create_simulator`` and ``sim:``/``sim://`` URLs."""
+    _REGISTRY[model.lower()] = factory
+
+
+def create_simulator(model: str, **options: str) -> WireDevice:
+    """Build the simulator of ``model`` with URL options (strings); unknown models list the known ones."""
+    _load_builtin()
+    try:
+        factory = _REGISTRY[model.lower()]
+    except KeyError:
+        raise URLError(f"no simulator for model {model!r}; known: {', '.join(sorted(_REGISTRY)) or 'none'}") from None
+    return factory(**options)
+
+
+def simulator_models() -> list[str]:
+    """Names of all registered simulator models."""
+    _load_builtin()
+    return sorted(_REGISTRY)
+
+
+def _load_builtin() -> None:
+    """Import the simulator modules shipped with pixelpen so they register themselves."""
+    import importlib
+    import pkgutil
+
+    from .. import sim
+
+    for info in pkgutil.iter_modules(sim.__path__):
+        if info.name not in ("base",) and not info.name.startswith("_"):
+            importlib.import_module(f"{sim.__name__}.{info.name}")
