@@ -58,6 +58,8 @@ class Fill:
     """Hatch spacing in millimetres; None = the pen/line width of the device."""
     pattern: tuple[tuple[int, ...], ...] | None = None
     """For ``pattern``: rows of 0/1 cells, repeated across the area in device pixels."""
+    outline: bool = True
+    """Also draw the boundary with the line attributes (GKS fill areas have none; plotters want one)."""
 
     def __post_init__(self) -> None:
         if self.style not in ("hollow", "solid", "hatch", "crosshatch", "pattern"):

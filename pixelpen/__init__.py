@@ -1,0 +1,23 @@
+"""pixelpen: one drawing API for pen plotters, framebuffer panels and files, with wire-level simulators.
+
+``pixelpen.open(url)`` opens a display (``png:out.png``, ``svg:out.svg?size=a4``, ``sim:hp7475a``);
+pictures are built from the primitives in ``pixelpen.display.picture``.
+"""
+
+from __future__ import annotations
+
+from .display.base import Display
+from .display.picture import (
+    Arc, Bezier, BSpline, Circle, Ellipse, Fill, Image, Marker, Picture, Polygon, Polyline, Rectangle, Segment, Style,
+    Text,
+)
+from .display.registry import known_schemes, open_display as open
+from .errors import ConfigError, LinkError, ParseError, PixelpenError, ProtocolError, URLError
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "open", "known_schemes", "Display", "Picture", "Segment", "Style", "Fill", "Polyline", "Polygon", "Rectangle",
+    "Circle", "Ellipse", "Arc", "Bezier", "BSpline", "Marker", "Text", "Image", "PixelpenError", "ConfigError",
+    "URLError", "ParseError", "ProtocolError", "LinkError",
+]

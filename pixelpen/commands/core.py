@@ -1,0 +1,92 @@
+"""Core commands: ``devices`` (what pixelpen knows and what is plugged in), ``draw`` and ``demo``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from ..display.pictfile import load_picture
+from ..display.registry import known_schemes, open_display
+from ..scene import draw_reference
+from ..urls import format_url
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the core subcommands to the ``pixelpen`` parser."""
+    p = sub.add_parser("devices", help="list known device schemes and the devices actually present")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.add_argument("--no-probe", action="store_true", help="do not look for attached hardware")
+    p.set_defaults(func=cmd_devices)
+
+    p = sub.add_parser("draw", help="draw a picture file onto one or more displays")
+    p.add_argument("picture", help="picture file (pixelpen JSON, see docs/picture-format.md)")
+    p.add_argument("--to", action="append", required=True, metavar="URL", help="display URL, e.g. png:out.png (repeatable)")
+    p.set_defaults(func=cmd_draw)
+
+    p = sub.add_parser("demo", help="draw the reference scene on every display pixelpen has (simulated devices too)")
+    p.add_argument("-o", "--out", default="pixelpen-demo", help="output folder (default: ./pixelpen-demo)")
+    p.set_defaults(func=cmd_demo)
+
+
+def cmd_devices(args: argparse.Namespace) -> int:
+    """Print the schemes with their options, then the serial, USB and HID devices present."""
+    schemes = {
+        name: {"class": cls.__name__, "description": (cls.__doc__ or "").strip().splitlines()[0],
+               "options": dict(cls.url_options), "simulated": cls.simulated}
+        for name, cls in known_schemes().items()
+    }
+    present: list[dict] = []
+    if not args.no_probe:
+        from ..drivers.discovery import discover
+
+        present = [dict(record) for record in discover()]
+    if args.json:
+        json.dump({"schemes": schemes, "present": present}, sys.stdout, indent=2, default=str)
+        print()
+        return 0
+    print("Known schemes:")
+    for name, info in schemes.items():
+        sim = "  (sim:%s too)" % name if info["simulated"] else ""
+        print(f"  {name + ':':10} {info['description']}{sim}")
+        for opt, text in info["options"].items():
+            print(f"      ?{opt}=  {text}")
+    print("\nDevices present:" if present else "\nDevices present: none found")
+    for rec in present:
+        print("  " + "  ".join(f"{k}={v}" for k, v in rec.items() if v not in (None, "")))
+    return 0
+
+
+def cmd_draw(args: argparse.Namespace) -> int:
+    """Draw a picture file onto each URL given with --to."""
+    picture = load_picture(args.picture)
+    for url in args.to:
+        with open_display(url) as display:
+            if picture.window:
+                display.window(*picture.window)
+            display.draw(picture)
+        print(f"drew {args.picture} on {url}", file=sys.stderr)
+    return 0
+
+
+def demo_targets(out: Path) -> list[str]:
+    """The display URLs the demo draws on: the file displays and every simulated device."""
+    return [
+        format_url("png", str(out / "scene.png"), {"size": "1600x1120"}),
+        format_url("svg", str(out / "scene.svg"), {"size": "200x140mm"}),
+    ]
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    """Draw the reference scene on every display and print where the results are."""
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    for url in demo_targets(out):
+        with open_display(url) as display:
+            draw_reference(display)
+        print(f"  {url}", file=sys.stderr)
+    print(f"pixelpen demo: the reference scene was drawn into {out.resolve()}/")
+    for path in sorted(out.iterdir()):
+        print(f"  {path}")
+    return 0

@@ -1,0 +1,59 @@
+"""The ``png:`` file display: a raster display drawn by the raster engine and saved as PNG."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..display.capabilities import Capabilities
+from ..display.kinds import RasterDisplay
+from ..display.registry import register_display
+from ..raster.canvas import Canvas
+from ..errors import ConfigError, URLError
+from ..urls import DeviceURL, parse_size
+
+_MODES = {"1": "mono", "L": "grey", "P": "indexed", "RGB565": "rgb565", "RGB": "rgb888", "RGBA": "rgba"}
+
+
+@register_display("png")
+class PngFileDisplay(RasterDisplay):
+    """Draws into a framebuffer and writes it to ``PATH`` (``png:PATH?size=800x600&dpi=96``)."""
+
+    url_options = {
+        "size": "image size in pixels, WxH; default 800x600",
+        "dpi": "pixels per inch, sets the millimetre size of a pixel; default 96",
+        "mode": "pixel mode: 1, L, P, RGB565, RGB or RGBA; default RGB",
+        "background": "background colour, a name or #rrggbb; default white",
+    }
+
+    def __init__(
+        self, path: str | Path, *, size: tuple[int, int] = (800, 600), dpi: float = 96.0, mode: str = "RGB",
+        background: object = "white",
+    ) -> None:
+        if mode not in _MODES:
+            raise ConfigError(f"png mode must be one of {', '.join(_MODES)}, got {mode!r}")
+        caps = Capabilities(
+            model="png", category="file", kind="raster", size=(float(size[0]), float(size[1])), unit_mm=25.4 / dpi,
+            colour_model=_MODES[mode], y_down=True, can_erase=True, tolerance=0.25, limits={"file": str(path)},
+        )
+        super().__init__(caps, mode=mode, background=background, deferral="flush")
+        self.path = Path(path)
+
+    @classmethod
+    def from_url(cls, url: DeviceURL, **kwargs: object) -> "PngFileDisplay":
+        opts = cls.options_of(url)
+        w, h, unit = opts.get("size", parse_size, (800.0, 600.0, "px"))
+        if unit != "px" or w != int(w) or h != int(h):
+            raise URLError(f"{url}: png size is whole pixels, WxH (e.g. 800x600), got {url.options['size']!r}")
+        return cls(
+            url.target, size=(int(w), int(h)), dpi=opts.get("dpi", float, 96.0), mode=opts.get("mode", str, "RGB"),
+            background=opts.get("background", str, "white"),
+        )
+
+    def _open_device(self) -> None:
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+
+    def _close_device(self) -> None:
+        self.canvas.save(self.path)
+
+    def _show(self, canvas: Canvas) -> None:
+        canvas.save(self.path)

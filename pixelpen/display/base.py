@@ -1,0 +1,182 @@
+"""The Display base class: what every output device offers, with a small core that devices implement.
+
+A device implements ``_open_device``, ``_close_device``, ``_render(shapes)``, ``_present()`` and
+``_erase()`` (RasterDisplay and VectorDisplay already implement ``_render`` for their kind); shared
+code does the viewing pipeline, flattening, clipping, deferral and safe closing.
+"""
+
+from __future__ import annotations
+
+import logging
+from abc import ABC, abstractmethod
+from typing import ClassVar, Iterable, Literal
+
+from .. import geometry as geo
+from ..errors import ConfigError, PixelpenError
+from ..urls import DeviceURL, Options
+from .capabilities import Capabilities
+from .flatten import DeviceShape, flatten_picture
+from .picture import PRIMITIVE_TYPES, Picture, Primitive, Segment
+
+log = logging.getLogger(__name__)
+
+Deferral = Literal["asap", "flush"]
+Rect = tuple[float, float, float, float]
+
+
+class Display(ABC):
+    """An output device that draws pictures: open, set window/viewport, draw, flush, close."""
+
+    schemes: ClassVar[tuple[str, ...]] = ()
+    url_options: ClassVar[dict[str, str]] = {}
+    """Options the scheme's URLs accept, with a one-line help text each."""
+    simulated: ClassVar[bool] = False
+    """True when ``sim:<scheme>`` gives a simulated device of this model."""
+
+    def __init__(self, capabilities: Capabilities, *, deferral: Deferral = "asap") -> None:
+        if deferral not in ("asap", "flush"):
+            raise ConfigError(f"deferral must be 'asap' or 'flush', got {deferral!r}")
+        self.capabilities = capabilities
+        self.deferral: Deferral = deferral
+        self.is_open = False
+        w_mm, h_mm = capabilities.size_mm
+        self._window: Rect = (0.0, 0.0, w_mm, h_mm)
+        self._window_angle = 0.0
+        self._viewport: Rect = (0.0, 0.0, 1.0, 1.0)
+        self._preserve_aspect = True
+        self._pending: list[Picture | Primitive | Segment] = []
+        self._pipeline: geo.ViewingPipeline | None = None
+
+    # -- construction from URLs -------------------------------------------------------------
+    @classmethod
+    @abstractmethod
+    def from_url(cls, url: DeviceURL, **kwargs: object) -> "Display":
+        """Build the display a parsed URL describes; read options with ``cls.options_of(url)``."""
+
+    @classmethod
+    def options_of(cls, url: DeviceURL) -> Options:
+        """The URL's options, refusing any this scheme does not know (the error lists the known ones)."""
+        return Options(url, cls.url_options)
+
+    # -- life cycle --------------------------------------------------------------------------
+    def open(self) -> "Display":
+        """Connect to the device (idempotent)."""
+        if not self.is_open:
+            self._open_device()
+            self.is_open = True
+        return self
+
+    def close(self) -> None:
+        """Draw what is pending, leave the device safe and release it (idempotent)."""
+        if not self.is_open:
+            return
+        try:
+            self.flush()
+        finally:
+            self.is_open = False
+            self._close_device()
+
+    def abort(self) -> None:
+        """Leave the device safe without drawing what is pending (used on errors and Ctrl-C)."""
+        self._pending.clear()
+        if self.is_open:
+            self.is_open = False
+            self._close_device()
+
+    def __enter__(self) -> "Display":
+        return self.open()
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            log.info("closing %s safely after %s", type(self).__name__, exc_type.__name__)
+            self.abort()
+
+    # -- viewing -----------------------------------------------------------------------------
+    def window(self, xmin: float, ymin: float, xmax: float, ymax: float, *, angle: float = 0.0) -> None:
+        """Set the world-coordinate window (optionally rotated by ``angle`` radians about its corner)."""
+        self._window = (float(xmin), float(ymin), float(xmax), float(ymax))
+        self._window_angle = float(angle)
+        self._pipeline = None
+
+    def viewport(self, xmin: float, ymin: float, xmax: float, ymax: float, *, preserve_aspect: bool = True) -> None:
+        """Set the viewport in normalized device coordinates [0, 1]^2."""
+        for v in (xmin, ymin, xmax, ymax):
+            if not 0.0 <= v <= 1.0:
+                raise ConfigError(f"viewport coordinates are normalized to [0, 1], got {(xmin, ymin, xmax, ymax)}")
+        self._viewport = (float(xmin), float(ymin), float(xmax), float(ymax))
+        self._preserve_aspect = preserve_aspect
+        self._pipeline = None
+
+    @property
+    def pipeline(self) -> geo.ViewingPipeline:
+        """The current world-to-device viewing pipeline."""
+        if self._pipeline is None:
+            caps = self.capabilities
+            self._pipeline = geo.ViewingPipeline(
+                self._window, self._viewport, device_size=caps.size, y_down=caps.y_down,
+                window_angle=self._window_angle, preserve_aspect=self._preserve_aspect,
+            )
+        return self._pipeline
+
+    # -- drawing -----------------------------------------------------------------------------
+    def draw(self, item: Picture | Primitive | Segment | Iterable[Primitive]) -> None:
+        """Draw a picture, segment or primitive now (deferral 'asap') or at the next ``flush()``."""
+        self._require_open()
+        if not isinstance(item, (Picture, Segment) + PRIMITIVE_TYPES):
+            items = list(item)  # type: ignore[arg-type]
+            picture = Picture()
+            for prim in items:
+                picture.add(prim)
+            item = picture
+        self._pending.append(item)
+        if self.deferral == "asap":
+            self.flush()
+
+    def flush(self) -> None:
+        """Render everything pending and push it to the device."""
+        self._require_open()
+        pending, self._pending = self._pending, []
+        for item in pending:
+            self._render(list(self.shapes(item)))
+        self._present()
+
+    def clear(self) -> None:
+        """Start a new frame (raster) or a new sheet (vector devices that cannot erase)."""
+        self._require_open()
+        self._pending.clear()
+        self._erase()
+
+    def shapes(self, item: Picture | Primitive | Segment) -> Iterable[DeviceShape]:
+        """The device-space shapes of an item under the current pipeline."""
+        if isinstance(item, Segment):
+            picture = Picture()
+            picture.add(item)
+            item = picture
+        return flatten_picture(item, self.pipeline, tolerance=self.capabilities.tolerance, unit_mm=self.capabilities.unit_mm)
+
+    def _require_open(self) -> None:
+        if not self.is_open:
+            raise PixelpenError(f"{type(self).__name__} is not open: call open() or use it in a 'with' block")
+
+    # -- the device's core -------------------------------------------------------------------
+    @abstractmethod
+    def _open_device(self) -> None:
+        """Connect to the hardware or create the output."""
+
+    @abstractmethod
+    def _close_device(self) -> None:
+        """Leave the device safe (pen up, motors off, files flushed) and release it."""
+
+    @abstractmethod
+    def _render(self, shapes: list[DeviceShape]) -> None:
+        """Turn device-space shapes into the device's representation (pixels, strokes)."""
+
+    @abstractmethod
+    def _present(self) -> None:
+        """Push what was rendered to the device (send the frame, plot the strokes, write the file)."""
+
+    @abstractmethod
+    def _erase(self) -> None:
+        """Clear the drawing surface."""

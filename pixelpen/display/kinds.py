@@ -1,0 +1,82 @@
+"""The two kinds of output display: raster (a framebuffer Canvas) and vector (a display list of strokes)."""
+
+from __future__ import annotations
+
+from abc import abstractmethod
+
+from ..raster.canvas import Canvas
+from ..vector.build import build_display_list
+from ..vector.displaylist import DisplayList
+from .base import Deferral, Display
+from .capabilities import Capabilities
+from .flatten import DeviceShape
+from .picture import parse_colour
+from .rasterize import rasterize
+
+
+class RasterDisplay(Display):
+    """A display refreshed from a pixel buffer; devices implement ``_show`` to send changed pixels."""
+
+    def __init__(
+        self, capabilities: Capabilities, *, mode: str = "RGB", background: object = "white", deferral: Deferral = "asap"
+    ) -> None:
+        super().__init__(capabilities, deferral=deferral)
+        width, height = (int(round(v)) for v in capabilities.size)
+        self.canvas = Canvas(width, height, mode)
+        self.background = self.canvas.colour_value(parse_colour(background))
+        self.canvas.fill(self.background)
+
+    def _render(self, shapes: list[DeviceShape]) -> None:
+        rasterize(self.canvas, shapes, self.capabilities.unit_mm)
+
+    def _erase(self) -> None:
+        self.canvas.fill(self.background)
+
+    def _present(self) -> None:
+        self._show(self.canvas)
+        self.canvas.clear_damage()
+
+    @abstractmethod
+    def _show(self, canvas: Canvas) -> None:
+        """Send the canvas's damaged regions (``canvas.damage()``) to the device."""
+
+
+class VectorDisplay(Display):
+    """A random-scan display: shapes become pen strokes; devices implement ``_plot`` for new strokes."""
+
+    def __init__(self, capabilities: Capabilities, *, pen_width_mm: float = 0.3, deferral: Deferral = "asap") -> None:
+        super().__init__(capabilities, deferral=deferral)
+        self.pen_width_mm = pen_width_mm
+        self.display_list = DisplayList(unit_mm=capabilities.unit_mm)
+        """Everything drawn on the current sheet."""
+        self._unplotted: list[DisplayList] = []
+
+    def _render(self, shapes: list[DeviceShape]) -> None:
+        self._unplotted.append(
+            build_display_list(
+                shapes, unit_mm=self.capabilities.unit_mm, pens=list(self.capabilities.pens) or None,
+                pen_width_mm=self.pen_width_mm,
+            )
+        )
+
+    def _present(self) -> None:
+        if not self._unplotted:
+            return
+        new = DisplayList.concat(self._unplotted)
+        self._unplotted = []
+        self.display_list = DisplayList.concat([self.display_list, new])
+        if len(new):
+            self._plot(new)
+
+    def _erase(self) -> None:
+        self._unplotted = []
+        self.display_list = DisplayList(unit_mm=self.capabilities.unit_mm)
+        self._new_sheet()
+
+    @abstractmethod
+    def _plot(self, strokes: DisplayList) -> None:
+        """Draw new strokes on the device."""
+
+    @abstractmethod
+    def _new_sheet(self) -> None:
+        """Start a fresh sheet (a plotter cannot erase: ask for new paper, or start a new file page)."""

@@ -1,0 +1,91 @@
+"""The reference scene of ``pixelpen demo``: every primitive, attribute and viewing feature on one page."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import geometry as geo
+from .display.base import Display
+from .display.picture import (
+    Arc, Bezier, BSpline, Circle, Ellipse, Fill, Image, Marker, Picture, Polygon, Polyline, Rectangle, Segment, Style,
+    Text,
+)
+
+WORLD = (0.0, 0.0, 200.0, 140.0)
+"""The scene's world window, in millimetres: an A4-landscape-like 200 x 140 area, y up."""
+
+
+def reference_scene() -> Picture:
+    """Build the reference scene in world coordinates (millimetres, y up)."""
+    pic = Picture(window=WORLD)
+    ink, red, blue, green = Style(), Style(colour="red"), Style(colour="blue"), Style(colour="green")
+    pic.add(Rectangle(2, 2, 198, 138, Style(width=0.5)))
+    pic.add(Text((6, 128), "pixelpen reference scene", height=6, style=ink))
+
+    # line types and widths
+    for k, dash in enumerate([None, (3.0, 1.5), (0.5, 1.0), (4.0, 1.0, 0.5, 1.0)]):
+        pic.add(Polyline([[6, 115 - 5 * k], [60, 115 - 5 * k]], Style(dash=dash, width=0.25 * k)))
+
+    # a concave polygon with a hole, hatched; a solid one; a cross-hatched one
+    star = _star((30, 75), 18, 8, 5)
+    hole = _regular((30, 75), 4, 6)
+    pic.add(Polygon((star, hole), Style(colour="blue", fill=Fill("hatch", angle=np.pi / 4, spacing=1.5))))
+    pic.add(Polygon(_regular((70, 75), 12, 6), Style(colour="orange", fill=Fill("solid"))))
+    pic.add(Rectangle(90, 62, 115, 88, Style(colour="purple", fill=Fill("crosshatch", angle=0.3, spacing=2.0))))
+
+    # conics
+    pic.add(Circle((135, 110), 14, red))
+    pic.add(Ellipse((170, 110), 20, 9, angle=np.pi / 6, style=Style(colour="green", fill=Fill("solid", outline=True))))
+    pic.add(Arc((135, 75), 12, 12, 0.0, 1.5 * np.pi, style=blue))
+    pic.add(Arc((165, 75), 14, 10, np.pi / 4, 5 * np.pi / 4, close="chord", style=red))
+    pic.add(Arc((185, 75), 10, 10, 0.0, np.pi / 2, close="pie", style=Style(colour="brown", fill=Fill("hatch", spacing=1.0))))
+
+    # curves: a cubic Bezier path, a degree-5 Bezier, a B-spline with its control polygon
+    pic.add(Bezier([[6, 20], [20, 55], [40, -5], [55, 30], [70, 65], [80, 10], [95, 35]], degree=3, style=red))
+    ctrl = np.array([[105, 15], [115, 50], [130, 20], [145, 50], [160, 15], [175, 45], [192, 20]])
+    pic.add(Polyline(ctrl, Style(colour="grey", dash=(1.0, 1.0))))
+    pic.add(BSpline(ctrl, degree=3, style=Style(colour="blue", width=0.4)))
+    pic.add(Bezier([[6, 8], [30, 16], [60, 0], [90, 14], [100, 4], [120, 10]], style=green))
+    pic.add(Marker(ctrl, kind="circle", size=2.0, style=Style(colour="grey")))
+    for k, kind in enumerate(["dot", "plus", "cross", "star", "square", "diamond"]):
+        pic.add(Marker([[128 + 10 * k, 6]], kind=kind, size=3.0, style=ink))
+
+    # an image (a colour ramp) and rotated, slanted text
+    yy, xx = np.mgrid[0:32, 0:48]
+    ramp = np.stack([xx * 5, yy * 7, 255 - xx * 5], axis=-1).clip(0, 255).astype(np.uint8)
+    pic.add(Image(ramp, (70, 100, 100, 120)))
+    pic.add(Text((108, 96), "rotated", height=4, angle=np.pi / 12, slant=0.25, style=Style(colour="purple")))
+
+    # a segment with its own transform (rotated copy of a small house), partly outside the window: clipped
+    house = Segment("house", transform=geo.rotate(np.pi / 8, about=(190, 50)))
+    house.add(Polygon([[180, 40], [205, 40], [205, 58], [192, 68], [180, 58]], Style(colour="black", width=0.3)))
+    pic.add(house)
+    return pic
+
+
+def draw_reference(display: Display) -> None:
+    """Draw the scene full size, then a rotated zoom of its middle into a corner viewport."""
+    scene = reference_scene()
+    display.window(*WORLD)
+    display.viewport(0.0, 0.0, 1.0, 1.0)
+    display.draw(scene)
+    # zoom: a rotated window around the star, shown in the top-right corner (clipped to that viewport)
+    display.window(15, 60, 55, 90, angle=np.pi / 10)
+    display.viewport(0.72, 0.70, 0.98, 0.98)
+    frame = Picture()
+    frame.add(Rectangle(15, 60, 55, 90, Style(colour="red", width=0.3)))
+    display.draw(scene)
+    display.draw(frame)
+    display.window(*WORLD)
+    display.viewport(0.0, 0.0, 1.0, 1.0)
+
+
+def _regular(centre: tuple[float, float], r: float, n: int) -> np.ndarray:
+    t = np.arange(n) * 2 * np.pi / n
+    return np.column_stack([centre[0] + r * np.cos(t), centre[1] + r * np.sin(t)])
+
+
+def _star(centre: tuple[float, float], r_out: float, r_in: float, points: int) -> np.ndarray:
+    t = np.arange(2 * points) * np.pi / points + np.pi / 2
+    r = np.where(np.arange(2 * points) % 2 == 0, r_out, r_in)
+    return np.column_stack([centre[0] + r * np.cos(t), centre[1] + r * np.sin(t)])

@@ -1,0 +1,69 @@
+"""Tests of the picture data model: validation of primitives and styles, segments, walking."""
+
+import numpy as np
+import pytest
+
+from pixelpen.display.picture import (
+    Bezier, BSpline, Circle, Fill, Image, Picture, Polygon, Polyline, Segment, Style, parse_colour,
+)
+from pixelpen.errors import ConfigError
+
+
+def test_colours():
+    assert parse_colour("#f00") == (255, 0, 0)
+    assert parse_colour("#0080ff") == (0, 128, 255)
+    assert parse_colour((1, 2, 3)) == (1, 2, 3)
+    for bad in ("#12", "nocolour", (256, 0, 0), (1.5, 0, 0), "#gggggg"):
+        with pytest.raises(ConfigError):
+            parse_colour(bad)
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: Polyline(np.zeros((0, 2))),
+        lambda: Polyline([[0, 0, 0]]),
+        lambda: Polyline([[0, np.nan]]),
+        lambda: Polygon([[0, 0], [1, 1]]),
+        lambda: Circle((0, 0), -1),
+        lambda: Bezier([[0, 0], [1, 1], [2, 2]], degree=3),
+        lambda: BSpline([[0, 0], [1, 1]], degree=2),
+        lambda: BSpline([[0, 0], [1, 1], [2, 2]], degree=2, knots=(0, 1, 0, 1, 1, 1)),
+        lambda: Image(np.zeros((2, 2), np.float32), (0, 0, 1, 1)),
+        lambda: Style(width=-1),
+        lambda: Style(dash=(1,)),
+        lambda: Style(pen=0),
+        lambda: Fill("zigzag"),
+        lambda: Fill("hatch", spacing=0),
+        lambda: Fill("pattern"),
+    ],
+)
+def test_invalid_primitives_are_refused(make):
+    with pytest.raises(ConfigError):
+        make()
+
+
+def test_points_are_read_only_copies():
+    pts = np.array([[0.0, 0.0], [1.0, 1.0]])
+    line = Polyline(pts)
+    with pytest.raises(ValueError):
+        line.points[0, 0] = 5
+
+
+def test_segments_walk_with_their_transform_and_hide():
+    pic = Picture()
+    pic.add(Circle((0, 0), 1))
+    seg = Segment("s", transform=np.diag([2.0, 2.0, 1.0]))
+    seg.add(Circle((1, 1), 1))
+    pic.add(seg)
+    hidden = Segment("h", visible=False)
+    hidden.add(Circle((9, 9), 1))
+    pic.add(hidden)
+    walked = list(pic.walk())
+    assert len(walked) == 2 and walked[1][1][0, 0] == 2.0 and walked[1][2] is seg
+    with pytest.raises(ConfigError, match="already exists"):
+        pic.add(Segment("s"))
+    with pytest.raises(KeyError, match="s, h"):
+        pic.segment("x")
+    with pytest.raises(ConfigError):
+        pic.add("not a primitive")

@@ -1,0 +1,87 @@
+"""Tests of the device URL grammar."""
+
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from pixelpen.errors import URLError
+from pixelpen.urls import Options, format_url, parse_bool, parse_size, parse_url, to_mm
+
+
+def test_plain_target_and_options():
+    u = parse_url("hp7475a:/dev/ttyUSB0?baud=9600&paper=a4")
+    assert (u.scheme, u.target, dict(u.options)) == ("hp7475a", "/dev/ttyUSB0", {"baud": "9600", "paper": "a4"})
+
+
+def test_nested_url_keeps_its_own_query_inside_brackets():
+    u = parse_url("hp7475a:[rfc2217://plotter:4000?logging=debug]?paper=a3")
+    assert u.target == "rfc2217://plotter:4000?logging=debug"
+    assert dict(u.options) == {"paper": "a3"}
+
+
+def test_nested_brackets_for_ipv6():
+    u = parse_url("grbl:[socket://[::1]:4000]")
+    assert u.target == "socket://[::1]:4000" and not u.options
+
+
+def test_scheme_is_case_insensitive_and_bare_option_is_true():
+    u = parse_url("SIM:hp7475a?fast")
+    assert u.scheme == "sim" and u.options["fast"] == "true"
+
+
+@pytest.mark.parametrize(
+    "bad, words",
+    [
+        ("", "non-empty"),
+        ("nocolon", "scheme:target"),
+        (":x", "scheme:target"),
+        ("a b:x", "letters"),
+        ("x:[unclosed", "no matching"),
+        ("x:[a]junk", "after ']'"),
+        ("x:t?a=1&a=2", "twice"),
+        ("x:t?=1", "empty option"),
+    ],
+)
+def test_malformed_urls_say_what_is_wrong(bad, words):
+    with pytest.raises(URLError, match=words):
+        parse_url(bad)
+
+
+def test_unknown_option_lists_known_and_hints_brackets():
+    u = parse_url("hp7475a:rfc2217://h:1?logging=debug")
+    with pytest.raises(URLError) as err:
+        Options(u, ["paper", "baud"])
+    text = str(err.value)
+    assert "logging" in text and "paper" in text and "brackets" in text
+
+
+def test_option_conversion_errors_name_the_option():
+    opts = Options(parse_url("png:x.png?dpi=abc"), ["dpi"])
+    with pytest.raises(URLError, match="dpi='abc'"):
+        opts.get("dpi", float, 96.0)
+    assert Options(parse_url("png:x.png"), ["dpi"]).get("dpi", float, 96.0) == 96.0
+
+
+text = st.text(st.characters(codec="utf-8", exclude_characters="\x00"), min_size=1, max_size=20)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    target=st.one_of(text, st.just("rfc2217://h:1?x=1&y=2"), st.just("socket://[::1]:9")),
+    options=st.dictionaries(st.text("abcxyz_", min_size=1, max_size=6), text, max_size=3),
+)
+def test_format_then_parse_round_trips(target, options):
+    u = parse_url(format_url("svg", target, options))
+    assert u.scheme == "svg" and u.target == target and dict(u.options) == options
+
+
+def test_sizes_and_units():
+    assert parse_size("800x600") == (800.0, 600.0, "px")
+    assert parse_size("210x297mm") == (210.0, 297.0, "mm")
+    assert parse_size("A3") == (297.0, 420.0, "mm")
+    assert to_mm(1.0, "in") == 25.4 and to_mm(96, "px") == pytest.approx(25.4)
+    for bad in ("800", "0x5", "axb", "-1x2"):
+        with pytest.raises(ValueError):
+            parse_size(bad)
+    assert parse_bool("On") is True and parse_bool("0") is False
+    with pytest.raises(ValueError):
+        parse_bool("maybe")
