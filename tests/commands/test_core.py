@@ -1,0 +1,57 @@
+"""Tests of the core commands: demo, draw and devices, run in-process through the CLI entry point."""
+
+import json
+
+import numpy as np
+from PIL import Image as PILImage
+
+from pixelpen.cli import main
+from pixelpen.display.pictfile import save_picture
+from pixelpen.display.picture import Picture, Polyline, Rectangle, Style, Fill
+
+
+def test_demo_writes_a_png_and_an_svg_of_the_scene(tmp_path, capsys):
+    assert main(["demo", "-o", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    png, svg = tmp_path / "scene.png", tmp_path / "scene.svg"
+    assert str(tmp_path.resolve()) in out and png.exists() and svg.exists()
+    img = np.asarray(PILImage.open(png).convert("RGB"))
+    assert img.shape == (1120, 1600, 3)
+    # the scene draws in several colours on a white page: red, blue and lots of white
+    assert (img == 255).all(axis=2).mean() > 0.5
+    assert ((img[..., 0] > 200) & (img[..., 1] < 60) & (img[..., 2] < 60)).any()  # red
+    assert ((img[..., 2] > 200) & (img[..., 0] < 60) & (img[..., 1] < 60)).any()  # blue
+    text = svg.read_text()
+    assert 'width="200mm"' in text.replace(".0mm", "mm") and "<g" in text
+
+
+def test_draw_a_picture_file_on_png(tmp_path):
+    pic = Picture(window=(0, 0, 10, 10))
+    pic.add(Rectangle(0, 0, 5, 5, Style(colour="black", fill=Fill("solid", outline=False))))
+    pic.add(Polyline([[0, 10], [10, 10]]))
+    path = tmp_path / "p.json"
+    save_picture(pic, path)
+    out = tmp_path / "o.png"
+    assert main(["draw", str(path), "--to", f"png:{out}?size=100x100"]) == 0
+    img = np.asarray(PILImage.open(out).convert("L"))
+    # lower-left quarter of the world (y up) is the lower-left quarter of the image (y down)
+    assert img[60:95, 5:45].max() == 0 and img[5:45, 55:95].min() == 255
+
+
+def test_draw_errors_are_one_line_and_exit_2(tmp_path, capsys):
+    bad = tmp_path / "bad.json"
+    bad.write_text("{")
+    assert main(["draw", str(bad), "--to", "png:x.png"]) == 2
+    err = capsys.readouterr().err
+    assert "bad.json" in err and "Traceback" not in err
+    save_picture(Picture(), tmp_path / "ok.json")
+    assert main(["draw", str(tmp_path / "ok.json"), "--to", "nosuch:x"]) == 2
+    assert "known schemes" in capsys.readouterr().err
+    assert main(["draw", str(tmp_path / "ok.json"), "--to", "png:x.png?colour=red"]) == 2
+    assert "known: background, dpi, mode, size" in capsys.readouterr().err
+
+
+def test_devices_lists_schemes_with_options(capsys):
+    assert main(["devices", "--json", "--no-probe"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert {"png", "svg"} <= set(data["schemes"]) and "size" in data["schemes"]["png"]["options"]
