@@ -1,0 +1,133 @@
+"""Previews of a display list as PNG (Pillow) or SVG: pen-down strokes in pen colours, pen-up travel faint and dashed."""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, ImageDraw
+
+from ..display.picture import parse_colour
+from ..errors import ConfigError
+from .displaylist import DisplayList
+
+DEFAULT_SIZE_PX = 1000
+"""Longest side of a preview when no size is given."""
+MARGIN = 0.03
+"""Blank border around the drawing, as a fraction of the longest side."""
+TRAVEL_COLOUR = "#f08080"
+BACKGROUND = "#ffffff"
+
+
+def _travel(dl: DisplayList, home: tuple[float, float]) -> np.ndarray:
+    """(S, 4) pen-up moves: from home to the first stroke, then from each stroke's end to the next one's start."""
+    if not len(dl):
+        return np.zeros((0, 4))
+    froms = np.vstack([np.asarray(home, dtype=np.float64)[None], dl.ends[:-1]])
+    return np.hstack([froms, dl.starts])
+
+
+def _frame(dl: DisplayList, travel: np.ndarray, size_px: int) -> tuple[np.ndarray, float, int, int]:
+    """Drawing-space minimum corner, pixels per unit, and the image size in pixels."""
+    pts = [dl.points] + ([travel[:, :2], travel[:, 2:]] if len(travel) else [])
+    allp = np.concatenate(pts) if sum(len(p) for p in pts) else np.zeros((1, 2))
+    lo, hi = allp.min(axis=0), allp.max(axis=0)
+    span = np.maximum(hi - lo, 1e-9)
+    longest = float(span.max())
+    lo = lo - MARGIN * longest
+    span = span + 2 * MARGIN * longest
+    scale = size_px / float(span.max())
+    w, h = (max(1, math.ceil(s * scale)) for s in span)
+    return lo, scale, w, h
+
+
+def render_preview(
+    dl: DisplayList,
+    path: str | os.PathLike,
+    *,
+    size_px: int | None = None,
+    show_travel: bool = True,
+    home: tuple[float, float] = (0.0, 0.0),
+    pen_width_mm: float | None = None,
+    y_up: bool = False,
+) -> None:
+    """Write a preview of ``dl`` to ``path``: PNG (or any raster format Pillow knows) or SVG, by extension.
+
+    ``size_px`` is the longest side (default 1000 px); strokes are drawn in their pens' colours
+    (``dl.pen_colours``, black when missing), ``pen_width_mm`` wide (default one pixel); pen-up moves from
+    ``home`` through the strokes in order are drawn faint (and dashed in SVG) when ``show_travel``. Device y
+    grows downwards in the picture unless ``y_up``.
+    """
+    size = DEFAULT_SIZE_PX if size_px is None else size_px
+    if not isinstance(size, int) or not 16 <= size <= 20000:
+        raise ConfigError(f"preview size must be an integer of 16..20000 pixels, got {size_px!r}")
+    if pen_width_mm is not None and not pen_width_mm > 0:
+        raise ConfigError(f"pen width must be > 0 mm, got {pen_width_mm!r}")
+    travel = _travel(dl, home) if show_travel else np.zeros((0, 4))
+    lo, scale, w, h = _frame(dl, travel, size)
+    suffix = Path(path).suffix.lower()
+    if suffix == ".svg":
+        _write_svg(dl, path, travel, lo, scale, w, h, pen_width_mm, y_up)
+        return
+    fmt = Image.registered_extensions().get(suffix)
+    if fmt is None:
+        raise ConfigError(f"preview file must end in .svg or an image extension such as .png, got {os.fspath(path)!r}")
+
+    def to_px(p: np.ndarray) -> np.ndarray:
+        q = (p - lo) * scale
+        if y_up:
+            q[:, 1] = h - q[:, 1]
+        return q
+
+    img = Image.new("RGB", (w, h), BACKGROUND)
+    draw = ImageDraw.Draw(img)
+    for seg in to_px(travel.reshape(-1, 2)).reshape(-1, 4):
+        draw.line(seg.tolist(), fill=TRAVEL_COLOUR, width=1)
+    width_px = 1 if pen_width_mm is None else max(1, round(pen_width_mm / dl.unit_mm * scale))
+    px = to_px(dl.points)
+    for i in range(len(dl)):
+        pts = px[dl.offsets[i]: dl.offsets[i + 1]]
+        colour = parse_colour(dl.pen_colours.get(int(dl.pens[i]), "#000000"))
+        if len(pts) == 1 or np.all(pts == pts[0]):
+            r = width_px / 2
+            draw.ellipse([pts[0, 0] - r, pts[0, 1] - r, pts[0, 0] + r, pts[0, 1] + r], fill=colour)
+        else:
+            draw.line(pts.ravel().tolist(), fill=colour, width=width_px, joint="curve" if width_px > 2 else None)
+    img.save(path, format=fmt)
+
+
+def _write_svg(
+    dl: DisplayList, path: str | os.PathLike, travel: np.ndarray, lo: np.ndarray, scale: float,
+    w: int, h: int, pen_width_mm: float | None, y_up: bool,
+) -> None:
+    """The SVG preview: viewBox in display-list units, one path per pen, travel as a dashed path."""
+    vw, vh = w / scale, h / scale
+    flip = f' transform="matrix(1 0 0 -1 0 {2 * lo[1] + vh:.10g})"' if y_up else ""
+    stroke_w = (pen_width_mm / dl.unit_mm) if pen_width_mm is not None else 1.0 / scale
+    out = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        (f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" '
+         f'viewBox="{lo[0]:.10g} {lo[1]:.10g} {vw:.10g} {vh:.10g}">'),
+        f'<rect x="{lo[0]:.10g}" y="{lo[1]:.10g}" width="{vw:.10g}" height="{vh:.10g}" fill="{BACKGROUND}"/>',
+        f'<g{flip} fill="none" stroke-linecap="round" stroke-linejoin="round">',
+    ]
+    if len(travel):
+        d = " ".join(f"M{a:.10g},{b:.10g} {c:.10g},{e:.10g}" for a, b, c, e in travel.tolist())
+        out.append(
+            f'<path d="{d}" stroke="{TRAVEL_COLOUR}" stroke-width="{1.0 / scale:.10g}" '
+            f'stroke-dasharray="{4.0 / scale:.10g} {3.0 / scale:.10g}"/>'
+        )
+    for pen in sorted(set(dl.pens.tolist())):
+        parts = []
+        for i in np.flatnonzero(dl.pens == pen):
+            pts = dl.stroke(int(i))
+            if len(pts) == 1:
+                pts = np.vstack([pts, pts])
+            parts.append("M" + ("%.10g,%.10g " * len(pts) % tuple(pts.ravel())).strip())
+        colour = dl.pen_colours.get(int(pen), "#000000")
+        out.append(f'<path d="{" ".join(parts)}" stroke="{colour}" stroke-width="{stroke_w:.10g}"/>')
+    out.append("</g>\n</svg>\n")
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write("\n".join(out))

@@ -1,0 +1,114 @@
+"""Tests of plot statistics against hand-computed small drawings."""
+
+import json
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from pixelpen.errors import ConfigError
+from pixelpen.vector.displaylist import DisplayList
+from pixelpen.vector.stats import format_stats, plot_stats, stats_json
+
+
+def drawing(unit_mm=1.0):
+    # stroke 1: (0,0)-(3,4), length 5, pen 1, layer 1
+    # stroke 2: (10,0)-(10,2)-(12,2), length 4, pen 2, layer 2
+    # stroke 3: (12,5)-(12,9), length 4, pen 2, layer 1
+    return DisplayList.from_polylines(
+        [np.array([[0, 0], [3, 4]]), np.array([[10, 0], [10, 2], [12, 2]]), np.array([[12, 5], [12, 9]])],
+        pens=[1, 2, 2], layers=[1, 2, 1], layer_names={1: "ink", 2: "red"}, unit_mm=unit_mm,
+        pen_colours={1: "#000000", 2: "#ff0000"},
+    )
+
+
+@dataclass(frozen=True)
+class Limits:
+    speed: float
+    accel: float
+
+
+def trapezoid_time(length, limits):
+    """Rest-to-rest move with constant acceleration: triangle when too short to reach full speed."""
+    if length <= 0:
+        return 0.0
+    if length >= limits.speed ** 2 / limits.accel:
+        return length / limits.speed + limits.speed / limits.accel
+    return 2 * math.sqrt(length / limits.accel)
+
+
+def test_totals_hand_computed():
+    s = plot_stats(drawing(unit_mm=0.5), profile=False, return_home=False)
+    t = s["total"]
+    assert t["strokes"] == 3 and t["points"] == 7 and t["pen_lifts"] == 3
+    assert t["pen_down_mm"] == pytest.approx((5 + 4 + 4) * 0.5)
+    # home (0,0) -> (0,0): 0; (3,4) -> (10,0): sqrt(65); (12,2) -> (12,5): 3
+    assert t["pen_up_mm"] == pytest.approx((math.sqrt(65) + 3) * 0.5)
+    assert t["pen_changes"] == 1 and t["pens"] == [1, 2]
+    assert s["bounds_mm"] == pytest.approx([0, 0, 6, 4.5])
+    assert s["unit_mm"] == 0.5
+
+
+def test_return_home_adds_the_last_hop():
+    s = plot_stats(drawing(), profile=False, return_home=True)
+    assert s["total"]["pen_up_mm"] == pytest.approx(math.sqrt(65) + 3 + math.hypot(12, 9))
+
+
+def test_per_layer_figures_are_each_layer_plotted_alone():
+    s = plot_stats(drawing(), profile=False, home=(1, 1), return_home=False)
+    ink, red = s["layers"]
+    assert (ink["id"], ink["name"], red["id"], red["name"]) == (1, "ink", 2, "red")
+    assert ink["strokes"] == 2 and ink["pen_down_mm"] == pytest.approx(9)
+    # from (1,1) to (0,0), then (3,4) to (12,5)
+    assert ink["pen_up_mm"] == pytest.approx(math.sqrt(2) + math.sqrt(82))
+    assert ink["pen_changes"] == 1 and ink["pens"] == [1, 2]
+    assert red["strokes"] == 1 and red["pen_up_mm"] == pytest.approx(math.hypot(9, 1)) and red["pen_changes"] == 0
+
+
+def test_time_from_a_profile_matches_trapezoid_motion():
+    profiles = pytest.importorskip("pixelpen.vector.profiles")
+    prof = profiles.load_profile("axidraw_v3")
+    dl = DisplayList.from_polylines([np.array([[10, 0], [10, 40]])], unit_mm=1.0)
+    s = plot_stats(dl, prof, return_home=True)
+    t = s["total"]["time"]
+    assert s["profile"] == prof.name
+    assert t["pen_down_s"] == pytest.approx(trapezoid_time(40, prof.pen_down), rel=1e-6)
+    hops = trapezoid_time(10, prof.pen_up) + trapezoid_time(math.hypot(10, 40), prof.pen_up)
+    assert t["pen_up_s"] == pytest.approx(hops, rel=1e-6)
+    assert t["pen_lifts_s"] == pytest.approx(prof.pen_lift_s + prof.pen_drop_s)
+    assert t["total_s"] == pytest.approx(t["pen_down_s"] + t["pen_up_s"] + t["pen_lifts_s"] + t["pen_changes_s"])
+    by_name = plot_stats(dl, "axidraw_v3")
+    assert by_name["total"]["time"] == pytest.approx(t)
+
+
+def test_default_profile_is_used_when_it_exists():
+    profiles = pytest.importorskip("pixelpen.vector.profiles")
+    if "axidraw_v3" not in profiles.builtin_profiles():
+        pytest.skip("no axidraw_v3 profile")
+    s = plot_stats(drawing())
+    assert s["profile"] == "axidraw_v3" and s["total"]["time"]["total_s"] > 0
+    assert all(layer["time"] is not None for layer in s["layers"])
+
+
+def test_unknown_profile_is_a_config_error():
+    pytest.importorskip("pixelpen.vector.profiles")
+    with pytest.raises(ConfigError):
+        plot_stats(drawing(), "no-such-plotter")
+
+
+def test_empty_list():
+    s = plot_stats(DisplayList(), profile=False)
+    assert s["total"]["strokes"] == 0 and s["total"]["pen_up_mm"] == 0 and s["layers"] == []
+    assert s["bounds_mm"] is None
+    assert "empty" in format_stats(s)
+
+
+def test_human_and_json_formats():
+    s = plot_stats(drawing(), profile=False, return_home=False)
+    text = format_stats(s)
+    lines = text.splitlines()
+    assert lines[0].split()[:2] == ["layer", "strokes"]
+    assert any(line.split()[:3] == ["ink", "2", "9.0"] for line in lines)
+    assert any(line.split()[:4] == ["total", "3", "13.0", f"{math.sqrt(65) + 3:.1f}"] for line in lines)
+    assert json.loads(stats_json(s)) == json.loads(json.dumps(s))
