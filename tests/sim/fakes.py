@@ -1,0 +1,153 @@
+"""Tiny WireDevices for transport tests: an echo-ish line device with a small buffer, and a scripted responder."""
+
+from __future__ import annotations
+
+from pixelpen.clock import REAL_CLOCK, Clock
+
+XON, XOFF = 0x11, 0x13
+
+
+class EchoDevice:
+    """Line device: ``buffer_size`` bytes of input, drained at ``drain_rate`` bytes/s, answers ``reply`` per line.
+
+    It records everything a transport test wants to check: every byte that arrived (``received``),
+    bytes lost to a full buffer (``overflowed``), bytes that arrived while its handshake line was low
+    (``arrived_while_busy``), executed bytes and lines, and the faults injected with the byte count
+    at which each came.  With ``xonxoff`` it sends XOFF when free space falls to ``xoff_free`` and XON
+    when it is back to ``xon_free``.
+    """
+
+    model = "echo"
+
+    def __init__(
+        self,
+        clock: Clock | None = None,
+        *,
+        buffer_size: int = 16,
+        drain_rate: float = 1000.0,
+        ready_free: int = 4,
+        reply: bytes = b"OK\r",
+        xonxoff: bool = False,
+        xoff_free: int = 4,
+        xon_free: int = 12,
+        **options: str,
+    ) -> None:
+        self.clock = clock if clock is not None else REAL_CLOCK
+        self.buffer_size = int(buffer_size)
+        self.drain_interval = 1.0 / float(drain_rate)
+        self.ready_free = ready_free
+        self.reply = reply
+        self.xonxoff = xonxoff
+        self.xoff_free, self.xon_free = xoff_free, xon_free
+        self.options = options
+        self.buffer = bytearray()
+        self.received = bytearray()
+        self.executed = bytearray()
+        self.lines: list[bytes] = []
+        self.overflowed = 0
+        self.arrived_while_busy = 0
+        self.faults: list[tuple[str, int]] = []
+        self.closed = False
+        self._line = bytearray()
+        self._out = bytearray()
+        self._t = self.clock.now()
+        self._next_drain: float | None = None
+        self._xoff_sent = False
+
+    @property
+    def free(self) -> int:
+        return self.buffer_size - len(self.buffer)
+
+    @property
+    def ready_to_receive(self) -> bool:
+        return self.free >= self.ready_free
+
+    def receive(self, data: bytes) -> None:
+        for b in data:
+            self.received.append(b)
+            if not self.ready_to_receive:
+                self.arrived_while_busy += 1
+            if len(self.buffer) >= self.buffer_size:
+                self.overflowed += 1
+                continue
+            self.buffer.append(b)
+            if self._next_drain is None:
+                self._next_drain = self._t + self.drain_interval
+            if self.xonxoff and not self._xoff_sent and self.free <= self.xoff_free:
+                self._out.append(XOFF)
+                self._xoff_sent = True
+
+    def advance_to(self, t: float) -> None:
+        while self._next_drain is not None and self._next_drain <= t:
+            self._t = self._next_drain
+            b = self.buffer.pop(0)
+            self.executed.append(b)
+            if b in b"\r\n":
+                if self._line:
+                    self.lines.append(bytes(self._line))
+                    self._out += self.reply
+                self._line.clear()
+            else:
+                self._line.append(b)
+            self._next_drain = self._t + self.drain_interval if self.buffer else None
+            if self.xonxoff and self._xoff_sent and self.free >= self.xon_free:
+                self._out.append(XON)
+                self._xoff_sent = False
+        self._t = max(self._t, t)
+
+    def take_output(self) -> bytes:
+        out = bytes(self._out)
+        self._out.clear()
+        return out
+
+    def next_event_time(self) -> float | None:
+        return self._next_drain
+
+    def say(self, data: bytes) -> None:
+        """Make the device send ``data`` unprompted (tests of the device-to-host direction)."""
+        self._out += data
+
+    def inject(self, fault: str) -> None:
+        self.faults.append((fault, len(self.received)))
+
+    def close(self) -> None:
+        self.closed = True
+
+
+class ScriptedDevice:
+    """A WireDevice that answers fixed requests: when its input ends with a key, it sends the value."""
+
+    model = "scripted"
+
+    def __init__(self, replies: dict[bytes, bytes], clock: Clock | None = None) -> None:
+        self.clock = clock if clock is not None else REAL_CLOCK
+        self.replies = replies
+        self.received = bytearray()
+        self.faults: list[str] = []
+        self.closed = False
+        self._out = bytearray()
+
+    ready_to_receive = True
+
+    def receive(self, data: bytes) -> None:
+        self.received += data
+        for request, reply in self.replies.items():
+            if self.received.endswith(request):
+                self._out += reply
+
+    def advance_to(self, t: float) -> None:
+        pass
+
+    def take_output(self) -> bytes:
+        out = bytes(self._out)
+        self._out.clear()
+        return out
+
+    def next_event_time(self) -> float | None:
+        return None
+
+    def inject(self, fault: str) -> None:
+        self.faults.append(fault)
+
+    def close(self) -> None:
+        self.closed = True
