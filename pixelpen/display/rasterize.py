@@ -2,17 +2,17 @@
 
 from __future__ import annotations
 
-import logging
-
 import numpy as np
 
 from .. import geometry as geo
 from ..raster.canvas import Canvas
+from ..vector.build import device_angle
 from ..vector.hatch import hatch
 from .flatten import DeviceShape
 from .picture import Fill, Image
 
-log = logging.getLogger(__name__)
+DEFAULT_HATCH_MM = 1.0
+"""Hatch spacing on raster displays when the fill gives none."""
 
 
 def rasterize(canvas: Canvas, shapes: list[DeviceShape], unit_mm: float) -> None:
@@ -39,8 +39,9 @@ def _area(canvas: Canvas, shape: DeviceShape, value, unit_mm: float) -> None:
     if fill.style == "solid":
         canvas.polygons([shape.paths], value, rule="evenodd")
     elif fill.style in ("hatch", "crosshatch"):
-        spacing = (fill.spacing / unit_mm) if fill.spacing else 4.0
-        lines = hatch(shape.paths, spacing, fill.angle, cross=fill.style == "crosshatch", join=False)
+        spacing = (fill.spacing or DEFAULT_HATCH_MM) / unit_mm
+        angle = device_angle(fill.angle, shape.matrix)
+        lines = hatch(shape.paths, spacing, angle, cross=fill.style == "crosshatch", join=False)
         if lines:
             segs = np.concatenate([np.hstack([p[:-1], p[1:]]) for p in lines if len(p) > 1])
             canvas.lines(np.floor(segs).astype(np.int64), value)

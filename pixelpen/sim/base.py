@@ -15,7 +15,10 @@ class WireDevice(Protocol):
     The transport calls ``advance_to(clock.now())`` before it looks at the device, feeds host bytes
     with ``receive`` (only while ``ready_to_receive`` when hardware handshake is on), and drains the
     device's answers with ``take_output``.  Devices keep time on ``clock``: a simulated plot takes the
-    device's real time unless the clock is a SimulatedClock.
+    device's real time unless the clock is a SimulatedClock.  A device produces output only inside
+    ``receive``, ``advance_to`` or ``inject``; output it makes by itself later is due at a time it
+    announces through ``next_event_time``.  Printer-class devices may also offer ``paper_empty``,
+    ``selected`` and ``error`` attributes for the USB port-status request.
     """
 
     model: str
@@ -53,14 +56,14 @@ def register_simulator(model: str, factory: SimulatorFactory) -> None:
     _REGISTRY[model.lower()] = factory
 
 
-def create_simulator(model: str, **options: str) -> WireDevice:
-    """Build the simulator of ``model`` with URL options (strings); unknown models list the known ones."""
+def create_simulator(model: str, *, clock: Clock | None = None, **options: str) -> WireDevice:
+    """Build the simulator of ``model`` with URL options (strings) on ``clock``; unknown models list the known ones."""
     _load_builtin()
     try:
         factory = _REGISTRY[model.lower()]
     except KeyError:
         raise URLError(f"no simulator for model {model!r}; known: {', '.join(sorted(_REGISTRY)) or 'none'}") from None
-    return factory(**options)
+    return factory(clock=clock, **options)
 
 
 def simulator_models() -> list[str]:

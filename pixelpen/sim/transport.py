@@ -562,7 +562,7 @@ def open_sim_port(
     transport, device_options = split_options(options, source or f"sim://{model}")
     if device is None:
         # simulator factories take the device's clock as keyword ``clock`` (create_simulator annotates str)
-        device = create_simulator(model, clock=clock or transport.make_clock(), **device_options)  # type: ignore[arg-type]
+        device = create_simulator(model, clock=clock or transport.make_clock(), **device_options)
     elif device_options:
         raise URLError(
             f"{source or model}: option(s) {', '.join(sorted(device_options))} are for a simulator factory, "
