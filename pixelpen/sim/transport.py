@@ -561,7 +561,6 @@ def open_sim_port(
     """
     transport, device_options = split_options(options, source or f"sim://{model}")
     if device is None:
-        # simulator factories take the device's clock as keyword ``clock`` (create_simulator annotates str)
         device = create_simulator(model, clock=clock or transport.make_clock(), **device_options)
     elif device_options:
         raise URLError(
