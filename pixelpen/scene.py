@@ -12,7 +12,14 @@ from .display.picture import (
 )
 
 WORLD = (0.0, 0.0, 200.0, 140.0)
-"""The scene's world window, in millimetres: an A4-landscape-like 200 x 140 area, y up."""
+"""The scene's world window, in millimetres: a 200 x 140 area, y up."""
+PAGE = (0.0, 0.0, 260.0, 140.0)
+"""The demo page: the scene on the left, two magnified insets in a 60 mm strip on the right."""
+INSETS = (
+    # (world window, window angle, page rectangle of the inset's viewport)
+    ((15.0, 60.0, 55.0, 90.0), np.pi / 10, (205.0, 73.0, 255.0, 135.0)),
+    ((100.0, 10.0, 150.0, 50.0), 0.0, (205.0, 5.0, 255.0, 67.0)),
+)
 
 
 def reference_scene() -> Picture:
@@ -64,20 +71,25 @@ def reference_scene() -> Picture:
 
 
 def draw_reference(display: Display) -> None:
-    """Draw the scene full size, then a rotated zoom of its middle into a corner viewport."""
+    """Draw the scene on the left of the page, and two insets through other windows on the right.
+
+    The first inset looks at the star through a rotated window, the second magnifies the curves;
+    both are clipped to their viewports, which are framed in page coordinates.
+    """
     scene = reference_scene()
+    pw, ph = PAGE[2], PAGE[3]
     display.window(*WORLD)
-    display.viewport(0.0, 0.0, 1.0, 1.0)
+    display.viewport(0.0, 0.0, WORLD[2] / pw, 1.0)
     display.draw(scene)
-    # zoom: a rotated window around the star, shown in the top-right corner (clipped to that viewport)
-    display.window(15, 60, 55, 90, angle=np.pi / 10)
-    display.viewport(0.72, 0.70, 0.98, 0.98)
-    frame = Picture()
-    frame.add(Rectangle(15, 60, 55, 90, Style(colour="red", width=0.3)))
-    display.draw(scene)
-    display.draw(frame)
-    display.window(*WORLD)
+    frames = Picture()
+    for window, angle, (x0, y0, x1, y1) in INSETS:
+        display.window(*window, angle=angle)
+        display.viewport(x0 / pw, y0 / ph, x1 / pw, y1 / ph)
+        display.draw(scene)
+        frames.add(Rectangle(x0, y0, x1, y1, Style(width=0.3)))
+    display.window(*PAGE)
     display.viewport(0.0, 0.0, 1.0, 1.0)
+    display.draw(frames)
 
 
 def _regular(centre: tuple[float, float], r: float, n: int) -> np.ndarray:

@@ -73,8 +73,8 @@ def cmd_draw(args: argparse.Namespace) -> int:
 def demo_targets(out: Path) -> list[str]:
     """The display URLs the demo draws on: the file displays and every simulated device."""
     return [
-        format_url("png", str(out / "scene.png"), {"size": "1600x1120"}),
-        format_url("svg", str(out / "scene.svg"), {"size": "200x140mm"}),
+        format_url("png", str(out / "scene.png"), {"size": "2080x1120"}),
+        format_url("svg", str(out / "scene.svg"), {"size": "260x140mm"}),
     ]
 
 

@@ -44,7 +44,8 @@ class Display(ABC):
         self._window_angle = 0.0
         self._viewport: Rect = (0.0, 0.0, 1.0, 1.0)
         self._preserve_aspect = True
-        self._pending: list[Picture | Primitive | Segment] = []
+        self._pending: list[tuple[Picture | Primitive | Segment, geo.ViewingPipeline]] = []
+        """Items drawn but not yet rendered, each with the pipeline in force when it was drawn."""
         self._pipeline: geo.ViewingPipeline | None = None
 
     # -- construction from URLs -------------------------------------------------------------
@@ -130,7 +131,7 @@ class Display(ABC):
             for prim in items:
                 picture.add(prim)
             item = picture
-        self._pending.append(item)
+        self._pending.append((item, self.pipeline))
         if self.deferral == "asap":
             self.flush()
 
@@ -138,8 +139,8 @@ class Display(ABC):
         """Render everything pending and push it to the device."""
         self._require_open()
         pending, self._pending = self._pending, []
-        for item in pending:
-            self._render(list(self.shapes(item)))
+        for item, pipeline in pending:
+            self._render(list(self.shapes(item, pipeline)))
         self._present()
 
     def clear(self) -> None:
@@ -148,13 +149,15 @@ class Display(ABC):
         self._pending.clear()
         self._erase()
 
-    def shapes(self, item: Picture | Primitive | Segment) -> Iterable[DeviceShape]:
-        """The device-space shapes of an item under the current pipeline."""
+    def shapes(self, item: Picture | Primitive | Segment, pipeline: geo.ViewingPipeline | None = None) -> Iterable[DeviceShape]:
+        """The device-space shapes of an item under ``pipeline`` (default: the current one)."""
         if isinstance(item, Segment):
             picture = Picture()
             picture.add(item)
             item = picture
-        return flatten_picture(item, self.pipeline, tolerance=self.capabilities.tolerance, unit_mm=self.capabilities.unit_mm)
+        return flatten_picture(
+            item, pipeline or self.pipeline, tolerance=self.capabilities.tolerance, unit_mm=self.capabilities.unit_mm
+        )
 
     def _require_open(self) -> None:
         if not self.is_open:

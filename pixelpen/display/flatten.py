@@ -35,6 +35,8 @@ class DeviceShape:
     image: Image | None = None
     matrix: np.ndarray = field(default_factory=lambda: np.eye(3))
     """World-to-device matrix the shape was made with (images use it to map their rectangle)."""
+    clip_rect: tuple[float, float, float, float] | None = None
+    """Device rectangle an image must be clipped to (paths arrive clipped already)."""
 
 
 def flatten_picture(
@@ -59,7 +61,7 @@ def flatten_picture(
 def _shapes_of(prim: Primitive, matrix: np.ndarray, tolerance: float, unit_mm: float, rect) -> Iterator[DeviceShape]:
     style = prim.style
     if isinstance(prim, Image):
-        yield DeviceShape("image", [], False, style, image=prim, matrix=matrix)
+        yield DeviceShape("image", [], False, style, image=prim, matrix=matrix, clip_rect=rect)
         return
     if isinstance(prim, Marker):
         paths = _marker_paths(geo.apply(matrix, prim.points), prim.kind, prim.size / unit_mm, tolerance)

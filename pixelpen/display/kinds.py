@@ -5,7 +5,7 @@ from __future__ import annotations
 from abc import abstractmethod
 
 from ..raster.canvas import Canvas
-from ..vector.build import build_display_list
+from ..vector.build import PenLayerMap, build_display_list
 from ..vector.displaylist import DisplayList
 from .base import Deferral, Display
 from .capabilities import Capabilities
@@ -50,12 +50,12 @@ class VectorDisplay(Display):
         self.display_list = DisplayList(unit_mm=capabilities.unit_mm)
         """Everything drawn on the current sheet."""
         self._unplotted: list[DisplayList] = []
+        self._mapping = PenLayerMap(list(capabilities.pens) or None)
 
     def _render(self, shapes: list[DeviceShape]) -> None:
         self._unplotted.append(
             build_display_list(
-                shapes, unit_mm=self.capabilities.unit_mm, pens=list(self.capabilities.pens) or None,
-                pen_width_mm=self.pen_width_mm,
+                shapes, unit_mm=self.capabilities.unit_mm, pen_width_mm=self.pen_width_mm, mapping=self._mapping
             )
         )
 

@@ -55,9 +55,9 @@ def _pattern(canvas: Canvas, rings: list[np.ndarray], cells: np.ndarray, value) 
     mask.polygons([rings], 1, rule="evenodd")
     ys, xs = np.nonzero(mask.array)
     on = cells[ys % cells.shape[0], xs % cells.shape[1]]
-    canvas.array[ys[on], xs[on]] = value
+    canvas.array[ys[on], xs[on]] = canvas.value(value)
     if len(ys):
-        canvas.mark_damage(int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
+        canvas.mark_damaged(int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
 
 
 def _image(canvas: Canvas, shape: DeviceShape) -> None:
@@ -69,8 +69,11 @@ def _image(canvas: Canvas, shape: DeviceShape) -> None:
     img_to_world = geo.compose(geo.translate(x0, y1), geo.scale((x1 - x0) / w, -(y1 - y0) / h))
     img_to_dev = geo.compose(shape.matrix, img_to_world)
     corners = geo.apply(img_to_dev, np.array([[0, 0], [w, 0], [w, h], [0, h]], float))
-    lo = np.clip(np.floor(corners.min(axis=0)).astype(int), 0, [canvas.width, canvas.height])
-    hi = np.clip(np.ceil(corners.max(axis=0)).astype(int), 0, [canvas.width, canvas.height])
+    x_lo, y_lo, x_hi, y_hi = shape.clip_rect or (0, 0, canvas.width, canvas.height)
+    bound_lo = np.maximum([np.ceil(x_lo - 0.5), np.ceil(y_lo - 0.5)], 0).astype(int)
+    bound_hi = np.minimum([np.floor(x_hi - 0.5) + 1, np.floor(y_hi - 0.5) + 1], [canvas.width, canvas.height]).astype(int)
+    lo = np.clip(np.floor(corners.min(axis=0)).astype(int), bound_lo, bound_hi)
+    hi = np.clip(np.ceil(corners.max(axis=0)).astype(int), bound_lo, bound_hi)
     if (hi <= lo).any():
         return
     gy, gx = np.mgrid[lo[1] : hi[1], lo[0] : hi[0]]
@@ -79,9 +82,7 @@ def _image(canvas: Canvas, shape: DeviceShape) -> None:
     col, row = np.floor(src[:, 0]).astype(np.int64), np.floor(src[:, 1]).astype(np.int64)
     inside = (col >= 0) & (col < w) & (row >= 0) & (row < h)
     rgb = _as_rgba(img.pixels)[row[inside], col[inside]]
-    dx, dy = gx.ravel()[inside], gy.ravel()[inside]
-    canvas.put_rgba(dx, dy, rgb)
-    canvas.mark_damage(int(lo[0]), int(lo[1]), int(hi[0]), int(hi[1]))
+    canvas.put_colours(gx.ravel()[inside], gy.ravel()[inside], rgb)
 
 
 def _as_rgba(px: np.ndarray) -> np.ndarray:

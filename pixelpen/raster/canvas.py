@@ -33,6 +33,7 @@ from . import antialias as wu
 from . import circles, fill, lines, polygons
 from .colour import rgb565_to_rgb888
 from .damage import DEFAULT_MERGE_COST, DamageTracker, Rect, tile_damage
+from .palette import Palette
 
 MODES: dict[str, tuple[type, int]] = {
     "1": (np.uint8, 1), "L": (np.uint8, 1), "P": (np.uint8, 1), "RGB565": (np.uint16, 1),
@@ -152,30 +153,53 @@ class Canvas:
                           f"of 0..255, found {value!r}")
 
     def colour_value(self, rgb: Sequence[int]) -> int | tuple[int, ...]:
-        """The native value nearest an (r, g, b) colour.
-
-        "L": luma (299R + 587G + 114B + 500) // 1000; "1": 1 iff 299R + 587G + 114B >= 128000;
-        "P": the nearest palette entry (squared RGB distance, lowest index on ties); "RGB565": truncation;
-        "RGB": the colour; "RGBA": the colour, opaque.
-        """
+        """The native value nearest an (r, g, b) colour (see :meth:`colour_values` for the rules)."""
         try:
             r, g, b = (int(c) for c in rgb)
         except (TypeError, ValueError):
             raise ConfigError(f"colour must be an (r, g, b) triple, found {rgb!r}") from None
         if not all(0 <= c <= 255 for c in (r, g, b)) or list(rgb) != [r, g, b]:
             raise ConfigError(f"colour components must be integers 0..255, found {rgb!r}")
-        weighted = 299 * r + 587 * g + 114 * b
-        if self.mode == "L":
-            return (weighted + 500) // 1000
-        if self.mode == "1":
-            return int(weighted >= 128000)
+        value = self.colour_values(np.array([[r, g, b]]))[0]
+        return tuple(int(c) for c in value) if value.ndim else int(value)
+
+    def colour_values(self, rgb: ArrayLike) -> np.ndarray:
+        """Native values nearest an (N, 3) array of 0..255 colours: (N,) or (N, C) in the canvas dtype.
+
+        "L": luma (299R + 587G + 114B + 500) // 1000; "1": 1 iff 299R + 587G + 114B >= 128000;
+        "P": the nearest palette entry (squared RGB distance, lowest index on ties); "RGB565": truncation;
+        "RGB": the colour; "RGBA": the colour, opaque.
+        """
+        c = np.asarray(rgb, dtype=np.int64).reshape(-1, 3)
+        dtype = MODES[self.mode][0]
+        if self.mode in ("L", "1"):
+            weighted = c @ np.array([299, 587, 114])
+            out = (weighted + 500) // 1000 if self.mode == "L" else weighted >= 128000
+            return out.astype(dtype)
         if self.mode == "P":
             assert self.palette is not None
-            d = ((self.palette.astype(np.int32) - np.array([r, g, b])) ** 2).sum(axis=1)
-            return int(np.argmin(d))
+            return Palette(self.palette).nearest_rows(c).astype(dtype)
         if self.mode == "RGB565":
-            return ((r & 0xF8) << 8) | ((g & 0xFC) << 3) | (b >> 3)
-        return (r, g, b) if self.mode == "RGB" else (r, g, b, 255)
+            return (((c[:, 0] & 0xF8) << 8) | ((c[:, 1] & 0xFC) << 3) | (c[:, 2] >> 3)).astype(dtype)
+        if self.mode == "RGB":
+            return c.astype(dtype)
+        return np.concatenate([c, np.full((len(c), 1), 255)], axis=1).astype(dtype)
+
+    def put_colours(self, xs: ArrayLike, ys: ArrayLike, rgba: ArrayLike) -> None:
+        """Composite (N, 4) RGBA colours "over" the pixels at (xs, ys) (inside the canvas), any mode."""
+        xs, ys = np.asarray(xs, dtype=np.int64), np.asarray(ys, dtype=np.int64)
+        src = np.asarray(rgba, dtype=np.uint32).reshape(-1, 4)
+        if not (len(xs) == len(ys) == len(src)):
+            raise ConfigError(f"put_colours needs as many colours as pixels, found {len(src)} for {len(xs)}")
+        if not len(xs):
+            return
+        if xs.min() < 0 or ys.min() < 0 or xs.max() >= self.width or ys.max() >= self.height:
+            raise ConfigError(f"put_colours: a pixel lies outside the {self.width}x{self.height} canvas")
+        alpha = src[:, 3:4]
+        base = self.to_rgb()[ys, xs].astype(np.uint32)
+        mixed = (src[:, :3] * alpha + base * (255 - alpha) + 127) // 255
+        self.array[ys, xs] = self.colour_values(mixed)
+        self._damage.add(int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
 
     def pixel(self, x: int, y: int) -> int | tuple[int, ...]:
         """The native value at (x, y)."""

@@ -39,17 +39,27 @@ def nearest_pen(colour: tuple[int, int, int], pens: Sequence[str]) -> int:
     return int(np.argmin(d)) + 1
 
 
-class _PenChooser:
-    """Pen numbers for styles: ``style.pen``, else nearest of ``pens``, else one pen per distinct colour."""
+class PenLayerMap:
+    """Pen numbers and layer ids for styles, kept across builds so that all strokes of a display agree.
 
-    def __init__(self, pens: Sequence[str] | None) -> None:
+    Pens: ``style.pen``, else the nearest of ``pens``, else one pen per distinct colour in order of
+    appearance. Layers: ``style.layer`` (unnamed shapes in ``default``), ids in order of appearance.
+    """
+
+    def __init__(self, pens: Sequence[str] | None = None) -> None:
         self.pens = [colour_hex(parse_colour(p)) for p in pens] if pens is not None else None
         if self.pens is not None and not self.pens:
             raise ConfigError("pens must list at least one colour")
         self.colours: dict[int, str] = {i + 1: c for i, c in enumerate(self.pens or [])}
         self._by_colour: dict[tuple[int, int, int], int] = {}
+        self.layer_ids: dict[str, int] = {}
+
+    def layer(self, style: Style) -> int:
+        """The layer id of a style."""
+        return self.layer_ids.setdefault(style.layer or DEFAULT_LAYER, len(self.layer_ids) + 1)
 
     def pen(self, style: Style) -> int:
+        """The pen number of a style."""
         if style.pen is not None:
             if self.pens is not None and style.pen > len(self.pens):
                 raise ConfigError(f"style asks for pen {style.pen} but only {len(self.pens)} pens are loaded")
@@ -96,6 +106,7 @@ def build_display_list(
     pens: Sequence[str] | None = None,
     pen_width_mm: float = 0.3,
     join: bool = True,
+    mapping: PenLayerMap | None = None,
 ) -> DisplayList:
     """Turn device-space shapes into a display list in device units.
 
@@ -106,13 +117,13 @@ def build_display_list(
     pen and are skipped with one warning. The pen is ``style.pen``, else the one of ``pens`` (``#rrggbb``
     colours of pens 1, 2, ...) nearest ``style.colour``, else one pen per distinct colour in order of
     appearance. Layers come from ``style.layer`` (ids in order of appearance, unnamed shapes in ``default``).
+    Pass the same ``mapping`` to successive builds to keep pen numbers and layer ids consistent.
     """
     if not (isinstance(unit_mm, (int, float)) and math.isfinite(unit_mm) and unit_mm > 0):
         raise ConfigError(f"device unit must be > 0 mm, got {unit_mm!r}")
     if not (isinstance(pen_width_mm, (int, float)) and math.isfinite(pen_width_mm) and pen_width_mm > 0):
         raise ConfigError(f"pen width must be > 0 mm, got {pen_width_mm!r}")
-    chooser = _PenChooser(pens)
-    layer_ids: dict[str, int] = {}
+    chooser = mapping if mapping is not None else PenLayerMap(pens)
     polylines: list[np.ndarray] = []
     pen_of: list[int] = []
     layer_of: list[int] = []
@@ -139,18 +150,18 @@ def build_display_list(
             if not np.isfinite(arr).all():
                 raise ConfigError(f"shape {n} ({shape.kind}) has a non-finite coordinate")
         pen = chooser.pen(shape.style)
-        layer = layer_ids.setdefault(shape.style.layer or DEFAULT_LAYER, len(layer_ids) + 1)
+        layer = chooser.layer(shape.style)
         polylines.extend(lines)
         pen_of.extend([pen] * len(lines))
         layer_of.extend([layer] * len(lines))
     if images:
         log.warning("%d image shape(s) skipped: a vector device cannot draw raster images", images)
-    used = set(pen_of)
+    used, used_layers = set(pen_of), set(layer_of)
     return DisplayList.from_polylines(
         polylines,
         pens=pen_of,
         layers=layer_of,
-        layer_names={i: name for name, i in layer_ids.items()},
+        layer_names={i: name for name, i in chooser.layer_ids.items() if i in used_layers},
         unit_mm=float(unit_mm),
         pen_colours={p: c for p, c in chooser.colours.items() if p in used},
     )

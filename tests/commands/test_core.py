@@ -16,13 +16,13 @@ def test_demo_writes_a_png_and_an_svg_of_the_scene(tmp_path, capsys):
     png, svg = tmp_path / "scene.png", tmp_path / "scene.svg"
     assert str(tmp_path.resolve()) in out and png.exists() and svg.exists()
     img = np.asarray(PILImage.open(png).convert("RGB"))
-    assert img.shape == (1120, 1600, 3)
+    assert img.shape == (1120, 2080, 3)
     # the scene draws in several colours on a white page: red, blue and lots of white
     assert (img == 255).all(axis=2).mean() > 0.5
     assert ((img[..., 0] > 200) & (img[..., 1] < 60) & (img[..., 2] < 60)).any()  # red
     assert ((img[..., 2] > 200) & (img[..., 0] < 60) & (img[..., 1] < 60)).any()  # blue
     text = svg.read_text()
-    assert 'width="200mm"' in text.replace(".0mm", "mm") and "<g" in text
+    assert 'width="260mm"' in text.replace(".0mm", "mm") and "<g" in text
 
 
 def test_draw_a_picture_file_on_png(tmp_path):

@@ -105,3 +105,14 @@ def test_pipeline_inverse_round_trips_for_input_devices():
     pts = np.array([[1.0, 2.0], [-3.0, 4.0]])
     np.testing.assert_allclose(d.pipeline.to_world(d.pipeline.to_device(pts)), pts, atol=1e-9)
     assert isinstance(Picture(), Picture)
+
+
+def test_deferred_items_keep_the_pipeline_they_were_drawn_under():
+    d = RecordingDisplay(deferral="flush").open()
+    d.window(0, 0, 10, 10)
+    d.viewport(0, 0, 0.5, 0.5, preserve_aspect=False)
+    d.draw(Polyline([[0, 0], [10, 10]]))
+    d.window(0, 0, 100, 50)
+    d.viewport(0, 0, 1, 1)
+    d.flush()
+    np.testing.assert_allclose(d.rendered[0][0].paths[0], [[0, 0], [500, 250]], atol=1e-9)

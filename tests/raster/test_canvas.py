@@ -116,3 +116,33 @@ def test_bad_colour():
         Canvas(3, 3).colour_value((1, 2))
     with pytest.raises(ConfigError, match="0..255"):
         Canvas(3, 3).colour_value((1, 2, 300))
+
+
+def test_colour_values_match_colour_value_in_every_mode():
+    rng = np.random.default_rng(5)
+    colours = rng.integers(0, 256, (50, 3))
+    for mode in ("1", "L", "P", "RGB565", "RGB", "RGBA"):
+        c = Canvas(4, 4, mode, palette=rng.integers(0, 256, (256, 3)) if mode == "P" else None)
+        batch = c.colour_values(colours)
+        for rgb, v in zip(colours.tolist(), batch):
+            single = c.colour_value(rgb)
+            assert (tuple(int(x) for x in v) if np.ndim(v) else int(v)) == single
+
+
+def test_put_colours_composites_over_and_records_damage():
+    c = Canvas(4, 3, "RGB")
+    c.fill((0, 0, 200))
+    c.clear_damage()
+    c.put_colours([1, 2], [0, 2], [[255, 0, 0, 255], [255, 255, 255, 0]])
+    assert c.pixel(1, 0) == (255, 0, 0)  # opaque replaces
+    assert c.pixel(2, 2) == (0, 0, 200)  # transparent leaves as it was
+    c.put_colours([0], [1], [[255, 0, 0, 128]])
+    # over: (255*128 + 0*127 + 127)//255 = 128 red; (200*127 + 127)//255 = 100 blue
+    assert c.pixel(0, 1) == (128, 0, 100)
+    (x0, y0, x1, y1), = [tuple(r) for r in c.damage()][:1] or [(None,) * 4]
+    assert x0 <= 0 and y0 <= 0 and x1 >= 3 and y1 >= 3
+    grey = Canvas(2, 2, "L")
+    grey.put_colours([0], [0], [[255, 255, 255, 255]])
+    assert grey.pixel(0, 0) == 255
+    with pytest.raises(ConfigError):
+        grey.put_colours([5], [0], [[0, 0, 0, 255]])

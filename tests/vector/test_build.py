@@ -10,7 +10,7 @@ import pytest
 
 from pixelpen.display.picture import Fill, Style
 from pixelpen.errors import ConfigError
-from pixelpen.vector.build import build_display_list, device_angle, nearest_pen
+from pixelpen.vector.build import PenLayerMap, build_display_list, device_angle, nearest_pen
 
 
 @dataclass
@@ -163,3 +163,19 @@ def test_bad_input():
     with pytest.raises(ConfigError, match="colour"):
         build_display_list([], unit_mm=1.0, pens=["#12345"])
     assert len(build_display_list([], unit_mm=1.0)) == 0
+
+
+def test_a_shared_mapping_keeps_pens_and_layers_consistent_across_builds():
+    line = np.array([[0.0, 0.0], [1.0, 0.0]])
+    red, blue = Style(colour="red", layer="a"), Style(colour="blue", layer="b")
+    mapping = PenLayerMap()
+    first = build_display_list([Shape("stroke", [line], False, red)], unit_mm=1.0, mapping=mapping)
+    second = build_display_list(
+        [Shape("stroke", [line], False, blue), Shape("stroke", [line], False, red)], unit_mm=1.0, mapping=mapping
+    )
+    assert first.pens.tolist() == [1] and second.pens.tolist() == [2, 1]
+    assert second.pen_colours == {1: "#ff0000", 2: "#0000ff"}
+    assert first.layer_names == {1: "a"} and second.layer_names == {1: "a", 2: "b"}
+    # without a shared mapping each build numbers from 1
+    alone = build_display_list([Shape("stroke", [line], False, blue)], unit_mm=1.0)
+    assert alone.pens.tolist() == [1]
