@@ -49,6 +49,7 @@ class WireDevice(Protocol):
 
 SimulatorFactory = Callable[..., WireDevice]
 _REGISTRY: dict[str, SimulatorFactory] = {}
+_NAMED: dict[str, WireDevice] = {}
 
 
 def register_simulator(model: str, factory: SimulatorFactory) -> None:
@@ -57,13 +58,42 @@ def register_simulator(model: str, factory: SimulatorFactory) -> None:
 
 
 def create_simulator(model: str, *, clock: Clock | None = None, **options: str) -> WireDevice:
-    """Build the simulator of ``model`` with URL options (strings) on ``clock``; unknown models list the known ones."""
+    """Build the simulator of ``model`` with URL options (strings) on ``clock``; unknown models list the known ones.
+
+    The option ``id=NAME`` names the instance: a later URL with the same ``id`` reaches the same
+    simulated device (its paper, buffer and state) instead of a new one — a reconnect after an
+    unplug, or a test fixture that looks at the device an application opened by URL.
+    """
     _load_builtin()
+    name = options.pop("id", None)
+    if name is not None and name in _NAMED:
+        device = _NAMED[name]
+        if device.model.lower() != model.lower():
+            raise URLError(f"simulator id={name!r} is a {device.model}, not a {model}")
+        return device
     try:
         factory = _REGISTRY[model.lower()]
     except KeyError:
         raise URLError(f"no simulator for model {model!r}; known: {', '.join(sorted(_REGISTRY)) or 'none'}") from None
-    return factory(clock=clock, **options)
+    device = factory(clock=clock, **options)
+    if name is not None:
+        _NAMED[name] = device
+    return device
+
+
+def named_simulator(name: str) -> WireDevice:
+    """The simulator created with ``id=name`` (KeyError naming the known ids otherwise)."""
+    try:
+        return _NAMED[name]
+    except KeyError:
+        raise KeyError(f"no simulator with id {name!r}; ids: {', '.join(sorted(_NAMED)) or 'none'}") from None
+
+
+def forget_simulator(name: str) -> None:
+    """Drop the named instance (closing it), so the next ``id=name`` builds a fresh device."""
+    device = _NAMED.pop(name, None)
+    if device is not None:
+        device.close()
 
 
 def simulator_models() -> list[str]:
