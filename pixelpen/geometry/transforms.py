@@ -1,0 +1,206 @@
+"""2D homogeneous transforms: 3x3 float64 matrices acting on column vectors [x, y, 1] (Hearn & Baker ch. 5)."""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence, Union
+
+import numpy as np
+
+ArrayLike = Union[np.ndarray, Sequence]
+
+# A homogeneous matrix whose linear part has |det| below this fraction of the product of its
+# row norms is treated as singular: its inverse would be dominated by rounding error.
+_SINGULAR_RATIO = 1e-12
+
+
+def as_points(points: ArrayLike, name: str = "points", *, min_rows: int = 0) -> tuple[np.ndarray, bool]:
+    """Validate an (N, 2) array or a single (2,) point of finite numbers; return (float64 (N, 2), was_single)."""
+    try:
+        arr = np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be an (N, 2) array of numbers: {exc}") from None
+    single = arr.shape == (2,)
+    if single:
+        arr = arr.reshape(1, 2)
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise ValueError(f"{name} must be an (N, 2) array or a single (x, y) point, got shape {arr.shape}")
+    if arr.shape[0] < min_rows:
+        raise ValueError(f"{name} needs at least {min_rows} points, got {arr.shape[0]}")
+    if not np.isfinite(arr).all():
+        row = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
+        raise ValueError(f"{name} contains a non-finite value (NaN or inf) at row {row}: {arr[row].tolist()}")
+    return arr, single
+
+
+def split_rows(array: np.ndarray, starts: np.ndarray) -> list[np.ndarray]:
+    """Cut an array into consecutive row blocks beginning at the given (increasing) row offsets, as views."""
+    bounds = starts.tolist() + [len(array)]
+    return [array[begin:end] for begin, end in zip(bounds[:-1], bounds[1:])]
+
+
+def as_matrix(m: ArrayLike, name: str = "matrix") -> np.ndarray:
+    """Validate a 3x3 homogeneous matrix of finite numbers and return it as float64."""
+    try:
+        arr = np.asarray(m, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a 3x3 array of numbers: {exc}") from None
+    if arr.shape != (3, 3):
+        raise ValueError(f"{name} must be a 3x3 homogeneous matrix, got shape {arr.shape}")
+    if not np.isfinite(arr).all():
+        raise ValueError(f"{name} contains NaN or inf: {arr.tolist()}")
+    return arr
+
+
+def as_number(value: object, name: str) -> float:
+    """Return value as a finite float or raise a ValueError/TypeError naming the parameter."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a real number, got {type(value).__name__} {value!r}")
+    result = float(value)
+    if not math.isfinite(result):
+        raise ValueError(f"{name} must be finite, got {result}")
+    return result
+
+
+def as_pair(value: object, name: str) -> tuple[float, float]:
+    """Return value as a pair of finite floats (a point)."""
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:  # type: ignore[arg-type]
+        raise ValueError(f"{name} must be a pair (x, y), got {value!r}")
+    return as_number(value[0], f"{name}[0]"), as_number(value[1], f"{name}[1]")  # type: ignore[index]
+
+
+def identity() -> np.ndarray:
+    """The 3x3 identity transform."""
+    return np.eye(3)
+
+
+def translate(tx: float, ty: float) -> np.ndarray:
+    """Translation by (tx, ty)."""
+    m = np.eye(3)
+    m[0, 2] = as_number(tx, "tx")
+    m[1, 2] = as_number(ty, "ty")
+    return m
+
+
+def rotate(theta: float, about: Sequence[float] = (0.0, 0.0)) -> np.ndarray:
+    """Counter-clockwise rotation by theta radians about the pivot point ``about``."""
+    theta = as_number(theta, "theta")
+    xr, yr = as_pair(about, "about")
+    c, s = math.cos(theta), math.sin(theta)
+    return np.array([
+        [c, -s, xr * (1.0 - c) + yr * s],
+        [s, c, yr * (1.0 - c) - xr * s],
+        [0.0, 0.0, 1.0],
+    ])
+
+
+def scale(sx: float, sy: float, about: Sequence[float] = (0.0, 0.0)) -> np.ndarray:
+    """Scaling by (sx, sy) that leaves the fixed point ``about`` in place."""
+    sx, sy = as_number(sx, "sx"), as_number(sy, "sy")
+    xf, yf = as_pair(about, "about")
+    return np.array([
+        [sx, 0.0, xf * (1.0 - sx)],
+        [0.0, sy, yf * (1.0 - sy)],
+        [0.0, 0.0, 1.0],
+    ])
+
+
+_NAMED_REFLECTIONS = {
+    "x": ((1.0, 0.0), (0.0, -1.0)),
+    "y": ((-1.0, 0.0), (0.0, 1.0)),
+    "origin": ((-1.0, 0.0), (0.0, -1.0)),
+    "y=x": ((0.0, 1.0), (1.0, 0.0)),
+    "y=-x": ((0.0, -1.0), (-1.0, 0.0)),
+}
+
+
+def reflect(axis: str | Sequence[Sequence[float]]) -> np.ndarray:
+    """Reflection about "x", "y", "origin", "y=x", "y=-x", or the line through two points ((x0, y0), (x1, y1))."""
+    if isinstance(axis, str):
+        if axis not in _NAMED_REFLECTIONS:
+            raise ValueError(f"unknown reflection axis {axis!r}: use one of {sorted(_NAMED_REFLECTIONS)} or two points")
+        m = np.eye(3)
+        m[:2, :2] = _NAMED_REFLECTIONS[axis]
+        return m
+    if not hasattr(axis, "__len__") or len(axis) != 2:  # type: ignore[arg-type]
+        raise ValueError(f"reflection axis must be a name or two points ((x0, y0), (x1, y1)), got {axis!r}")
+    x0, y0 = as_pair(axis[0], "axis[0]")
+    x1, y1 = as_pair(axis[1], "axis[1]")
+    dx, dy = x1 - x0, y1 - y0
+    length = math.hypot(dx, dy)
+    if length == 0.0:
+        raise ValueError(f"reflection line needs two distinct points, got ({x0}, {y0}) twice")
+    ux, uy = dx / length, dy / length
+    c2, s2 = ux * ux - uy * uy, 2.0 * ux * uy  # cos 2a, sin 2a of the line's angle a
+    linear = np.array([[c2, s2], [s2, -c2]])
+    m = np.eye(3)
+    m[:2, :2] = linear
+    m[:2, 2] = np.array([x0, y0]) - linear @ np.array([x0, y0])
+    return m
+
+
+def shear(shx: float = 0.0, shy: float = 0.0, ref: Sequence[float] = (0.0, 0.0)) -> np.ndarray:
+    """Shear: x' = x + shx (y - ref[1]) relative to y = ref[1]; y' = y + shy (x - ref[0]) relative to x = ref[0].
+
+    Both shears act simultaneously (one matrix, Hearn & Baker's general form); to apply one after the
+    other, compose two single shears.
+    """
+    shx, shy = as_number(shx, "shx"), as_number(shy, "shy")
+    xref, yref = as_pair(ref, "ref")
+    return np.array([
+        [1.0, shx, -shx * yref],
+        [shy, 1.0, -shy * xref],
+        [0.0, 0.0, 1.0],
+    ])
+
+
+def compose(*matrices: ArrayLike) -> np.ndarray:
+    """Matrix product in the usual order: compose(A, B) applies B first, then A (identity when empty)."""
+    result = np.eye(3)
+    for index, m in enumerate(matrices):
+        result = result @ as_matrix(m, f"matrix {index}")
+    return result
+
+
+def apply(m: ArrayLike, points: ArrayLike) -> np.ndarray:
+    """Map an (N, 2) array (or a single (2,) point) through the homogeneous matrix m."""
+    mat = as_matrix(m)
+    pts, single = as_points(points)
+    out = pts @ mat[:2, :2].T + mat[:2, 2]
+    if not (mat[2, 0] == 0.0 and mat[2, 1] == 0.0 and mat[2, 2] == 1.0):
+        w = pts @ mat[2, :2] + mat[2, 2]
+        if (np.abs(w) < 1e-300).any():
+            row = int(np.flatnonzero(np.abs(w) < 1e-300)[0])
+            raise ValueError(f"point {pts[row].tolist()} (row {row}) maps to infinity (w = 0) under this matrix")
+        out = out / w[:, None]
+    return out[0] if single else out
+
+
+def _singular_ratio(mat: np.ndarray) -> float:
+    """|det| over the product of row norms (Hadamard ratio, 1 for orthogonal rows, 0 when singular)."""
+    if mat[2, 0] == 0.0 and mat[2, 1] == 0.0 and mat[2, 2] != 0.0:
+        block = mat[:2, :2]  # affine: invertible iff the linear part is
+        det = float(np.linalg.det(block)) * mat[2, 2]
+        norms = float(np.prod(np.linalg.norm(block, axis=1))) * abs(mat[2, 2])
+    else:
+        det = float(np.linalg.det(mat))
+        norms = float(np.prod(np.linalg.norm(mat, axis=1)))
+    return 0.0 if norms == 0.0 else abs(det) / norms
+
+
+def invert(m: ArrayLike) -> np.ndarray:
+    """Inverse of a homogeneous matrix; ValueError when it is singular (e.g. a scale by zero)."""
+    mat = as_matrix(m)
+    ratio = _singular_ratio(mat)
+    if ratio < _SINGULAR_RATIO:
+        raise ValueError(
+            f"matrix is singular (|det| / row norms = {ratio:.3g}); it collapses the plane onto a line or point "
+            f"and has no inverse: {mat.tolist()}"
+        )
+    return np.linalg.inv(mat)
+
+
+def scale_factor(m: ArrayLike) -> float:
+    """sqrt|det| of the linear part: device units per world unit (to convert lengths such as tolerances)."""
+    mat = as_matrix(m)
+    return math.sqrt(abs(float(np.linalg.det(mat[:2, :2]))))
