@@ -13,7 +13,7 @@ from .errors import PixelpenError
 
 def build_parser() -> argparse.ArgumentParser:
     """The parser with every subcommand registered."""
-    from .commands import core, vector
+    from .commands import core, plot, sim, vector
 
     parser = argparse.ArgumentParser(prog="pixelpen", description="Draw on plotters, panels and files; simulate them.")
     parser.add_argument("--version", action="version", version=f"pixelpen {__version__}")
@@ -21,6 +21,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     core.register(sub)
     vector.register(sub)
+    plot.register(sub)
+    sim.register(sub)
     return parser
 
 

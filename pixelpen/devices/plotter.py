@@ -36,7 +36,7 @@ from ..display.kinds import VectorDisplay
 from ..drivers.link import Link
 from ..drivers.serial import SerialLink
 from ..errors import ConfigError, LinkError, ParseError, PixelpenError, URLError
-from ..urls import DeviceURL, format_url
+from ..urls import DeviceURL, Options, format_url
 from ..vector.displaylist import DisplayList
 from ..vector.motion import estimate_time
 from ..vector.profiles import DeviceProfile, load_profile
@@ -177,6 +177,7 @@ class PlotterDisplay(VectorDisplay):
         self.flow = flow or ("rtscts" if link and link.rtscts else "xonxoff" if link and link.xonxoff else "none")
         self.timeout = timeout if timeout is not None else (link.timeout_s if link else 8.0)
         self.clock = clock or REAL_CLOCK
+        self._clock_given = clock is not None
         self.state_file = Path(state_file) if state_file else None
         self._link_factory = link_factory
         self.on_progress = on_progress
@@ -197,169 +198,42 @@ class PlotterDisplay(VectorDisplay):
     @classmethod
     def from_url(cls, url: DeviceURL, **kwargs: object) -> "PlotterDisplay":
         """``MODEL:PORT?options`` for hardware, ``sim:MODEL?options`` for the simulator."""
+        sim_opts: dict[str, str] | None = None
         if url.scheme == "sim":
             model = url.target
             own = {k: v for k, v in url.options.items() if k in cls.url_options and k not in ("baud", "flow")}
             sim_opts = {k: v for k, v in url.options.items() if k not in own or k == "paper"}
-            opts = DeviceURL(model, "", own, str(url))
-            port = format_url("sim", "//" + model, sim_opts)
+            opts, port = DeviceURL(model, "", own, str(url)), ""
         else:
             opts, port = url, url.target
         options = cls.options_of(opts)
-        profile = options.get("profile", load_profile, None) or load_profile(cls.profile_name)
+        profile = options.get("profile", load_profile, None) or cls.default_profile(options)
+        if sim_opts is not None:
+            port = format_url("sim", "//" + model, cls.simulator_options(sim_opts, options, profile))
         return cls(
             port, profile=profile, paper=options.get("paper", str, None), baudrate=options.get("baud", int, None),
             flow=options.get("flow", _flow, None), timeout=options.get("timeout", float, None),
-            state_file=options.get("state", str, None), **kwargs,  # type: ignore[arg-type]
+            state_file=options.get("state", str, None), **cls.family_options(options, profile), **kwargs,  # type: ignore[arg-type]
         )
 
-    # -- life cycle ----------------------------------------------------------------------------
-    def _open_device(self) -> None:
-        self.link = self._make_link()
-        try:
-            self._connect()
-        except BaseException:
-            self.link.close()
-            self.link = None
-            raise
-
-    def _make_link(self) -> Link:
-        if self._link_factory is not None:
-            return self._link_factory()
-        return SerialLink(self.port, baudrate=self.baudrate, flow=self.flow, timeout=self.timeout)  # type: ignore[arg-type]
-
-    def _close_device(self) -> None:
-        link, self.link = self.link, None
-        if link is None:
-            return
-        try:
-            if not link.closed:
-                self._make_safe_on(link)
-        finally:
-            link.close()
-
-    def _make_safe_on(self, link: Link) -> None:
-        self.link = link
-        try:
-            self._make_safe()
-        except Exception as exc:  # leaving the device safe is best effort on a failing link
-            log.warning("could not leave %s safe: %s", self.profile.name, exc)
-        finally:
-            self.link = None
-
-    def reconnect(self) -> None:
-        """Close the link (if any), open a new one and handshake again (after an unplug or reset)."""
-        if self.link is not None:
-            try:
-                self.link.close()
-            finally:
-                self.link = None
-        self.pen = None
-        self.link = self._make_link()
-        self._connect()
-
-    # -- VectorDisplay hooks -------------------------------------------------------------------
-    def _plot(self, strokes: DisplayList) -> None:
-        self.plot(strokes)
-
-    def _new_sheet(self) -> None:
-        self._make_safe()
-        if self.on_pen_change is None:
-            log.warning("%s: a plotter cannot erase; put in a new sheet before the next drawing", self.profile.name)
-
-    # -- plotting ------------------------------------------------------------------------------
-    def plot(self, dl: DisplayList, *, resume: bool = False) -> None:
-        """Plot a display list in device units; with ``resume`` continue a job from its state file."""
-        if self.link is None:
-            raise PixelpenError(f"{self.profile.name} is not open")
-        start = self._start_job(dl, resume)
-        pts = self._device_points(dl)
-        try:
-            for i in range(start, len(dl)):
-                self._hold_while_paused()
-                pen = int(dl.pens[i])
-                if pen != self.pen:
-                    self._change_pen(pen)
-                self._send_stroke(i, pts[dl.offsets[i] : dl.offsets[i + 1]], pen)
-                self._poll()
-            self._drain()
-        except LinkError as exc:
-            self._poll_quietly()
-            raise PlotInterrupted(
-                f"{self.profile.name}: plot interrupted by {type(exc).__name__}: {exc}",
-                resume_from=self.confirmed, state_file=self.state_file, cause=exc,
-            ) from exc
-        except KeyboardInterrupt:
-            self._make_safe()
-            raise
-        self._confirm(len(dl))
-
-    def resume_after_fault(self, attempts: int = 3, wait_s: float = 1.0) -> None:
-        """Reconnect and plot the rest of the interrupted job from its last confirmed stroke."""
-        if self._job is None:
-            raise PixelpenError("there is no interrupted plot to resume")
-        for attempt in range(1, attempts + 1):
-            try:
-                self.reconnect()
-                break
-            except LinkError as exc:
-                if attempt == attempts:
-                    raise
-                log.warning("reconnect %d/%d failed: %s", attempt, attempts, exc)
-                self.clock.sleep(wait_s)
-        self._plot_rest()
-
-    def _plot_rest(self) -> None:
-        job = self._job
-        assert job is not None
-        self.plot(job, resume=True)
-
-    def _start_job(self, dl: DisplayList, resume: bool) -> int:
-        fp = fingerprint(dl)
-        if resume and self._job is not None and fingerprint(self._job) == fp:
-            start = self.confirmed
-        elif resume and self.state_file is not None and self.state_file.exists():
-            state = PlotState.load(self.state_file)
-            if state.fingerprint != fp or state.strokes != len(dl):
-                raise ConfigError(f"{self.state_file}: the plot state belongs to another drawing; refusing to resume")
-            start = state.confirmed
-        elif resume:
-            raise ConfigError("nothing to resume: no interrupted plot in this process and no state file")
-        else:
-            start = 0
-        self._job = dl
-        self._job_state = PlotState(self.port, fp, len(dl), start)
-        seg = np.zeros(len(dl.points))
-        seg[1:] = np.hypot(*np.diff(dl.points, axis=0).T)
-        seg[dl.offsets[:-1]] = 0.0  # no pen-down segment leads into a stroke's first point
-        per_stroke = np.add.reduceat(seg, dl.offsets[:-1]) if len(dl) else np.zeros(0)
-        self._cum_mm = np.zeros(1)
-        self._estimate_s = 0.0
-        self._started = 0.0
-
-    # -- construction ------------------------------------------------------------------------
     @classmethod
-    def from_url(cls, url: DeviceURL, **kwargs: object) -> "PlotterDisplay":
-        """``MODEL:PORT?options`` for hardware, ``sim:MODEL?options`` for the simulator."""
-        if url.scheme == "sim":
-            model = url.target
-            own = {k: v for k, v in url.options.items() if k in cls.url_options and k not in ("baud", "flow")}
-            sim_opts = {k: v for k, v in url.options.items() if k not in own or k == "paper"}
-            opts = DeviceURL(model, "", own, str(url))
-            port = format_url("sim", "//" + model, sim_opts)
-        else:
-            opts, port = url, url.target
-        options = cls.options_of(opts)
-        profile = options.get("profile", load_profile, None) or load_profile(cls.profile_name)
-        return cls(
-            port, profile=profile, paper=options.get("paper", str, None), baudrate=options.get("baud", int, None),
-            flow=options.get("flow", _flow, None), timeout=options.get("timeout", float, None),
-            state_file=options.get("state", str, None), **kwargs,  # type: ignore[arg-type]
-        )
+    def default_profile(cls, options: Options) -> DeviceProfile:
+        """The built-in profile of a URL without ``profile=`` (a family with several models reads its option)."""
+        return load_profile(cls.profile_name)
+
+    @classmethod
+    def family_options(cls, options: Options, profile: DeviceProfile) -> dict[str, object]:
+        """Constructor keywords read from the family's own URL options (the base has none)."""
+        return {}
+
+    @classmethod
+    def simulator_options(cls, sim_options: dict[str, str], options: Options, profile: DeviceProfile) -> dict[str, str]:
+        """Options for the simulator of a ``sim:`` URL: as given, paper included (a family translates its own)."""
+        return sim_options
 
     # -- life cycle ----------------------------------------------------------------------------
     def _open_device(self) -> None:
-        self.link = self._make_link()
+        self._attach(self._make_link())
         try:
             self._connect()
         except BaseException:
@@ -399,8 +273,14 @@ class PlotterDisplay(VectorDisplay):
             finally:
                 self.link = None
         self.pen = None
-        self.link = self._make_link()
+        self._attach(self._make_link())
         self._connect()
+
+    def _attach(self, link: Link) -> None:
+        """Use ``link``; a display given no clock keeps time on the link's (a ``speed=fast`` simulator's)."""
+        self.link = link
+        if not self._clock_given:
+            self.clock = link.clock
 
     # -- VectorDisplay hooks -------------------------------------------------------------------
     def _plot(self, strokes: DisplayList) -> None:

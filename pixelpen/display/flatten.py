@@ -125,7 +125,7 @@ def _world_paths(prim: Primitive, tol: float) -> tuple[list[np.ndarray], bool]:
     if isinstance(prim, Bezier):
         cp = prim.control_points
         deg = prim.degree or len(cp) - 1
-        pieces = [geo.flatten_bezier(cp[i : i + deg + 1], tol) for i in range(0, len(cp) - 1, deg)]
+        pieces = geo.flatten_beziers([cp[i : i + deg + 1] for i in range(0, len(cp) - 1, deg)], tol)
         return [np.vstack([pieces[0]] + [p[1:] for p in pieces[1:]])], False
     if isinstance(prim, BSpline):
         return [geo.flatten_bspline(prim.control_points, prim.degree, prim.knots, tolerance=tol)], False
