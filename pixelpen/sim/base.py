@@ -57,7 +57,7 @@ def register_simulator(model: str, factory: SimulatorFactory) -> None:
     _REGISTRY[model.lower()] = factory
 
 
-def create_simulator(model: str, *, clock: Clock | None = None, **options: str) -> WireDevice:
+def create_simulator(model: str, /, *, clock: Clock | None = None, **options: str) -> WireDevice:
     """Build the simulator of ``model`` with URL options (strings) on ``clock``; unknown models list the known ones.
 
     The option ``id=NAME`` names the instance: a later URL with the same ``id`` reaches the same
