@@ -1,0 +1,430 @@
+"""AxiDraw driver (``axidraw:PORT``): the EiBotBoard over USB serial, moves planned and sliced on the host.
+
+URL: ``axidraw:/dev/ttyACM0?model=se_a3&moves=lm`` (PORT is a device path, a pyserial URL in brackets, or
+``auto`` for the first USB serial port with the EBB's ID 04D8:FD92); ``sim:axidraw?speed=fast`` plots on
+the simulator.  ``model=`` picks the profile: ``v3`` (default; also V2 and SE/A4), ``se_a3``, ``minikit``.
+
+Each stroke is a pen-up travel, ``SP,0,<drop ms>``, the stroke, ``SP,1,<lift ms>``.  Travel and stroke are
+planned with the vector engine's motion model (:func:`pixelpen.vector.motion.plan`: trapezoids, junction
+deviation at corners) with the profile's pen-up and pen-down limits and emitted as time slices of at most
+25 ms (``SM``, ``XM`` or ``LM``, option ``moves=``), steps rounded with their fractions carried.
+
+How a stroke is confirmed.  A motion command's ``OK`` comes when it enters the board's motion FIFO, not when
+it runs.  The FIFO holds one command at boot and one more executes, so when the ``OK`` of the n-th queued
+command arrives every queued command up to n − 2 has finished: a stroke is confirmed once the command
+count acknowledged passes its pen lift by two.  At the end of a job (and before a pause) ``QM`` is polled
+until the motion system is idle, which confirms everything sent.
+
+Pause: the PRG button (``QG`` bit 5, or ``QB`` on firmware before 2.6.2), polled at most every 50 ms
+between strokes, pauses the plot with the pen up; a second press resumes it.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ..display.registry import register_display
+from ..drivers.discovery import list_serial_ports
+from ..drivers.link import Link
+from ..errors import ConfigError, LinkError, LinkTimeout, ParseError, ProtocolError
+from ..urls import Options
+from ..vector.profiles import DeviceProfile, load_profile
+from .ebb_encode import (
+    EBB_USB_ID,
+    FEATURES,
+    move_commands,
+    parse_error,
+    parse_qg,
+    parse_qm,
+    parse_version_reply,
+    reply_shape,
+    servo_positions,
+    slice_polyline,
+    strip_name,
+    supports,
+)
+from .plotter import PlotterDisplay
+
+log = logging.getLogger(__name__)
+
+__all__ = ["MODELS", "AxiDrawPlotter", "find_ebb_port"]
+
+MODELS = {"v3": "axidraw_v3", "v2": "axidraw_v3", "se_a4": "axidraw_v3", "se_a3": "axidraw_se_a3",
+          "a3": "axidraw_se_a3", "minikit": "axidraw_minikit"}
+"""``model=`` values and the profile each one uses."""
+SLICE_S = 0.025
+"""Longest motion slice (pyaxidraw's SM slices are 25 ms)."""
+WINDOW = 4
+"""Commands written ahead of their replies: the board holds two (FIFO + executing), the rest wait in USB."""
+BUTTON_POLL_S = 0.05
+"""Least time between two button polls (pyaxidraw: QB at least 50 ms apart)."""
+IDLE_POLL_S = 0.01
+FIFO_DEPTH = 1
+"""Motion FIFO depth at boot (ebb.html CU,4); the driver does not change it."""
+FLUSH = "#"
+"""Sent alone before the first command: ends any half-received command as a syntax error, so it cannot run."""
+
+
+@dataclass
+class _Sent:
+    """A command written to the board and not yet answered."""
+
+    text: str
+    queued: bool
+    duration_s: float
+    on_reply: Callable[[str], None] | None = None
+
+
+def _model(text: str) -> str:
+    value = text.strip().lower().replace("-", "_")
+    if value not in MODELS:
+        raise ValueError(f"expected one of {', '.join(MODELS)}")
+    return value
+
+
+def _moves(text: str) -> str:
+    value = text.strip().lower()
+    if value not in ("sm", "xm", "lm"):
+        raise ValueError("expected sm, xm or lm")
+    return value
+
+
+def _percent(text: str) -> float:
+    value = float(text)
+    if not (math.isfinite(value) and 0 <= value <= 100):
+        raise ValueError("expected a percentage 0..100")
+    return value
+
+
+@register_display("axidraw")
+class AxiDrawPlotter(PlotterDisplay):
+    """An AxiDraw (EiBotBoard): host-planned sliced moves, servo pen, FIFO-count confirmation, button pause."""
+
+    profile_name: ClassVar[str] = "axidraw_v3"
+    family: ClassVar[str] = "axidraw"
+    url_options: ClassVar[dict[str, str]] = {
+        **PlotterDisplay.url_options,
+        "model": f"AxiDraw model: {', '.join(MODELS)}; default v3",
+        "moves": "motion commands: sm (default), xm (mixed-axis, fw >= 2.3.0) or lm (accelerated, fw >= 2.7.0)",
+        "pen_up": "pen-up servo position in percent of the profile's servo range; default the profile's",
+        "pen_down": "pen-down servo position in percent; default the profile's",
+    }
+
+    def __init__(
+        self,
+        port: str,
+        *,
+        profile: DeviceProfile,
+        moves: str = "sm",
+        pen_up_percent: float | None = None,
+        pen_down_percent: float | None = None,
+        **kwargs: Any,
+    ) -> None:
+        super().__init__(port, profile=profile, **kwargs)
+        if moves not in ("sm", "xm", "lm"):
+            raise ConfigError(f"axidraw: moves must be sm, xm or lm, got {moves!r}")
+        self.moves = moves
+        self.servo_up, self.servo_down = servo_positions(profile.servo, pen_up_percent, pen_down_percent)
+        self.steps_per_mm = profile.steps_per_mm or 1.0 / profile.unit_mm
+        self.version: tuple[int, int, int] | None = None
+        """Firmware version from ``V``."""
+        self.future_syntax = False
+        """True when the board answers in the future syntax (``CU,10,1``)."""
+        self.position = np.zeros(2, dtype=np.int64)
+        """Carriage position in steps (x right, y down) after every command sent."""
+        self._unanswered: deque[_Sent] = deque()
+        self._queued_acked = 0
+        self._queued_sent = 0
+        self._marks: deque[tuple[int, int]] = deque()
+        self._paused = False
+        self._button_asked = -math.inf
+        self._zeroed = False
+
+    # -- URL hooks -------------------------------------------------------------------------------
+    @classmethod
+    def default_profile(cls, options: Options) -> DeviceProfile:
+        """``model=`` picks among the AxiDraw profiles."""
+        return load_profile(MODELS[options.get("model", _model, "v3")])
+
+    @classmethod
+    def family_options(cls, options: Options, profile: DeviceProfile) -> dict[str, object]:
+        """Read moves, pen_up and pen_down from the URL."""
+        return {
+            "moves": options.get("moves", _moves, "sm"),
+            "pen_up_percent": options.get("pen_up", _percent, None),
+            "pen_down_percent": options.get("pen_down", _percent, None),
+        }
+
+    @classmethod
+    def simulator_options(cls, sim_options: dict[str, str], options: Options, profile: DeviceProfile) -> dict[str, str]:
+        """The simulated AxiDraw of the same model (the EBB simulator has no paper option: it is the travel)."""
+        out = {k: v for k, v in sim_options.items() if k != "paper"}
+        if "model" in options:
+            out.setdefault("model", options.get("model", _model, "v3"))
+        return out
+
+    def _make_link(self) -> Link:
+        if self.port == "auto" and self._link_factory is None:
+            self.port = find_ebb_port()
+        return super()._make_link()
+
+    # -- device core -----------------------------------------------------------------------------
+    def _connect(self) -> None:
+        """Flush a half command, read ``V``, wait out leftover motion, set 16× stepping and the pen servo."""
+        link = self._link()
+        self._unanswered.clear()
+        self._marks.clear()
+        self._queued_acked = self._queued_sent = 0
+        self._paused = False
+        link.reset_input()
+        link.write(f"{FLUSH}\rV\r".encode("ascii"))
+        self.version, self.future_syntax = self._await_version()
+        if not supports(self.version, "QM"):
+            raise ProtocolError(
+                f"EBB firmware {_v(self.version)} is too old: pixelpen needs 2.4.4 or newer (QM); update the firmware",
+                code="version", command="V", device="axidraw",
+            )
+        needs = {"xm": "XM", "lm": "LM"}.get(self.moves)
+        if needs and not supports(self.version, needs):
+            raise ConfigError(
+                f"axidraw: moves={self.moves} needs EBB firmware {_v(FEATURES[needs])} or newer; this board has "
+                f"{_v(self.version)} (use moves=sm)"
+            )
+        self._wait_idle(60.0)
+        if self._zeroed and supports(self.version, "QS"):
+            s1, s2 = self._query_steps()
+            self.position = np.array([(s1 + s2) // 2, (s1 - s2) // 2], dtype=np.int64)
+            log.info("axidraw: reconnected; carriage at %s steps", self.position.tolist())
+        else:
+            self._command("EM,1,1", queued=supports(self.version, "queued_EM"))
+            self.position = np.zeros(2, dtype=np.int64)
+            self._zeroed = True
+        self._command(f"SC,4,{self.servo_up}")
+        self._command(f"SC,5,{self.servo_down}")
+        self._pen(up=True)
+        self._flush_replies()
+
+    def _send_stroke(self, index: int, points: np.ndarray, pen: int) -> None:
+        pts = np.asarray(points, dtype=np.int64).reshape(-1, 2)
+        self._travel(pts[0])
+        self._pen(up=False)
+        if len(pts) > 1:
+            self._move(pts, self.profile.pen_down)
+        self._pen(up=True)
+        self._marks.append((self._queued_sent, index))
+
+    def _poll(self) -> None:
+        link = self._link()
+        while self._unanswered and link.in_waiting:
+            self._read_reply()
+
+    def _drain(self) -> None:
+        self._flush_replies()
+        self._wait_idle(max(self.timeout, 5.0))
+        while self._marks:
+            _, index = self._marks.popleft()
+            self._confirm(index + 1)
+
+    def _select_pen(self, pen: int) -> None:
+        raise ConfigError(f"axidraw: the plotter holds one pen; cannot select pen {pen}")
+
+    def _device_paused(self) -> bool:
+        """Toggled by each press of the PRG button (``QG`` bit 5 / ``QB``), polled at most every 50 ms."""
+        now = self.clock.now()
+        if now - self._button_asked >= BUTTON_POLL_S:
+            self._button_asked = now
+            if supports(self.version or (0, 0, 0), "QG"):
+                self._command("QG", on_reply=lambda data: self._button(bool(parse_qg(data) & 0x20)))
+            else:
+                self._command("QB", on_reply=lambda data: self._button(strip_name("QB", data).strip() == "1"))
+        self._poll()
+        return self._paused
+
+    def _make_safe(self) -> None:
+        """Let the few queued slices finish, pen up, park at home after a finished job, wait idle, motors off."""
+        try:
+            link = self.link
+            if link is None or link.closed:
+                return
+            interrupted = bool(self._unanswered or self._marks)
+            self._flush_replies()
+            self._pen(up=True)
+            if interrupted:
+                log.warning("axidraw: stopped away from home at %s steps: move the carriage home before the next "
+                            "plot", self.position.tolist())
+            elif self.position.any():
+                self._travel(np.zeros(2, dtype=np.int64))
+            self._flush_replies()
+            self._wait_idle(max(self.timeout, 5.0))
+            self._command("EM,0,0", queued=supports(self.version or (0, 0, 0), "queued_EM"))
+            self._flush_replies()
+            self._marks.clear()
+            self.position = np.zeros(2, dtype=np.int64)
+            self._zeroed = False
+        except (LinkError, ProtocolError, ParseError) as exc:
+            log.warning("axidraw: could not leave the plotter safe: %s", exc)
+
+    @property
+    def paused(self) -> bool:
+        """True while a press of the PRG button holds the plot (pen up); the next press resumes it."""
+        return self._paused
+
+    # -- motion ----------------------------------------------------------------------------------
+    def _travel(self, target: np.ndarray) -> None:
+        """Pen-up move from the carriage position to ``target`` (steps)."""
+        target = np.asarray(target, dtype=np.int64)
+        if np.array_equal(target, self.position):
+            return
+        self._move(np.vstack([self.position, target]), self.profile.pen_up)
+
+    def _move(self, pts: np.ndarray, limits: Any) -> None:
+        """Plan ``pts`` (steps, starting at the carriage) with ``limits`` and send it as slices."""
+        mm = pts.astype(np.float64) / self.steps_per_mm
+        sliced = slice_polyline(mm, limits, self.steps_per_mm, SLICE_S)
+        signed_steps = supports(self.version or (0, 0, 0), "LM_signed_steps")
+        for cmd, ms in zip(move_commands(sliced, self.moves, signed_steps), sliced.ms.tolist()):
+            self._command(cmd, queued=True, duration_s=ms / 1000.0)
+        self.position = self.position + sliced.steps.sum(axis=0)
+
+    def _pen(self, up: bool) -> None:
+        ms = round(1000 * (self.profile.pen_lift_s if up else self.profile.pen_drop_s))
+        self._command(f"SP,{1 if up else 0},{ms}", queued=True, duration_s=ms / 1000.0)
+
+    # -- commands and replies --------------------------------------------------------------------
+    def _command(self, text: str, *, queued: bool = False, duration_s: float = 0.0,
+                 on_reply: Callable[[str], None] | None = None) -> None:
+        """Write one command (keeping at most WINDOW unanswered); ``queued`` ones enter the motion FIFO."""
+        while len(self._unanswered) >= WINDOW:
+            self._read_reply()
+        self._link().write(text.encode("ascii") + b"\r")
+        self._unanswered.append(_Sent(text, queued, duration_s, on_reply))
+        if queued:
+            self._queued_sent += 1
+
+    def _flush_replies(self) -> None:
+        while self._unanswered:
+            self._read_reply()
+
+    def _read_reply(self) -> str | None:
+        """Read the oldest pending command's reply (both syntaxes); ProtocolError names the command on ``!n Err``."""
+        sent = self._unanswered[0]
+        name = _name(sent.text)
+        wait = self.timeout + sum(s.duration_s for s in self._unanswered if s.queued)
+        line = self._line(wait, sent.text)
+        data: str | None = None
+        error = parse_error(line)
+        if error is None and self.future_syntax:
+            if not line.upper().startswith(name):
+                raise ParseError(f"reply to {sent.text!r} should start with {name!r}", source="ebb", token=line)
+            data = line[len(name) + 1:] if len(line) > len(name) else ""
+        elif error is None:
+            shape = reply_shape(name)
+            if shape == "ack":
+                if line.upper() != "OK":
+                    raise ParseError(f"expected OK after {sent.text!r}", source="ebb", token=line)
+            else:
+                data = line
+                if shape == "data_ok":
+                    ok = self._line(wait, sent.text)
+                    error = parse_error(ok)
+                    if error is None and ok.upper() != "OK":
+                        raise ParseError(f"expected OK after the data of {sent.text!r}", source="ebb", token=ok)
+        self._unanswered.popleft()
+        if error is not None:
+            raise ProtocolError(f"EBB rejected a command: !{error[0]} Err: {error[1]}", code=error[0],
+                                command=sent.text, device="axidraw")
+        if sent.queued:
+            self._queued_acked += 1
+            done = self._queued_acked - (FIFO_DEPTH + 1)
+            while self._marks and self._marks[0][0] <= done:
+                _, index = self._marks.popleft()
+                self._confirm(index + 1)
+        if sent.on_reply is not None:
+            sent.on_reply(data or "")
+        return data
+
+    def _line(self, timeout: float, command: str) -> str:
+        """One non-empty reply line (legacy endings \\r\\n and \\n\\r both handled)."""
+        link = self._link()
+        while True:
+            try:
+                raw = link.read_until(b"\n", timeout=timeout, max_size=300)
+            except LinkTimeout as exc:
+                raise LinkTimeout(f"axidraw: no reply to {command!r} within {timeout:.1f}s ({exc})") from exc
+            text = raw.decode("ascii", "replace").strip()
+            if text:
+                return text
+
+    def _await_version(self) -> tuple[tuple[int, int, int], bool]:
+        """Read lines after ``#\\rV\\r`` until the version reply (the flush's error and stale replies are skipped)."""
+        for _ in range(64):
+            line = self._line(self.timeout, "V")
+            try:
+                return parse_version_reply(line)
+            except ParseError:
+                log.debug("axidraw: skipped %r while waiting for the version", line)
+        raise ParseError("no version reply among 64 lines", source="ebb V")
+
+    def _wait_idle(self, limit_s: float) -> None:
+        """Poll ``QM`` until nothing executes and the FIFO is empty (bounded by ``limit_s`` clock seconds)."""
+        deadline = self.clock.now() + limit_s
+        state: list[tuple[int, int, int, int]] = []
+        while True:
+            self._command("QM", on_reply=lambda data: state.append(parse_qm(data)))
+            self._flush_replies()
+            if not any(state[-1]):
+                return
+            if self.clock.now() >= deadline:
+                raise LinkTimeout(f"axidraw: motion still running after {limit_s}s (QM {state[-1]})")
+            self.clock.sleep(IDLE_POLL_S)
+
+    def _query_steps(self) -> tuple[int, int]:
+        found: list[tuple[int, int]] = []
+
+        def read(data: str) -> None:
+            parts = strip_name("QS", data).split(",")
+            if len(parts) != 2:
+                raise ParseError("QS reply must be two step counts", source="ebb QS", token=data)
+            found.append((int(parts[0]), int(parts[1])))
+
+        self._command("QS", on_reply=read)
+        self._flush_replies()
+        return found[0]
+
+    def _button(self, pressed: bool) -> None:
+        if pressed:
+            self._paused = not self._paused
+            log.info("axidraw: PRG button: %s", "pausing at the next pen-up" if self._paused else "resuming")
+
+    def _link(self) -> Link:
+        if self.link is None:
+            raise LinkError("axidraw: the plotter is not connected")
+        return self.link
+
+
+def _name(command: str) -> str:
+    """The one- or two-character command name (the firmware takes the second character unless it is a comma)."""
+    head = command.split(",", 1)[0]
+    return head[:2].upper()
+
+
+def _v(version: tuple[int, int, int]) -> str:
+    return ".".join(str(p) for p in version)
+
+
+def find_ebb_port() -> str:
+    """``axidraw:auto``: the first serial port with the EiBotBoard's USB ID 04D8:FD92."""
+    ports = list_serial_ports()
+    for dev in ports:
+        if (dev.vid, dev.pid) == EBB_USB_ID:
+            log.info("axidraw: auto port %s (%s)", dev.path, dev.description)
+            return dev.path
+    seen = ", ".join(f"{d.path} ({d.description})" for d in ports) or "none"
+    raise LinkError(f"axidraw:auto found no EiBotBoard (USB 04D8:FD92) among the serial ports: {seen}; name the port")

@@ -1,0 +1,448 @@
+"""The GRBL driver against a scripted GRBL (flow control, errors, alarms) and the GRBL simulator (end to end)."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+import pixelpen
+from pixelpen.clock import SimulatedClock
+from pixelpen.devices.grbl import GrblPlotter
+from pixelpen.devices.plotter import PlotInterrupted
+from pixelpen.drivers.link import Link
+from pixelpen.drivers.serial import SerialLink
+from pixelpen.errors import ConfigError, LinkTimeout, ProtocolError, URLError
+from pixelpen.sim.base import create_simulator
+from pixelpen.sim.plotter import Paper
+from pixelpen.vector.displaylist import DisplayList
+from pixelpen.vector.profiles import load_profile
+
+WELCOME = b"\r\nGrbl 1.1h ['$' for help]\r\n"
+PROFILE = load_profile("grbl")
+MM = 1000  # device units per millimetre (unit 0.001 mm)
+SIM_OPTIONS = {"size": "297x210", "pen": "servo-inverted", "pen_threshold": "275"}
+"""What ``sim:grbl`` builds for the grbl profile (S50 down, S500 up, A4 landscape travel)."""
+
+
+class FakeGrbl(Link):
+    """A scripted GRBL 1.1 (interface.md): a 128-byte RX buffer, one line parsed per ``line_time``, ``ok`` each.
+
+    Records every byte written, the fullest the RX buffer got and any overflow; ``error_for(line)`` may
+    return an error code for a line, ``alarm_at`` names a line number at which ``ALARM:1`` is sent.
+    """
+
+    def __init__(self, clock, *, rx_buffer=128, line_time=0.003, welcome=WELCOME, error_for=None, alarm_at=None,
+                 lose=None):
+        super().__init__("fake-grbl", timeout=2.0, clock=clock)
+        self.rx_size = rx_buffer
+        self.line_time = line_time
+        self.error_for = error_for or (lambda line: None)
+        self.alarm_at = alarm_at
+        self.lose = lose or (lambda line: False)
+        self.welcome = welcome
+        self.rx = bytearray()
+        self.out = bytearray(welcome)
+        self.written = bytearray()
+        self.lines: list[str] = []
+        self.max_fill = 0
+        self.overflowed = 0
+        self._busy_until: float | None = None
+
+    def _advance(self) -> None:
+        now = self.clock.now()
+        while b"\n" in self.rx:
+            if self._busy_until is None:
+                self._busy_until = now + self.line_time
+            if self._busy_until > now:
+                return
+            line, _, rest = bytes(self.rx).partition(b"\n")
+            self.rx = bytearray(rest)
+            text = line.decode().strip()
+            if self.lose(text):  # garbled on the wire: GRBL never saw a line, so it never answers
+                self._busy_until = self._busy_until + self.line_time if b"\n" in self.rx else None
+                continue
+            self.lines.append(text)
+            code = self.error_for(text)
+            if self.alarm_at is not None and len(self.lines) == self.alarm_at:
+                self.out += b"ALARM:1\r\n"
+            self.out += b"ok\r\n" if code is None else f"error:{code}\r\n".encode()
+            self._busy_until = self._busy_until + self.line_time if b"\n" in self.rx else None
+
+    def _write_raw(self, data, wait):
+        self._advance()
+        for b in data:
+            self.written.append(b)
+            if b == ord("?"):
+                state = "Run" if self.rx else "Idle"
+                self.out += f"<{state}|MPos:0.000,0.000,0.000|FS:0,0>\r\n".encode()
+            elif b in (0x18, ord("!"), ord("~")):
+                if b == 0x18:
+                    self.rx.clear()
+                    self.out += self.welcome
+            elif len(self.rx) >= self.rx_size:
+                self.overflowed += 1
+            else:
+                self.rx.append(b)
+                self.max_fill = max(self.max_fill, len(self.rx))
+        return len(data)
+
+    def _read_raw(self, wait):
+        self._advance()
+        if not self.out and wait and self._busy_until is not None:
+            step = self._busy_until - self.clock.now()
+            if wait is None or step <= wait:
+                self.clock.sleep(max(step, 0.0))
+                self._advance()
+        out, self.out = bytes(self.out), bytearray()
+        return out
+
+    def _raw_in_waiting(self):
+        self._advance()
+        return len(self.out)
+
+    def _close_raw(self):
+        pass
+
+    def gcode(self) -> bytes:
+        """Everything written except the real-time bytes (``?``, ``!``, ``~``, Ctrl-X)."""
+        return bytes(b for b in self.written if b not in b"?!~\x18")
+
+
+def fake_plotter(clock=None, **fake_kwargs) -> tuple[GrblPlotter, FakeGrbl]:
+    clock = clock or SimulatedClock()
+    plotter_kwargs = {k: fake_kwargs.pop(k) for k in ("stream",) if k in fake_kwargs}
+    fake = FakeGrbl(clock, **fake_kwargs)
+    plotter = GrblPlotter("fake", profile=PROFILE, clock=clock, link_factory=lambda: fake, **plotter_kwargs)
+    plotter.open()
+    return plotter, fake
+
+
+def squares(n: int, side_mm: float = 10.0, at=(20.0, 20.0), step_mm: float = 3.0) -> DisplayList:
+    base = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0, 0]], float) * side_mm
+    polys = [(base + np.array(at) + i * step_mm) * MM for i in range(n)]
+    return DisplayList.from_polylines(polys, unit_mm=PROFILE.unit_mm)
+
+
+class Replug:
+    """The simulator as a new cable sees it: closing a link must not switch the machine off.
+
+    (The sim:// handler closes a device it was given when its port closes; a reconnect to the same
+    machine needs it to stay on.)
+    """
+
+    def __init__(self, device):
+        self._device = device
+
+    def __getattr__(self, name):
+        return getattr(self._device, name)
+
+    def close(self):
+        pass
+
+
+def sim_plotter(dev, clock, url_extra="", **kwargs) -> GrblPlotter:
+    """A driver whose every (re)connection reaches the simulator ``dev`` (faults only on the first link)."""
+    urls = iter([f"sim://grbl?baud=115200{url_extra}"])
+
+    def factory():
+        url = next(urls, "sim://grbl?baud=115200")
+        return SerialLink(url, baudrate=115200, clock=clock, device=Replug(dev))
+
+    plotter = GrblPlotter("sim://grbl", profile=PROFILE, clock=clock, link_factory=factory, **kwargs)
+    plotter.open()
+    return plotter
+
+
+def new_sim(clock=None):
+    clock = clock or SimulatedClock()
+    return create_simulator("grbl", clock=clock, **SIM_OPTIONS), clock
+
+
+def render(strokes_mm, dpi=50) -> np.ndarray:
+    """Independent rendering of the expected ink: the strokes drawn on a fresh simulator sheet."""
+    paper = Paper(297.0, 210.0, y_down=False)
+    for pts in strokes_mm:
+        paper.pen_down(pts[0])
+        paper.line_to(pts)
+        paper.pen_up()
+    return paper.paper_image(dpi).array
+
+
+# -- connecting --------------------------------------------------------------------------------------
+def test_connect_sends_units_and_pen_up_once():
+    plotter, fake = fake_plotter()
+    assert plotter.version == (1, 1, "h")
+    assert fake.gcode() == b"G21 G90\nM3 S500\nG4 P0.15\n"
+    plotter.close()
+
+
+def test_old_grbl_is_refused():
+    with pytest.raises(ProtocolError, match="0.9j"):
+        fake_plotter(welcome=b"\r\nGrbl 0.9j ['$' for help]\r\n")
+
+
+def test_silent_port_times_out():
+    clock = SimulatedClock()
+    fake = FakeGrbl(clock, welcome=b"")
+    fake._write_raw = lambda data, wait: len(data)  # swallows everything: no GRBL there
+    plotter = GrblPlotter("fake", profile=PROFILE, clock=clock, link_factory=lambda: fake)
+    with pytest.raises(LinkTimeout):
+        plotter.open()
+
+
+def test_alarm_locked_grbl_needs_permission_to_unlock():
+    dev, clock = new_sim()
+    dev.settings[22] = 1.0  # homing enabled: GRBL boots alarm-locked
+    dev.inject("reset")
+    with pytest.raises(ProtocolError, match=r"unlock=true") as info:
+        sim_plotter(dev, clock)
+    assert info.value.code == "Alarm"
+    assert not any(line == "$X" for _, line in dev.log)
+    plotter = sim_plotter(dev, clock, unlock=True)
+    assert any(line == "$X" for _, line in dev.log)
+    assert dev.state == "Idle"
+    plotter.close()
+
+
+# -- byte-exact strokes ------------------------------------------------------------------------------
+def test_unit_square_bytes():
+    plotter, fake = fake_plotter()
+    before = len(fake.gcode())
+    plotter.plot(squares(1, at=(0.0, 0.0)))
+    assert fake.gcode()[before:] == (
+        b"G0 X0.000 Y0.000\nM3 S50\nG4 P0.15\nG1 X10.000 Y0.000 F3000\nG1 X10.000 Y10.000\n"
+        b"G1 X0.000 Y10.000\nG1 X0.000 Y0.000\nM3 S500\nG4 P0.15\n"
+    )
+    plotter.close()
+    assert fake.gcode().endswith(b"M3 S500\nG4 P0.15\nM5\n")
+
+
+def test_pen_options_from_the_url():
+    url = pixelpen.display.registry.parse_url("grbl:/dev/null?pen=z&pen_up=5&pen_down=-0.2&dwell=0.05&feed=1500")
+    plotter = GrblPlotter.from_url(url)
+    assert plotter.pen_motion.up_lines() == ["G0 Z5", "G4 P0.05"]
+    assert plotter.pen_motion.down_lines() == ["G1 Z-0.2 F600", "G4 P0.05"]
+    assert plotter.feed == 1500.0
+    url = pixelpen.display.registry.parse_url("grbl:/dev/null?pen_up=off&pen_down=120&stream=wait")
+    plotter = GrblPlotter.from_url(url)
+    assert plotter.pen_motion.up_lines() == ["M5", "G4 P0.15"] and plotter.stream == "wait"
+
+
+@pytest.mark.parametrize("query", ["stream=fast", "pen=laser", "pen_down=off", "dwell=-1", "feed=0", "rx_buffer=8",
+                                   "colour=red"])
+def test_bad_url_options_are_refused(query):
+    with pytest.raises((URLError, ConfigError)):
+        GrblPlotter.from_url(pixelpen.display.registry.parse_url(f"grbl:/dev/null?{query}"))
+
+
+# -- flow control --------------------------------------------------------------------------------------
+def test_character_counting_fills_but_never_overflows_the_rx_buffer():
+    plotter, fake = fake_plotter()
+    plotter.plot(squares(12))
+    assert fake.overflowed == 0
+    assert 100 < fake.max_fill <= 128  # the buffer is really used: several lines in flight
+    plotter.close()
+
+
+def test_send_and_wait_keeps_one_line_in_flight():
+    plotter, fake = fake_plotter(stream="wait")
+    plotter.plot(squares(3))
+    longest = max(len(line) + 1 for line in fake.lines)
+    assert fake.max_fill <= longest
+    plotter.close()
+
+
+def test_counting_against_the_simulators_rx_buffer():
+    dev, clock = new_sim()
+    low = []
+    receive = dev.receive
+
+    def watch(data):
+        receive(data)
+        low.append(dev.rx_free)
+
+    dev.receive = watch
+    plotter = sim_plotter(dev, clock)
+    plotter.plot(squares(8))
+    plotter.close()
+    assert dev.overflowed == 0
+    assert min(low) < 40  # most of GRBL's 128 bytes were in use at times
+
+
+def test_both_streaming_modes_plot_the_same_paper():
+    images = []
+    for stream in ("counting", "wait"):
+        dev, clock = new_sim()
+        plotter = sim_plotter(dev, clock, stream=stream)
+        plotter.plot(squares(4))
+        plotter.close()
+        images.append(dev.paper_image(50).array)
+    assert np.array_equal(images[0], images[1])
+    assert (images[0] != 255).any()
+
+
+# -- errors and alarms -----------------------------------------------------------------------------------
+def test_error_reply_names_the_line_and_its_meaning():
+    plotter, _fake = fake_plotter(error_for=lambda line: 22 if line.startswith("G1 X30.000") else None)
+    with pytest.raises(ProtocolError) as info:
+        plotter.plot(squares(1))
+    err = info.value
+    assert err.code == 22 and err.command == "G1 X30.000 Y20.000 F3000"
+    assert "Undefined feed rate" in str(err) and "G1 X30.000 Y20.000 F3000" in str(err)
+    plotter.abort()
+
+
+def test_alarm_names_its_meaning_and_the_line_being_run():
+    plotter, _fake = fake_plotter(alarm_at=6)
+    with pytest.raises(ProtocolError) as info:
+        plotter.plot(squares(1))
+    assert info.value.code == "ALARM:1" and "Hard limit" in str(info.value)
+    assert info.value.command is not None and info.value.command.startswith("G")
+    plotter.abort()
+
+
+def test_a_line_lost_on_the_wire_interrupts_instead_of_hanging():
+    plotter, _fake = fake_plotter(lose=lambda line: line == "G1 X30.000 Y30.000")
+    with pytest.raises(PlotInterrupted) as info:
+        plotter.plot(squares(2))
+    assert isinstance(info.value.cause, LinkTimeout) and "never acknowledged" in str(info.value.cause)
+    plotter.abort()
+
+
+def test_garbled_status_report_is_a_parse_error():
+    plotter, fake = fake_plotter()
+    fake.out += b"<Idle|MPos:0.000,zero,0.000|FS:0,0>\r\n"
+    with pytest.raises(pixelpen.ParseError):
+        plotter.query_status()
+
+
+# -- end to end through sim:grbl --------------------------------------------------------------------------
+def test_square_lands_where_it_should_on_the_simulated_paper():
+    with pixelpen.open("sim:grbl?speed=fast") as plotter:
+        dev = plotter.link.port.sim_device
+        plotter.plot(squares(1, at=(20.0, 30.0)))
+        assert [line for _, line in dev.log][-9:] == [
+            "G0X20.000Y30.000", "M3S50", "G4P0.15", "G1X30.000Y30.000F3000", "G1X30.000Y40.000",
+            "G1X20.000Y40.000", "G1X20.000Y30.000", "M3S500", "G4P0.15"]
+    expected = render([np.array([[20, 30], [30, 30], [30, 40], [20, 40], [20, 30]], float)])
+    assert np.array_equal(dev.paper_image(50).array, expected)
+
+
+def test_drawing_a_picture_puts_ink_at_its_world_coordinates():
+    with pixelpen.open("sim:grbl?speed=fast") as plotter:
+        dev = plotter.link.port.sim_device
+        plotter.draw(pixelpen.Polyline([(50, 60), (90, 60), (90, 100)]))
+    (_, ink), = dev.paper.strokes()
+    assert np.allclose(ink, [[50, 60], [90, 60], [90, 100]], atol=0.01)
+
+
+def test_z_axis_pen_draws_the_same_square():
+    with pixelpen.open("sim:grbl?speed=fast&pen=z&pen_up=3&pen_down=0") as plotter:
+        dev = plotter.link.port.sim_device
+        plotter.plot(squares(1, at=(20.0, 30.0)))
+        assert [line for _, line in dev.log][-9:-6] == ["G0X20.000Y30.000", "G1Z0F600", "G4P0"]
+    # the simulator boots with work Z = 0, i.e. touching, so its sheet has a dot at home before any command
+    ink = [s for _, s in dev.paper.strokes() if not (len(s) == 1 and np.allclose(s[0], 0.0))]
+    expected = render([np.array([[20, 30], [30, 30], [30, 40], [20, 40], [20, 30]], float)])
+    assert np.array_equal(render(ink), expected)
+
+
+def test_auto_port_finds_an_arduino(monkeypatch):
+    from pixelpen.devices import grbl
+    from pixelpen.drivers.discovery import DiscoveredDevice
+    from pixelpen.errors import LinkError
+
+    ports = [DiscoveredDevice("serial", "/dev/ttyS0", "ttyS0"),
+             DiscoveredDevice("serial", "/dev/ttyACM0", "Arduino Uno", 0x2341, 0x0043, model="grbl")]
+    monkeypatch.setattr(grbl, "list_serial_ports", lambda: ports)
+    assert grbl.find_grbl_port() == "/dev/ttyACM0"
+    monkeypatch.setattr(grbl, "list_serial_ports", lambda: ports[:1])
+    with pytest.raises(LinkError, match="ttyS0"):
+        grbl.find_grbl_port()
+
+
+def test_confirmation_means_on_paper():
+    dev, clock = new_sim()
+    seen = []
+
+    def check(progress):
+        seen.append((progress.strokes_done, len(dev.paper.strokes()), dev.paper.pen_is_down))
+
+    plotter = sim_plotter(dev, clock, on_progress=check)
+    plotter.plot(squares(5))
+    plotter.close()
+    assert [done for done, _, _ in seen] == [1, 2, 3, 4, 5]
+    assert all(strokes == done and not down for done, strokes, down in seen)
+
+
+def test_ctrl_c_leaves_the_pen_up_and_the_machine_idle():
+    dev, clock = new_sim()
+
+    def interrupt(progress):
+        if progress.strokes_done == 2:
+            raise KeyboardInterrupt
+
+    plotter = sim_plotter(dev, clock, on_progress=interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        plotter.plot(squares(10))
+    assert dev.state == "Idle" and not dev.paper.pen_is_down
+    dev.receive(b"?")
+    status = dev.take_output().decode()
+    assert re.search(r"\|FS:0,0\b", status), status  # no motion, spindle (servo PWM) off
+    assert len(dev.paper.strokes()) < 10
+    plotter.close()
+
+
+def test_feed_hold_pauses_and_cycle_start_resumes():
+    """The hold button mid-plot pauses GRBL; the operator's cycle start (``~``) resumes; nothing is lost."""
+    reference, clock = new_sim()
+    plotter = sim_plotter(reference, clock)
+    plotter.plot(squares(4))
+    plotter.close()
+
+    class Operator(SimulatedClock):
+        """Simulated time with an operator who presses cycle start three seconds into a hold."""
+
+        def advance(self, seconds):
+            super().advance(seconds)
+            if dev.state.startswith("Hold") and self.now() > held_since[0] + 3.0:
+                dev.receive(b"~")
+            elif dev.state.startswith("Hold") and held_since[0] == float("inf"):
+                held_since[0] = self.now()
+
+    held_since = [float("inf")]
+    clock = Operator()
+    dev, _ = new_sim(clock)
+    plotter = sim_plotter(dev, clock, url_extra="&pause_after=200")
+    plotter.plot(squares(4))
+    plotter.close()
+    assert held_since[0] < float("inf")
+    assert np.array_equal(dev.paper_image(50).array, reference.paper_image(50).array)
+
+
+@pytest.mark.parametrize("fault", ["drop_after", "stall_after"])
+def test_resume_after_fault_gives_the_same_paper(fault):
+    """For many fault points, the interrupted-and-resumed plot equals the uninterrupted one pixel for pixel."""
+    drawing = squares(3, side_mm=4.0, step_mm=2.5)
+    reference, clock = new_sim()
+    plotter = sim_plotter(reference, clock)
+    plotter.plot(drawing)
+    plotter.close()
+    want = reference.paper_image(50).array
+    rng = np.random.default_rng(7 if fault == "drop_after" else 11)
+    interrupted = 0
+    for at in rng.integers(40, 420, size=6):
+        dev, clock = new_sim()
+        plotter = sim_plotter(dev, clock, url_extra=f"&{fault}={at}", timeout=0.5)
+        try:
+            plotter.plot(drawing)
+        except PlotInterrupted as exc:
+            interrupted += 1
+            assert exc.resume_from == plotter.confirmed
+            plotter.resume_after_fault()
+        plotter.close()
+        assert plotter.confirmed == len(drawing)
+        assert np.array_equal(dev.paper_image(50).array, want), f"{fault}={at}"
+    assert interrupted >= 4
