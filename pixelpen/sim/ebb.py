@@ -18,7 +18,10 @@ executes, ``n`` wait, and one more blocks the USB parser, its reply held back un
 parser is blocked the board reads only one more 64-byte USB packet (``ready_to_receive`` goes low).
 The paper: AxiDraw mixed axes (motor1 = A+B, motor2 = A−B) at 80 steps/mm per axis in 1/16 stepping
 (halved per coarser EM mode), x right, y down, origin at the home corner (top left).  The pen touches
-the paper while the servo's pulse width is past the midpoint between SC,4 (up) and SC,5 (down).
+the paper while the servo's pulse width is past the midpoint between SC,4 (up) and SC,5 (down).  Servo
+power (RB1) is off at boot and after ``R`` (SR: "On boot, the power to the RC Servo ... will be off"), so
+the pen rests up until a command moves the servo (SP, TP, S2 on RP4); that first move starts from the
+pen-up position, SC,4.  Ink is recorded once per move (and where a pen or motor change splits one).
 Replies in legacy syntax after an error: the error line ends in ``OK\\r\\n`` on fw >= 3.0 (ebb.html,
 "Returned Errors") and in ``\\r\\n`` before.  Timing is exact to the 40 µs tick; the parser itself
 takes no time.  Faults: "power-loss" (V+ falls to 0 V: motors unpowered, ``QC`` reads 0, QG bit 6 once
@@ -90,6 +93,7 @@ class _Command:
     linear: tuple[int, int] | None = None  # constant-rate moves: total motor steps
     t0: float = 0.0
     ticks: int = 0
+    ends: tuple[int, int] = (0, 0)  # accumulator moves: the tick at which each axis stops (LM: its last step)
     moving: tuple[bool, bool] = (False, False)
 
 
@@ -133,7 +137,7 @@ class EbbSimulator:
         self._boot_syntax = syntax
         self.clock = clock if clock is not None else REAL_CLOCK
         width, height = TRAVEL_MM[machine]
-        self.paper = Paper(width, height, y_down=True, pen_colours={1: pen_colour}, pen_width_mm=pen_width)
+        self._paper = Paper(width, height, y_down=True, pen_colours={1: pen_colour}, pen_width_mm=pen_width)
         self.stats = WireStats()
         self.log: list[tuple[float, str]] = []
         self.nickname = ""
@@ -182,7 +186,7 @@ class EbbSimulator:
         else:  # pragma: no cover - a bug, never a hang
             raise RuntimeError("ebb simulator: event loop does not converge")
         if t > self._now:
-            self._idle_or_ink(t)
+            self._still_pen(t)
             self._now = t
         self._service()
 
@@ -237,6 +241,13 @@ class EbbSimulator:
         return self._pen_state_up
 
     @property
+    def paper(self) -> Paper:
+        """The sheet, with the executing move inked up to the current clock time."""
+        self._catch_up()
+        self._split_ink(self._now)
+        return self._paper
+
+    @property
     def syntax(self) -> str:
         """Current response syntax: 'legacy' or 'future'."""
         return "future" if self._future else "legacy"
@@ -274,7 +285,7 @@ class EbbSimulator:
         self._enabled = [False, False]
         self._servo_min, self._servo_max = SERVO_MIN, SERVO_MAX
         self._rate_up = self._rate_down = 0
-        self._servo = ServoTrack(SERVO_MIN, self._now)
+        self._servo: ServoTrack | None = None  # RB1 servo power is off at boot: the pen rests up
         self._pen_state_up = True
         self._servo_power_until: float | None = None
         self._servo_timeout = SERVO_TIMEOUT_MS
@@ -315,11 +326,15 @@ class EbbSimulator:
     def _engine_end(self) -> float | None:
         return None if self._exec is None else self._exec.t0 + self._exec.duration
 
-    def _idle_or_ink(self, t: float) -> None:
-        if self._exec is not None:
-            self._ink(self._exec, self._inked_until, t)
-            self._inked_until = t
-        self._sync_pen(t)
+    def _still_pen(self, t: float) -> None:
+        """Bring the paper's pen in line with the servo while the carriage stands still.
+
+        A move is inked as one segment when it ends, or up to the moment something changes the pen or
+        the motors under it (``_split_ink``), so time passing within a move costs nothing.
+        """
+        cmd = self._exec
+        if cmd is None or (cmd.axes is None and cmd.linear is None):
+            self._sync_pen(t)
 
     def _start_next(self, t: float) -> None:
         if self._exec is not None or not self._fifo:
@@ -349,7 +364,7 @@ class EbbSimulator:
         self._apply_steps(cmd, d1, d2, te)
         if cmd.axes is not None:
             for k in range(2):
-                self._acc[k] = cmd.axes[k].remainder(cmd.ticks)
+                self._acc[k] = cmd.axes[k].remainder(min(cmd.ticks, cmd.ends[k]))
         self._exec = None
         if cmd.axes is not None or cmd.linear is not None or cmd.duration > 0:
             self._last_motion_end = te
@@ -381,7 +396,7 @@ class EbbSimulator:
         spm = self._steps_per_mm()
         dx = (d1 * e1 + d2 * e2) / 2.0 / spm
         dy = (d1 * e1 - d2 * e2) / 2.0 / spm
-        hi = np.array([self.paper.width_mm, self.paper.height_mm])
+        hi = np.array([self._paper.width_mm, self._paper.height_mm])
         return np.clip(xy + np.array([dx, dy]), 0.0, hi)
 
     def _motors_effective(self, t: float) -> tuple[float, float]:
@@ -424,21 +439,21 @@ class EbbSimulator:
 
     def _contact(self, t: float) -> bool:
         mid, side = self._servo_down_side()
-        return side != 0 and (self._servo.position(t) - mid) * side > 0
+        return self._servo is not None and side != 0 and (self._servo.position(t) - mid) * side > 0
 
     def _contact_change(self, t0: float, t1: float) -> float | None:
         mid, side = self._servo_down_side()
-        if side == 0:
+        if side == 0 or self._servo is None:
             return None
         tc = self._servo.crossing(mid)
         return tc if tc is not None and t0 < tc < t1 else None
 
     def _sync_pen(self, t: float) -> None:
         down = self._contact(t)
-        if down and not self.paper.pen_is_down:
-            self.paper.pen_down(self._xy_at(t))
-        elif not down and self.paper.pen_is_down:
-            self.paper.pen_up()
+        if down and not self._paper.pen_is_down:
+            self._paper.pen_down(self._xy_at(t))
+        elif not down and self._paper.pen_is_down:
+            self._paper.pen_up()
 
     def _split_ink(self, t: float) -> None:
         """Ink the executing move up to ``t`` (before something changes the pen or the motors)."""
@@ -456,11 +471,11 @@ class EbbSimulator:
         for a, b in spans:
             mid = 0.5 * (a + b)
             if not self._contact(mid):
-                self.paper.pen_up()
+                self._paper.pen_up()
                 continue
             pts = self._track(cmd, a, b)
-            self.paper.pen_down(pts[0])
-            self.paper.line_to(pts)
+            self._paper.pen_down(pts[0])
+            self._paper.line_to(pts)
 
     def _track(self, cmd: _Command, ta: float, tb: float) -> np.ndarray:
         """Carriage positions (mm) along ``cmd`` between ta and tb, clamped at the ends of travel.
@@ -468,14 +483,14 @@ class EbbSimulator:
         A constant-rate move is a straight line (its exact clamped path); an accelerated one is
         sampled 33 times from the accumulator's closed form.
         """
-        hi = np.array([self.paper.width_mm, self.paper.height_mm])
+        hi = np.array([self._paper.width_mm, self._paper.height_mm])
         e1, e2 = self._motors_effective(ta)
         spm = self._steps_per_mm()
         if cmd.linear is not None or cmd.axes is None:
             d = np.array([self._move_steps(cmd, ta), self._move_steps(cmd, tb)], dtype=np.float64)
         else:
-            ticks = np.clip(np.floor((np.linspace(ta, tb, 33) - cmd.t0) / TICK + 1e-6), 0, cmd.ticks)
-            d = np.column_stack([ax.direction * ax.steps_sampled(ticks) for ax in cmd.axes])
+            ticks = np.clip(np.floor((np.linspace(ta, tb, 33) - cmd.t0) / TICK + 1e-6), 0, cmd.ticks).astype(int)
+            d = np.array([[ax.direction * ax.steps_at(k) for ax in cmd.axes] for k in ticks.tolist()], dtype=np.float64)
         xy = self._xy + np.column_stack([(d[:, 0] * e1 + d[:, 1] * e2), (d[:, 0] * e1 - d[:, 1] * e2)]) / (2 * spm)
         if len(xy) == 2:
             return clamp_path(xy[0], xy[1], np.zeros(2), hi)
@@ -646,11 +661,12 @@ class EbbSimulator:
                 for k, a in enumerate(cmd.axes)  # type: ignore[arg-type]
             )
             if any(a.steps is not None for a in cmd.axes):  # type: ignore[union-attr]
-                ends = [a.completion() or 0 for a in cmd.axes]  # type: ignore[union-attr]
-                cmd.ticks = max(ends)
+                cmd.ends = tuple(a.completion() or 0 for a in cmd.axes)  # type: ignore[assignment,union-attr]
+                cmd.ticks = max(cmd.ends)
                 cmd.duration = cmd.ticks * TICK
 
         cmd.ticks = ticks
+        cmd.ends = (ticks, ticks)
         cmd.begin = begin
         self._queue(name, cmd, reply)
 
@@ -769,7 +785,10 @@ class EbbSimulator:
 
     # ---- pen -------------------------------------------------------------------------------------
     def _servo_move(self, t: float, target: float, rate: float) -> None:
+        """Power the servo and slew it to ``target`` (its first move starts from the pen-up position)."""
         self._split_ink(t)
+        if self._servo is None:
+            self._servo = ServoTrack(self._servo_min, t)
         self._servo.move(t, target, rate)
         self._servo_power_until = None if self._servo_timeout == 0 else t + self._servo_timeout / 1000.0
         self._servo_always_on = self._servo_timeout == 0
@@ -830,7 +849,7 @@ class EbbSimulator:
             self._rate_up = value
         elif param == 12:
             self._rate_down = value
-        self._sync_pen(self._now)
+        self._split_ink(self._now)
         self._reply(name)
 
     def _cmd_SR(self, name: str, v: list) -> None:

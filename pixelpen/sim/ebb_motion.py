@@ -3,14 +3,14 @@
 Written from evil-mad/EggBot ``docs/ebb.html`` (LM "Methods and consequences", SM/XM/HM limits, S2/SC
 servo rates and the FAQ's servo timing).  Every 40 µs an axis adds Accel (after Jerk) to Rate, rolls a
 negative Rate over by 2³¹, adds Rate to its accumulator and steps when the accumulator passes 2³¹.
+Rollovers are counted exactly for jerk-free moves; with Jerk (whose L3 description is "coming soon")
+the accumulator follows its closed form without them.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-
-import numpy as np
 
 __all__ = ["MAX_STEP_RATE", "MIN_STEP_RATE", "TICK", "AccumulatorAxis", "ServoTrack"]
 
@@ -20,6 +20,20 @@ MAX_STEP_RATE = 25000.0  # steps/s
 MIN_STEP_RATE = 0.00001164  # steps/s (fw 3.0)
 SERVO_PERIOD = 0.024  # one RC-servo frame: 8 channels x 3 ms
 _TICK_CAP = 1 << 36  # ~ 32 days of ticks: a move that would take longer never ends
+
+
+def _floor_sum(n: int, m: int, a: int, b: int) -> int:
+    """Sum of floor((a*i + b) / m) for i in 0..n-1 (m > 0), in O(log m) steps (Euclid-like reduction)."""
+    total = 0
+    while n > 0:
+        qa, a = divmod(a, m)
+        qb, b = divmod(b, m)
+        total += qa * n * (n - 1) // 2 + qb * n
+        y = a * n + b
+        if y < m:
+            break
+        n, b, m, a = y // m, y % m, a, m
+    return total
 
 
 @dataclass(frozen=True)
@@ -36,14 +50,19 @@ class AccumulatorAxis:
     def _rate_adjusted(self) -> int:
         return self.rate - int(self.accel / 2)
 
-    def _rollover_tick(self) -> int | None:
-        """First tick at which Rate goes negative and rolls over (jerk-free moves only)."""
+    def _rolled(self, t: int) -> int:
+        """Sum over ticks 1..t of the rollovers made so far (each adds 2³¹ to every later Rate).
+
+        A decelerating jerk-free axis rolls over whenever Rate + Accel goes negative, so Rate at tick k
+        is (R + A·k) mod 2³¹ once R + A·k < 0: any number of rollovers, counted exactly.
+        """
         if self.jerk or self.accel >= 0:
-            return None
+            return 0
         r = self._rate_adjusted()
-        if r + self.accel >= 0:
-            return r // (-self.accel) + 1
-        return 1
+        k0 = max(1, r // -self.accel + 1)  # first tick at which R + A·k < 0
+        if t < k0:
+            return 0
+        return -_floor_sum(t - k0 + 1, TWO31, self.accel, r + self.accel * k0)
 
     def accumulated(self, ticks: int) -> int:
         """Accumulator total after ``ticks`` ISR periods (exact integer, before steps are removed)."""
@@ -52,10 +71,7 @@ class AccumulatorAxis:
             return self.acc0
         total = self.acc0 + t * self._rate_adjusted() + self.accel * t * (t + 1) // 2
         total += self.jerk * t * (t + 1) * (t + 2) // 6
-        k0 = self._rollover_tick()
-        if k0 is not None and t >= k0:
-            total += (t - k0 + 1) * TWO31
-        return total
+        return total + self._rolled(t) * TWO31
 
     def steps_at(self, ticks: int) -> int:
         """Steps taken after ``ticks`` periods (at most one per tick, capped at ``steps``)."""
@@ -63,18 +79,19 @@ class AccumulatorAxis:
         return n if self.steps is None else min(n, self.steps)
 
     def remainder(self, ticks: int) -> int:
-        """The accumulator value left after the move (for a later move that does not clear it)."""
+        """The accumulator left after the axis ran ``ticks`` periods (an LM axis stops adding at its last step)."""
         return self.accumulated(ticks) - self.steps_at(ticks) * TWO31
 
     def completion(self) -> int | None:
         """Ticks until ``steps`` steps are done (0 for none); None when the axis never gets there."""
         if not self.steps:
             return 0
-        if self.steps_at(_TICK_CAP) < self.steps:
-            return None
-        lo, hi = 0, 1
+        hi = 1
         while self.steps_at(hi) < self.steps:
-            lo, hi = hi, hi * 2
+            if hi >= _TICK_CAP:
+                return None
+            hi *= 2
+        lo = hi // 2
         while hi - lo > 1:
             mid = (lo + hi) // 2
             if self.steps_at(mid) >= self.steps:
@@ -82,19 +99,6 @@ class AccumulatorAxis:
             else:
                 lo = mid
         return hi
-
-    def steps_sampled(self, ticks: np.ndarray) -> np.ndarray:
-        """Vectorised :meth:`steps_at` (float arithmetic; exact enough for drawing the path)."""
-        t = np.maximum(np.asarray(ticks, dtype=np.float64), 0.0)
-        acc = self.acc0 + t * self._rate_adjusted() + self.accel * t * (t + 1) / 2
-        acc = acc + self.jerk * t * (t + 1) * (t + 2) / 6
-        k0 = self._rollover_tick()
-        if k0 is not None:
-            acc = acc + np.maximum(t - k0 + 1, 0.0) * TWO31
-        n = np.clip(np.floor(acc / TWO31), 0, t)
-        if self.steps is not None:
-            n = np.minimum(n, self.steps)
-        return n
 
 
 class ServoTrack:

@@ -9,7 +9,9 @@ Written from gnea/grbl's documentation (``doc/markdown/interface.md``, ``command
 ``pen=servo``          pen on a servo spindle: down while M3/M4 is on with an output S >= ``pen_threshold``
 ``pen=servo-inverted`` servo mounted the other way: down while M3/M4 outputs less than ``pen_threshold``
                        (plotters.md: "S50 down / S500 up").  In both servo modes M5 (no pulses) is up
-``pen=z``              pen on the Z axis: down wherever the work Z is <= 0
+``pen=z``              pen on the Z axis: down wherever the work Z is <= 0, once a move has driven Z
+                       (GRBL boots assuming Z = 0, but the pen of a parked plotter is up: until the
+                       first Z motion after power-up or a reboot it stays up, so nothing inks at home)
 ``pen_threshold=N``    servo output dividing up from down, default 500 (half of $30=1000)
 ``rx_buffer=N``        serial RX ring buffer in bytes, default 128 (GRBL's RX_BUFFER_SIZE)
 ``planner=N``          BLOCK_BUFFER_SIZE, default 16 (15 usable blocks, as ``Bf:15,128`` shows)
@@ -294,6 +296,8 @@ class GrblSimulator:
         self._ovr_counter = 0
         self._idle_since: float | None = None
         self._alarm = keep_alarm
+        if power_up:
+            self._z_parked = True  # the Z pen rests up until a motion drives the Z axis
         if power_up and self._flag(22):
             self._alarm = True
         self._pen_update()
@@ -1137,7 +1141,7 @@ class GrblSimulator:
         """Bring the paper's pen state in line with the spindle (or Z) now."""
         down = self._pen_down_for(block)
         if down is None:
-            down = float(self._current_mpos()[2] - self.gc.wco()[2]) <= 0.0
+            down = not self._z_parked and float(self._current_mpos()[2] - self.gc.wco()[2]) <= 0.0
         if down and not self.paper.pen_is_down:
             self.paper.pen_down(self._phys(self._current_mpos())[:2])
         elif not down and self.paper.pen_is_down:
@@ -1159,8 +1163,9 @@ class GrblSimulator:
             return
         down = self._pen_down_for(block)
         if down is None:
+            self._z_parked = self._z_parked and block.unit[2] == 0.0
             wco_z = block.data.wco_z if isinstance(block.data, _MovePayload) else 0.0
-            pieces = _z_down_pieces(block, s0, s1, wco_z)
+            pieces = [] if self._z_parked else _z_down_pieces(block, s0, s1, wco_z)
         else:
             pieces = [(s0, s1)] if down else []
         cur = s0

@@ -324,8 +324,6 @@ def test_sm_and_xm_draw_the_same_paper():
     assert np.array_equal(images[0], images[1])
 
 
-@pytest.mark.xfail(reason="sim/ebb.py rejects decelerating LM moves with !6 (ebb.html LM example 7 is one)",
-                   raises=ProtocolError, strict=False)
 def test_lm_moves_draw_the_square():
     dev, clock = new_sim()
     plotter = sim_plotter(dev, clock, moves="lm")

@@ -157,6 +157,39 @@ def test_sm_xm_lm_sequence_ends_at_hand_computed_positions():
     assert np.allclose(rig.dev.position_mm, before + [1.0, 0.0])  # 40 steps at 40/mm
 
 
+@pytest.mark.parametrize("command, seconds, steps", [
+    ("LM,3865471,60,1732,0,0,0", 0.4068, b"60,0"),  # example 1: 45 -> 250 steps/s
+    ("LM,33865471,1000,0,0,0,0", 1000 / (33865471 / 85899.35), b"1000,0"),  # example 2 (Rate ~ 85,899.35 x F)
+    ("LM,85899346,10,0,17180814,2,0", 0.010, b"10,2"),  # example 3
+    ("LM,85899346,500,0,85899346,250,0", 0.500, b"500,250"),  # example 4: axis 2 is done after 250 ms
+    ("LM,17180814,6,0,57266231,20,0", 0.030, b"6,20"),  # example 5
+    ("LM,42950000,50,13400,0,0,0", 0.077, b"50,0"),  # example 6: 500 -> 800 steps/s
+    ("LM,17179000,75,-687,8592000,75,687", 0.500, b"75,75"),  # example 7: axis 1 decelerates
+    ("LM,-17179000,75,687,8592000,-75,687", 0.500, b"-75,-75"),  # 7 backwards: a negative Rate flips Accel too
+])
+def test_documented_lm_examples(command, seconds, steps):
+    rig = Rig()
+    assert rig.send(command + "\r") == b"OK\r\n"
+    assert rig.dev.next_event_time() == pytest.approx(seconds, rel=0.002)
+    rig.until_idle()
+    assert rig.send("QS\r") == steps + b"\n\rOK\r\n"
+
+
+def test_lm_axis_that_finishes_first_stops_accumulating():
+    rig = Rig()
+    rig.send("LM,85899346,500,0,85899346,250,0\r")  # example 4: axis 2 stops after 250 steps (6250 ticks)
+    rig.until_idle()
+    assert rig.send("QU,200\r") == b"QU,1000,500\r\nOK\r\n"  # 12500 and 6250 ticks of 85899346, less the steps
+
+
+def test_lm_is_rejected_only_when_no_axis_can_move():
+    rig = Rig()
+    assert rig.send("LM,85899346,0,0,0,10,0\r") == b"!6 Err: Invalid parameter valueOK\r\n"  # ebb.html restriction
+    assert rig.send("LM,0,10,-5,0,0,0\r") == b"OK\r\n"  # Rate 2 - 5 rolls over to 2^31 - 3 on tick 1
+    rig.until_idle()
+    assert rig.send("QS\r") == b"10,0\n\rOK\r\n" and rig.clock.now() == pytest.approx(11 * 40e-6)  # ticks 2..11
+
+
 def test_fifo_depth_blocks_the_parser_and_its_reply():
     rig = Rig()
     assert rig.send("SM,1000,100,100\rSM,1000,100,100\r") == b"OK\r\nOK\r\n"  # executing + queued
@@ -217,6 +250,51 @@ def test_pen_strokes_on_the_paper():
     assert len(strokes) == 1
     assert np.allclose(strokes[0][1][[0, -1]], [[10, 10], [30, 10]])  # y down, mm
     assert np.allclose(rig.dev.position_mm, [30, 20])
+
+
+def test_unpowered_servo_leaves_no_ink_until_a_servo_command():
+    rig = Rig()  # SR: servo power (RB1) is off at boot; SC,4/SC,5 only configure it
+    rig.send("EM,1,1\rSC,4,20641\rSC,5,15248\rSM,500,800,800\r")
+    rig.until_idle()
+    assert rig.dev.paper.strokes() == [] and rig.send("QR\r") == b"0\n\rOK\r\n"
+    rig.send("SP,1,120\rSM,500,800,0\r")  # the first servo move starts at the pen-up position: no touch
+    rig.until_idle()
+    assert rig.dev.paper.strokes() == [] and rig.send("QR\r") == b"1\n\rOK\r\n"
+    rig.send("SP,0,150\rSM,500,800,0\rSP,1,150\r")
+    rig.until_idle()
+    (_, ink), = rig.dev.paper.strokes()
+    assert np.allclose(ink, [[15, 5], [20, 10]])
+    rig.send("SP,0,150\rR\rSM,500,800,0\r")  # R stops the servo output: the pen rests up again
+    rig.until_idle()
+    assert len(rig.dev.paper.strokes()) == 2 and rig.dev.paper.strokes()[1][1].shape == (1, 2)
+
+
+def test_ink_is_one_point_per_move_however_the_bytes_arrive():
+    moves = "".join(f"SM,20,{40 * (k % 3)},{-30 * (k % 2)}\r" for k in range(40))
+    at_once, by_byte = Rig(), Rig()
+    for rig in (at_once, by_byte):
+        rig.send("CU,4,8\rSP,0\r")
+    at_once.send(moves)
+    for b in moves.encode():
+        by_byte.run(0.0005)
+        by_byte.send(bytes([b]))
+    for rig in (at_once, by_byte):
+        rig.until_idle()
+    (_, a), = at_once.dev.paper.strokes()
+    (_, b), = by_byte.dev.paper.strokes()
+    assert len(a) == len(b) == 1 + sum(1 for k in range(40) if k % 3 or k % 2)
+    assert np.array_equal(a, b)
+
+
+def test_paper_read_mid_move_shows_the_ink_so_far():
+    rig = Rig()
+    rig.send("SP,0\rXM,1000,800,0\r")  # 10 mm along x in 1 s
+    rig.run(0.25)
+    (_, ink), = rig.dev.paper.strokes()
+    assert np.allclose(ink, [[0, 0], [2.5, 0]])
+    rig.until_idle()
+    (_, ink), = rig.dev.paper.strokes()
+    assert np.allclose(ink, [[0, 0], [2.5, 0], [10, 0]])
 
 
 def test_pen_contact_follows_the_servo_slew():

@@ -9,8 +9,8 @@ from hypothesis import strategies as st
 from pixelpen.sim.ebb_motion import TICK, TWO31, AccumulatorAxis, ServoTrack
 
 
-def reference_steps(rate: int, accel: int, ticks: int, acc0: int = 0, limit: int | None = None) -> int:
-    """ebb.html "Methods and consequences", one 40 µs tick at a time."""
+def reference(rate: int, accel: int, ticks: int, acc0: int = 0, limit: int | None = None) -> tuple[int, int]:
+    """ebb.html "Methods and consequences", one 40 µs tick at a time: (steps, accumulator)."""
     r = rate - int(accel / 2)
     acc = acc0
     steps = 0
@@ -24,7 +24,12 @@ def reference_steps(rate: int, accel: int, ticks: int, acc0: int = 0, limit: int
         if acc >= TWO31:
             steps += 1
             acc -= TWO31
-    return steps
+    return steps, acc
+
+
+def reference_steps(rate: int, accel: int, ticks: int, acc0: int = 0, limit: int | None = None) -> int:
+    """Steps of :func:`reference`."""
+    return reference(rate, accel, ticks, acc0, limit)[0]
 
 
 def test_lm_example_3_is_10_ms():
@@ -47,6 +52,21 @@ def test_lm_example_1_takes_0_4068_s():
     assert ax.completion() * TICK == pytest.approx(0.4068, rel=0.002)
 
 
+def test_lm_example_7_decelerates_and_takes_500_ms():
+    # LM,17179000,75,-687,8592000,75,687: 200 -> 100 and 100 -> 200 steps/s over 75 steps each, 500 ms
+    slowing = AccumulatorAxis(1, 17179000, -687, steps=75)
+    speeding = AccumulatorAxis(1, 8592000, 687, steps=75)
+    assert slowing.completion() * TICK == pytest.approx(0.5) and speeding.completion() * TICK == pytest.approx(0.5)
+
+
+def test_deceleration_past_zero_rolls_over_and_finishes():
+    # Rate falls below 0 after 1000 ticks and rolls over to ~2^31: a step on nearly every tick after that
+    ax = AccumulatorAxis(1, 1000 * 1000, -1000, steps=50)
+    end = ax.completion()
+    assert reference(1000 * 1000, -1000, end, limit=50)[0] == 50 > reference(1000 * 1000, -1000, end - 1)[0]
+    assert 1000 < end < 1100
+
+
 def test_lt_example_3_covers_75_steps_each():
     # LT,12500,17179000,-687,8592000,687: 500 ms, 75 steps on each axis
     assert AccumulatorAxis(1, 17179000, -687).steps_at(12500) == 75
@@ -60,13 +80,21 @@ def test_closed_form_matches_the_tick_by_tick_reference(rate, accel, ticks, acc0
     assert ax.steps_at(ticks) == reference_steps(rate, accel, ticks, acc0)
 
 
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.integers(-(2**31), -1), st.integers(0, 3000), st.integers(0, 2**31 - 1))
+def test_closed_form_counts_every_rollover(rate, accel, ticks, acc0):
+    ax = AccumulatorAxis(1, rate, accel, acc0=acc0)
+    assert ax.steps_at(ticks) == reference_steps(rate, accel, ticks, acc0)
+
+
 @settings(max_examples=40, deadline=None)
-@given(st.integers(1_000_000, 2**31 - 1), st.integers(0, 5000), st.integers(1, 200))
-def test_completion_is_the_first_tick_with_all_steps(rate, accel, steps):
-    ax = AccumulatorAxis(1, rate, accel, steps=steps)
+@given(st.integers(1_000_000, 2**31 - 1), st.integers(-50_000, 5000), st.integers(1, 200),
+       st.integers(0, 2**31 - 1))
+def test_completion_is_the_first_tick_with_all_steps(rate, accel, steps, acc0):
+    ax = AccumulatorAxis(1, rate, accel, acc0=acc0, steps=steps)
     t = ax.completion()
-    assert reference_steps(rate, accel, t, limit=steps) == steps
-    assert reference_steps(rate, accel, t - 1, limit=steps) < steps
+    assert reference(rate, accel, t, acc0, limit=steps) == (steps, ax.remainder(t))
+    assert reference_steps(rate, accel, t - 1, acc0, limit=steps) < steps
 
 
 def test_axis_that_never_moves_never_completes():

@@ -374,6 +374,23 @@ def test_servo_inverted_and_z_pens():
     assert not any(np.any(s[:, 0] > 20.001) for s in strokes)
 
 
+def test_z_pen_is_parked_up_until_a_move_drives_z():
+    rig = Rig(pen="z")  # boots at work Z = 0, but a plotter powers up with its pen up
+    rig.run(1.0)
+    assert rig.dev.paper.strokes() == [] and not rig.dev.paper.pen_is_down
+    rig.send("G1X10F1000\n")  # XY only: the pen stays parked
+    rig.until_idle()
+    assert rig.dev.paper.strokes() == []
+    rig.send("G1Z-1F500\nG1X20F1000\nG0Z5\n")  # the first Z move lowers it onto the paper
+    rig.until_idle()
+    (_, ink), = rig.dev.paper.strokes()
+    assert np.allclose(ink[[0, -1]], [[10, 0], [20, 0]])
+    rig.send("G0Z0\n")
+    rig.until_idle()
+    rig.dev.inject("reset")  # a reboot parks it again, whatever the Z it assumes
+    assert len(rig.dev.paper.strokes()) == 2 and not rig.dev.paper.pen_is_down
+
+
 def test_starved_time_counts_waits_for_the_host():
     rig = Rig()
     rig.send("G1X10F600\n")  # 1 s + ramps

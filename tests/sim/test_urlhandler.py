@@ -31,7 +31,7 @@ def test_write_read_with_timeout():
     assert port.read(1) == b""  # timeout passes in simulated time
     assert port.sim_device is device and port.clock is clock
     port.close()
-    assert device.closed and not port.is_open
+    assert not device.closed and not port.is_open  # the port did not build it, so it does not stop it
 
 
 def test_read_waits_for_all_requested_bytes_until_timeout():
@@ -115,6 +115,31 @@ def test_closed_port_refuses_io():
         port.write(b"x")
     with pytest.raises(serial.PortNotOpenError):
         port.read(1)
+
+
+def test_port_stops_a_device_it_built(monkeypatch):
+    made = []
+    monkeypatch.setitem(base._REGISTRY, "echo-test", lambda clock=None, **o: made.append(EchoDevice(clock)) or made[-1])
+    port = serial.serial_for_url("sim://echo-test?speed=fast")
+    port.close()
+    assert made[0].closed
+
+
+def test_named_instance_survives_a_port_close(monkeypatch):
+    monkeypatch.setattr(base, "_NAMED", {})
+    port = serial.serial_for_url("sim://axidraw?id=X&speed=fast", timeout=1.0)
+    port.write(b"SL,42\r")
+    assert port.read(4) == b"OK\r\n"
+    port.close()
+    again = serial.serial_for_url("sim://axidraw?id=X&speed=fast", timeout=1.0)
+    assert again.sim_device is port.sim_device
+    again.write(b"QL\r")
+    assert again.read(8) == b"42\r\nOK\r\n"  # still answering, variable kept
+    again.close()
+    device = again.sim_device
+    base.forget_simulator("X")  # closes it: a stopped board reads nothing
+    device.receive(b"V\r")
+    assert device.take_output() == b""
 
 
 def test_factory_receives_device_options_and_the_clock(monkeypatch):

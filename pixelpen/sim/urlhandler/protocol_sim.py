@@ -11,6 +11,10 @@ are used, and changing ``baudrate``/``rtscts``/``xonxoff`` on the open port reco
 Extra constructor keywords: ``clock=`` (the clock the simulator runs on; wins over ``speed``) and
 ``device=`` (a ready-made WireDevice instead of the factory).  ``inter_byte_timeout`` is ignored.
 
+Closing the port stops only a device it built: a ``device=`` passed in, or a named instance
+(``id=NAME``, closed by :func:`pixelpen.sim.base.forget_simulator`), outlives the port, so a
+reconnect to it finds the same device with its state.
+
 Errors are pyserial's and pixelpen's at once: a dropped link raises :class:`SimDisconnected`
 (a ``SerialException`` and a :class:`~pixelpen.errors.Disconnected`), a write that does not fit
 before ``write_timeout`` raises :class:`SimTimeout` (``SerialTimeoutException`` + ``LinkTimeout``).
@@ -75,6 +79,7 @@ class Serial(SerialBase):
     def __init__(self, *args: Any, clock: Clock | None = None, device: WireDevice | None = None, **kwargs: Any) -> None:
         self._sim_clock = clock
         self._given_device = device
+        self._owns_device = False
         self.sim_port: SimPort | None = None
         super().__init__(*args, **kwargs)
 
@@ -96,10 +101,11 @@ class Serial(SerialBase):
             self._dsrdtr = False
         port = open_sim_port(model, options, clock=self._sim_clock, device=self._given_device, source=self._port)
         self.sim_port = port
+        self._owns_device = self._given_device is None and "id" not in options
         try:
             self._reconfigure_port()
         except BaseException:
-            port.close()
+            port.close(close_device=self._owns_device)
             self.sim_port = None
             raise
         self.is_open = True
@@ -118,11 +124,11 @@ class Serial(SerialBase):
             self.sim_port.configure(baud=self._baudrate, flow=self._flow())
 
     def close(self) -> None:
-        """Close the port and stop the simulator (its results stay readable through ``sim_device``)."""
+        """Close the port, and stop the simulator if the port built it (results stay readable via ``sim_device``)."""
         if self.is_open:
             self.is_open = False
             if self.sim_port is not None:
-                self.sim_port.close()
+                self.sim_port.close(close_device=self._owns_device)
 
     @property
     def sim_device(self) -> WireDevice:
