@@ -244,19 +244,6 @@ def test_garbled_reply_is_a_parse_error():
 
 
 # -- end to end through sim:axidraw ------------------------------------------------------------------------------
-class Replug:
-    """The simulator as a new cable sees it: closing a link must not switch the board off."""
-
-    def __init__(self, device):
-        self._device = device
-
-    def __getattr__(self, name):
-        return getattr(self._device, name)
-
-    def close(self):
-        pass
-
-
 def new_sim(clock=None):
     clock = clock or SimulatedClock()
     return create_simulator("axidraw", clock=clock), clock
@@ -266,20 +253,16 @@ def sim_plotter(dev, clock, url_extra="", **kwargs) -> AxiDrawPlotter:
     urls = iter([f"sim://axidraw?baud=1000000{url_extra}"])
 
     def factory():
-        return SerialLink(next(urls, "sim://axidraw?baud=1000000"), clock=clock, device=Replug(dev))
+        return SerialLink(next(urls, "sim://axidraw?baud=1000000"), clock=clock, device=dev)
 
     plotter = AxiDrawPlotter("sim://axidraw", profile=PROFILE, clock=clock, link_factory=factory, **kwargs)
     plotter.open()
     return plotter
 
 
-def without_home_dot(paper: Paper) -> list[np.ndarray]:
-    """The sheet's strokes but a one-point touch at the home corner.
-
-    The EBB simulator models the unpowered servo at 12000 and lets SC,4/SC,5 (pen up above pen down, as
-    every AxiDraw is set up) put it on the pen-down side before the first SP,1: a dot at home.
-    """
-    return [s for _, s in paper.strokes() if not (len(s) == 1 and np.allclose(s[0], 0.0))]
+def inked(paper: Paper) -> list[np.ndarray]:
+    """The strokes on the sheet."""
+    return [s for _, s in paper.strokes()]
 
 
 def render(strokes, width=300.0, height=218.0, dpi=50) -> np.ndarray:
@@ -296,7 +279,7 @@ def test_square_lands_where_it_should_on_the_simulated_paper():
         dev = plotter.link.port.sim_device
         plotter.plot(squares(1, at=(20.0, 30.0)))
     expected = render([np.array([[20, 30], [30, 30], [30, 40], [20, 40], [20, 30]], float)])
-    assert np.array_equal(render(without_home_dot(dev.paper)), expected)
+    assert np.array_equal(render(inked(dev.paper)), expected)
     assert np.allclose(dev.position_mm, 0.0) and dev.pen_up
 
 
@@ -330,7 +313,7 @@ def test_lm_moves_draw_the_square():
     plotter.plot(squares(1, side_mm=3.0))
     plotter.close()
     expected = render([np.array([[20, 20], [23, 20], [23, 23], [20, 23], [20, 20]], float)])
-    assert np.array_equal(render(without_home_dot(dev.paper)), expected)
+    assert np.array_equal(render(inked(dev.paper)), expected)
 
 
 def test_confirmation_means_on_paper():
@@ -338,7 +321,7 @@ def test_confirmation_means_on_paper():
     seen = []
 
     def check(progress):
-        seen.append((progress.strokes_done, len(without_home_dot(dev.paper)), dev.paper.pen_is_down))
+        seen.append((progress.strokes_done, len(inked(dev.paper)), dev.paper.pen_is_down))
 
     plotter = sim_plotter(dev, clock, on_progress=check)
     plotter.plot(squares(3, side_mm=2.0))
