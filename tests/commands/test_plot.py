@@ -1,0 +1,405 @@
+"""Tests of ``pixelpen plot``: placement on the paper, fitting, clipping, layers, pens, faults, resume, Ctrl-C, demo.
+
+Every plot runs on a simulator reached by a named instance (``id=``), and the expected positions come from the
+device profiles' documented paper origins (vpype's ``origin_location``) and the SVG/world conventions, not from
+the command's own output.
+"""
+
+import io
+import json
+import logging
+import os
+import threading
+import time
+import uuid
+
+import numpy as np
+import pytest
+
+from pixelpen.cli import main
+from pixelpen.commands import plot as plotcmd
+from pixelpen.devices.plotter import PlotProgress
+from pixelpen.display.pictfile import save_picture
+from pixelpen.display.picture import Picture, Polyline, Style
+from pixelpen.sim.base import forget_simulator, named_simulator
+
+HP_UNIT = 0.02488  # hp7475a.toml unit_mm
+HP_ORIGIN = (10.0, 206.0)  # hp7475a.toml [paper.a4] origin_mm: device origin 10 mm right of, 206 mm below the top left
+GRBL_ORIGIN_Y = 210.0  # grbl.toml [paper.a4] origin_mm = [0, 210]: the origin is the sheet's lower-left corner
+
+
+@pytest.fixture
+def sim():
+    """Unique simulator ids for one test, forgotten afterwards; ``sim(model, **opts)`` gives the URL."""
+    made = []
+
+    def url(model, **options):
+        ident = f"t-{uuid.uuid4().hex[:10]}"
+        made.append(ident)
+        query = "&".join(f"{k}={v}" for k, v in {"speed": "fast", "id": ident, **options}.items())
+        return f"sim:{model}?{query}", ident
+
+    yield url
+    for ident in made:
+        forget_simulator(ident)
+
+
+def svg(tmp_path, body, name="d.svg", size=(297, 210)):
+    path = tmp_path / name
+    w, h = size
+    path.write_text(
+        f'<svg xmlns="http://www.w3.org/2000/svg" xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" '
+        f'width="{w}mm" height="{h}mm" viewBox="0 0 {w} {h}">{body}</svg>'
+    )
+    return str(path)
+
+
+def line(x0, y0, x1, y1, colour="black"):
+    return f'<path d="M{x0},{y0} L{x1},{y1}" stroke="{colour}" fill="none"/>'
+
+
+def run(*argv, stdin=""):
+    """Run the CLI in-process with ``stdin`` as the operator's input."""
+    import sys
+
+    old = sys.stdin
+    sys.stdin = io.StringIO(stdin)
+    try:
+        return main(["plot", *argv])
+    finally:
+        sys.stdin = old
+
+
+def grbl_strokes(ident):
+    return [pts for _, pts in named_simulator(ident).paper.strokes()]
+
+
+# ---------------------------------------------------------------------------------------------------------
+# placement
+
+
+def test_svg_lands_true_size_where_the_profile_puts_the_sheet_on_grbl(tmp_path, sim):
+    url, ident = sim("grbl")
+    assert run(svg(tmp_path, line(10, 20, 50, 20)), "--to", url) == 0
+    (stroke,) = grbl_strokes(ident)
+    # GRBL machine y runs up from the sheet's lower-left corner: page y 20 mm down is 190 mm up
+    np.testing.assert_allclose(stroke[[0, -1]], [[10, 190], [50, 190]], atol=0.002)
+
+
+def test_svg_on_hp7475a_is_offset_by_the_paper_origin(tmp_path, sim):
+    url, ident = sim("hp7475a")
+    assert run(svg(tmp_path, line(30, 50, 130, 50)), "--to", url) == 0
+    seg, _, _ = named_simulator(ident).segments()
+    xs, ys = seg[:, 0::2].ravel(), seg[:, 1::2].ravel()
+    # device mm = (x - 10, 206 - y) -> plotter units of 0.02488 mm
+    assert xs.min() == pytest.approx((30 - HP_ORIGIN[0]) / HP_UNIT, abs=1)
+    assert xs.max() == pytest.approx((130 - HP_ORIGIN[0]) / HP_UNIT, abs=1)
+    assert np.allclose(ys, (HP_ORIGIN[1] - 50) / HP_UNIT, atol=1)
+
+
+def test_svg_on_a_y_down_axidraw_keeps_page_coordinates(tmp_path, sim):
+    url, ident = sim("axidraw")
+    assert run(svg(tmp_path, line(10, 20, 50, 20)), "--to", url) == 0
+    strokes = [pts for _, pts in named_simulator(ident).paper.strokes()]
+    assert len(strokes) == 1
+    # the AxiDraw origin is the home corner at the sheet's top left, y down the page (axidraw_v3.toml)
+    np.testing.assert_allclose(strokes[0][[0, -1]], [[10, 20], [50, 20]], atol=0.02)
+
+
+def test_fit_scales_the_drawing_into_the_paper_centred(tmp_path, sim):
+    url, ident = sim("grbl")
+    square = '<path d="M0,0 H10 V10 H0 Z" stroke="black" fill="none"/>'
+    assert run(svg(tmp_path, square, size=(10, 10)), "--to", url, "--fit") == 0
+    pts = np.vstack(grbl_strokes(ident))
+    # a 10 mm square fills the 210 mm height of a 297 x 210 mm area, centred: x from 43.5 to 253.5
+    np.testing.assert_allclose([pts[:, 0].min(), pts[:, 0].max()], [43.5, 253.5], atol=0.01)
+    np.testing.assert_allclose([pts[:, 1].min(), pts[:, 1].max()], [0.0, 210.0], atol=0.01)
+
+
+def test_picture_world_millimetres_are_device_millimetres(tmp_path, sim):
+    pic = Picture()
+    pic.add(Polyline([[10, 10], [60, 10]]))
+    path = tmp_path / "p.json"
+    save_picture(pic, path)
+    url, ident = sim("grbl")
+    assert run(str(path), "--to", url) == 0
+    (stroke,) = grbl_strokes(ident)
+    np.testing.assert_allclose(stroke[[0, -1]], [[10, 10], [60, 10]], atol=0.002)
+
+
+def test_page_to_world_puts_the_profile_origin_at_the_device_origin():
+    for url in ("sim:hp7475a", "sim:hp7475a?paper=a3", "sim:grbl", "sim:axidraw"):
+        display = plotcmd.plotter_for(url)
+        matrix = plotcmd.page_to_world(display)
+        origin = display.paper.origin_mm
+        device = display.pipeline.to_device(matrix[:2, :2] @ np.asarray(origin) + matrix[:2, 2])
+        np.testing.assert_allclose(device, [0.0, 0.0], atol=1e-6)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# clipping, layers, pens
+
+
+def test_lines_beyond_the_limits_are_cut_with_a_warning_naming_how_much(tmp_path, sim, caplog):
+    url, ident = sim("grbl")
+    caplog.set_level(logging.WARNING, logger="pixelpen.commands.plot")
+    assert run(svg(tmp_path, line(-10, 20, 50, 20)), "--to", url) == 0
+    assert "10.0 mm of 60.0 mm" in caplog.text
+    (stroke,) = grbl_strokes(ident)
+    np.testing.assert_allclose(stroke[[0, -1]], [[0, 190], [50, 190]], atol=0.002)
+
+
+def test_clip_to_device_splits_a_stroke_that_leaves_and_returns():
+    dl = plotcmd.DisplayList.from_polylines([np.array([[1, 1], [5, 1], [5, 20], [8, 20], [8, 1], [9, 1]])])
+    clipped, cut = plotcmd.clip_to_device(dl, (10, 10))
+    assert len(clipped) == 2 and cut == pytest.approx(10 + 3 + 10)
+    np.testing.assert_allclose(clipped.stroke(0), [[1, 1], [5, 1], [5, 10]])
+    np.testing.assert_allclose(clipped.stroke(1), [[8, 10], [8, 1], [9, 1]])
+
+
+def test_layers_select_what_is_plotted(tmp_path, sim, capsys):
+    body = (
+        '<g inkscape:groupmode="layer" inkscape:label="outline">' + line(10, 20, 50, 20) + "</g>"
+        '<g inkscape:groupmode="layer" inkscape:label="detail">' + line(10, 40, 30, 40) + "</g>"
+    )
+    path = svg(tmp_path, body)
+    url, ident = sim("grbl")
+    assert run(path, "--to", url, "--layers", "detail") == 0
+    (stroke,) = grbl_strokes(ident)
+    np.testing.assert_allclose(stroke[[0, -1]], [[10, 170], [30, 170]], atol=0.002)
+    url2, _ = sim("grbl")
+    assert run(path, "--to", url2, "--layers", "shading") == 2
+    err = capsys.readouterr().err
+    assert "no layer 'shading'" in err and "outline" in err and "detail" in err
+
+
+def test_single_pen_plotter_asks_for_each_pen(tmp_path, sim, capsys):
+    url, ident = sim("grbl")
+    path = svg(tmp_path, line(10, 20, 50, 20) + line(10, 30, 50, 30, "#ff0000"))
+    assert run(path, "--to", url, stdin="\n\n") == 0
+    err = capsys.readouterr().err
+    assert "insert pen 1 (#000000) and press Enter" in err
+    assert "insert pen 2 (#ff0000) and press Enter" in err
+    assert len(grbl_strokes(ident)) == 2
+
+
+def test_a_pen_change_with_no_operator_is_an_error(tmp_path, sim, capsys):
+    url, ident = sim("grbl")
+    path = svg(tmp_path, line(10, 20, 50, 20) + line(10, 30, 50, 30, "#ff0000"))
+    assert run(path, "--to", url, stdin="\n") == 2
+    assert "input is closed" in capsys.readouterr().err
+    assert len(grbl_strokes(ident)) == 1
+    assert not named_simulator(ident).paper.pen_is_down
+
+
+def test_carousel_pens_are_chosen_by_colour(tmp_path, sim):
+    url, ident = sim("hp7475a")
+    # pen 2 of the hp7475a profile is red (#d62728), pen 4 blue (#1f77b4)
+    path = svg(tmp_path, line(30, 50, 80, 50, "#ff0000") + line(30, 70, 80, 70, "#0000ff"))
+    assert run(path, "--to", url) == 0
+    seg, pens, _ = named_simulator(ident).segments()
+    y_mm = HP_ORIGIN[1] - seg[:, 1] * HP_UNIT
+    assert set(pens[np.isclose(y_mm, 50, atol=0.1)].tolist()) == {2}
+    assert set(pens[np.isclose(y_mm, 70, atol=0.1)].tolist()) == {4}
+
+
+# ---------------------------------------------------------------------------------------------------------
+# errors
+
+
+def test_errors_are_one_line_and_exit_2(tmp_path, sim, capsys):
+    good = svg(tmp_path, line(10, 20, 50, 20))
+    url, _ = sim("grbl")
+    cases = [
+        ([str(tmp_path / "missing.svg"), "--to", url], "missing.svg"),
+        ([good, "--to", f"png:{tmp_path / 'x.png'}"], "not a pen plotter"),
+        ([good, "--to", "nosuch:x"], "known schemes"),
+        ([svg(tmp_path, "<g>", name="bad.svg"), "--to", url], "bad.svg"),
+        ([svg(tmp_path, "", name="empty.svg"), "--to", url], "nothing to plot"),
+        ([str(tmp_path / "d.txt"), "--to", url], "expected an SVG"),
+        ([good, "--to", url, "--resume", "--state", str(tmp_path / "none.json")], "nothing to resume"),
+    ]
+    for argv, needle in cases:
+        assert run(*argv) == 2, argv
+        err = capsys.readouterr().err
+        assert needle in err and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+
+
+# ---------------------------------------------------------------------------------------------------------
+# faults, retries, resume, Ctrl-C
+
+
+def ladder(tmp_path, n=12):
+    return svg(tmp_path, "".join(line(10 + 10 * i, 20, 10 + 10 * i, 60) for i in range(n)), name="ladder.svg")
+
+
+def test_a_fault_beyond_the_retries_exits_3_and_resume_plots_the_rest(tmp_path, sim, capsys):
+    path = ladder(tmp_path)
+    state = tmp_path / "job.json"
+    broken, _ = sim("grbl", drop_after=700)
+    assert run(path, "--to", broken, "--retries", "0", "--no-optimize", "--state", str(state)) == 3
+    err = capsys.readouterr().err
+    assert f"--state {state} --resume" in err
+    done = json.loads(state.read_text())["confirmed"]
+    assert 0 < done < 12
+    url, ident = sim("grbl")
+    assert run(path, "--to", url, "--no-optimize", "--state", str(state), "--resume") == 0
+    xs = [pts[0, 0] for pts in grbl_strokes(ident)]
+    # the second plotter draws exactly the strokes the first did not confirm, in the drawing's order
+    np.testing.assert_allclose(xs, [10 + 10 * i for i in range(done, 12)], atol=0.002)
+    assert not state.exists() and not os.path.exists(f"{state}.drawing.npz")
+
+
+def test_resume_refuses_another_drawing(tmp_path, sim, capsys):
+    state = tmp_path / "job.json"
+    broken, _ = sim("grbl", drop_after=700)
+    assert run(ladder(tmp_path), "--to", broken, "--retries", "0", "--state", str(state)) == 3
+    other = svg(tmp_path, line(10, 20, 50, 20), name="other.svg")
+    url, _ = sim("grbl")
+    capsys.readouterr()
+    assert run(other, "--to", url, "--state", str(state), "--resume") == 2
+    assert "another drawing" in capsys.readouterr().err
+
+
+def test_retries_reconnect_and_finish_the_plot(tmp_path, sim, capsys):
+    path = ladder(tmp_path, 6)
+    # every reconnection reaches the same plotter (id=) over a link that drops again after 450 bytes,
+    # so the job takes several connections
+    broken, ident = sim("grbl", drop_after=450)
+    assert run(path, "--to", broken, "--retries", "8", "--no-optimize", "--state", str(tmp_path / "s.json")) == 0
+    err = capsys.readouterr().err
+    assert "retry 1/8" in err and "plotted" in err and "6 strokes" in err
+    starts = sorted({round(float(pts[0, 0]), 3) for pts in grbl_strokes(ident) if len(pts) > 1})
+    assert starts == [10.0 + 10 * i for i in range(6)]  # every stroke is on the one sheet
+
+
+def test_ctrl_c_leaves_the_pen_up_and_the_device_idle(tmp_path, sim, monkeypatch):
+    calls = []
+
+    def interrupt(self, progress):
+        calls.append(progress)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(plotcmd.ProgressBar, "__call__", interrupt)
+    state = tmp_path / "s.json"
+    url, ident = sim("grbl")
+    assert main(["plot", ladder(tmp_path), "--to", url, "--state", str(state)]) == 130
+    device = named_simulator(ident)
+    assert calls and device.state == "Idle"
+    assert not device.paper.pen_is_down and device.next_event_time() is None
+    assert len(device.paper.strokes()) < 12 and state.exists()
+
+
+def test_ctrl_c_on_hpgl_stores_the_pen_and_empties_the_buffer(tmp_path, sim, monkeypatch):
+    monkeypatch.setattr(plotcmd.ProgressBar, "__call__", lambda self, p: (_ for _ in ()).throw(KeyboardInterrupt))
+    url, ident = sim("hp7475a", sync_strokes=1)
+    assert main(["plot", ladder(tmp_path), "--to", url]) == 130
+    device = named_simulator(ident)
+    assert device.selected_pen == 0 and device.buffered_bytes == 0 and device.next_event_time() is None
+
+
+def test_ctrl_c_on_an_axidraw_lifts_the_pen_and_stops_the_motors(tmp_path, sim, monkeypatch):
+    monkeypatch.setattr(plotcmd.ProgressBar, "__call__", lambda self, p: (_ for _ in ()).throw(KeyboardInterrupt))
+    url, ident = sim("axidraw")
+    assert main(["plot", ladder(tmp_path, 4), "--to", url]) == 130
+    device = named_simulator(ident)
+    assert device.pen_up and device.next_event_time() is None
+    assert [text for _, text in device.log][-1] == "EM,0,0"  # motors disabled last
+
+
+# ---------------------------------------------------------------------------------------------------------
+# progress, keys
+
+
+def progress(done, total, mm, total_mm, eta=10.0):
+    return PlotProgress(done, total, mm, total_mm, 5.0, eta)
+
+
+def test_progress_bar_text():
+    bar = plotcmd.ProgressBar(io.StringIO(), width=10)
+    text = bar.format(progress(3, 10, 60.0, 200.0, eta=83.0))
+    assert text.startswith("[###.......]") and " 30.0%" in text
+    assert "60/200 mm" in text and "strokes 3/10" in text and "ETA 1:23" in text and "elapsed 0:05" in text
+
+
+class _Tty(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_progress_bar_throttles_on_a_terminal_and_steps_in_a_log():
+    t = [0.0]
+    tty = _Tty()
+    bar = plotcmd.ProgressBar(tty, interval=0.5, now=lambda: t[0])
+    for k in range(1, 10):
+        bar(progress(k, 10, k, 10))
+        t[0] += 0.2
+    bar(progress(10, 10, 10, 10))
+    # redrawn at t = 0, 0.6, 1.2 (every 0.5 s at most) and at the end
+    assert tty.getvalue().count("\r") == 4
+    log = io.StringIO()
+    bar = plotcmd.ProgressBar(log)
+    for k in range(101):
+        bar(progress(k, 100, k, 100))
+    assert len(log.getvalue().splitlines()) == 11  # 0 %, 10 %, ..., 100 %
+
+
+def _until(cond, limit=5.0):
+    end = time.monotonic() + limit
+    while not cond():
+        assert time.monotonic() < end, "condition not reached"
+        time.sleep(0.01)
+
+
+def test_keys_toggle_the_pause_and_answer_prompts():
+    r, w = os.pipe()
+    toggles = []
+    keys = plotcmd.KeyControl(r, toggles.append)
+    try:
+        os.write(w, b"p")
+        _until(lambda: keys.pause_requested())
+        os.write(w, b" ")
+        _until(lambda: not keys.pause_requested())
+        assert toggles == [True, False]
+        stop = threading.Event()
+
+        def press_enter():  # keeps pressing, so that one Enter surely comes after wait_enter began
+            while not stop.is_set():
+                os.write(w, b"x\n")
+                stop.wait(0.02)
+
+        presser = threading.Thread(target=press_enter)
+        presser.start()
+        try:
+            assert keys.wait_enter() is True
+        finally:
+            stop.set()
+            presser.join()
+        os.close(w)
+        w = None
+        assert keys.wait_enter() is False
+    finally:
+        keys.close()
+        for fd in (r, w):
+            if fd is not None:
+                os.close(fd)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# demo
+
+
+def test_plot_demo_saves_each_paper_and_skips_unknown_models(tmp_path, monkeypatch, caplog):
+    def small_scene(display):
+        display.draw(Polyline([[10, 10], [80, 60]], Style(width=0.5)))
+
+    monkeypatch.setattr("pixelpen.scene.draw_reference", small_scene)
+    caplog.set_level(logging.WARNING, logger="pixelpen.commands.plot")
+    paths = plotcmd.plot_demo(tmp_path, models=("hp7475a", "grbl", "nosuch"))
+    assert paths == [tmp_path / "paper-hp7475a.png", tmp_path / "paper-grbl.png"]
+    from PIL import Image
+
+    for path in paths:
+        img = np.asarray(Image.open(path).convert("L"))
+        assert (img < 128).any() and (img == 255).mean() > 0.9
+    assert "skipping nosuch" in caplog.text

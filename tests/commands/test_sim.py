@@ -1,0 +1,151 @@
+"""Tests of ``pixelpen sim``: replaying byte files paced so the device never overflows, the pty mode, errors."""
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+
+import numpy as np
+import pytest
+import serial
+from PIL import Image
+
+from pixelpen.cli import main
+from pixelpen.commands import sim as simcmd
+from pixelpen.errors import URLError
+from pixelpen.sim.transport import SimPort, TransportOptions
+
+
+def zigzag_hpgl(n: int) -> bytes:
+    """IN, pen 1, then one PD instruction per short vector: n vectors of 40 plotter units (1 mm)."""
+    body = b"".join(b"PD%d,%d;" % (1000 + 40 * (i + 1), 1000 + 40 * (i % 2)) for i in range(n))
+    return b"IN;SP1;PU1000,1000;" + body + b"PU;SP0;"
+
+
+def test_hpgl_replay_never_overflows_a_small_buffer():
+    data = zigzag_hpgl(150)
+    device, transport = simcmd.open_simulator("hp7475a", {"buffer": "64", "reserve_bug": "false"}, "fast")
+    result = simcmd.replay(device, data, transport)
+    assert device.stats.bytes_overflowed == 0 and device.error_log == [] and result.errors == []
+    seg, _, _ = device.segments()
+    assert len(seg) == 150
+    np.testing.assert_allclose(seg[-1, 2:], [1000 + 40 * 150, 1000 + 40 * (149 % 2)])
+    assert result.bytes_fed == len(data) == result.link.bytes_sent
+    # the same bytes without pacing overrun the 64-byte buffer: the pacing is what keeps them
+    raw, _ = simcmd.open_simulator("hp7475a", {"buffer": "64", "reserve_bug": "false"}, "fast")
+    port = SimPort(raw, baud=9600, flow="none", clock=raw.clock)
+    port.write(data)
+    port.drain()
+    assert raw.stats.bytes_overflowed > 0
+
+
+def test_grbl_replay_keeps_the_rx_buffer_from_overflowing():
+    lines = [b"G21", b"G90", b"M3 S50"] + [b"G1 X%.2f Y%.2f F3000" % (10 + i * 0.5, 10 + (i % 2)) for i in range(60)]
+    data = b"\n".join(lines) + b"\n"
+    device, transport = simcmd.open_simulator("grbl", {"baud": "115200"}, "fast")
+    result = simcmd.replay(device, data, transport)
+    assert device.overflowed == 0 and result.errors == []
+    assert result.replies.count(b"ok") == len(lines)
+    assert device.stats.commands_executed == len(lines)
+    np.testing.assert_allclose(device.machine_position()[:2], [10 + 59 * 0.5, 10 + 59 % 2], atol=1e-6)
+    raw, _ = simcmd.open_simulator("grbl", {}, "fast")
+    port = SimPort(raw, baud=115200, flow="none", clock=raw.clock)
+    port.write(data)
+    port.drain()
+    assert raw.overflowed > 0
+
+
+def test_ebb_replay_waits_for_the_usb_handshake():
+    commands = [b"EM,1,1", b"SP,0,100"] + [b"SM,30,40,40"] * 40 + [b"SP,1,100"]
+    device, transport = simcmd.open_simulator("axidraw", {}, "fast")
+    result = simcmd.replay(device, b"\r".join(commands) + b"\r", transport)
+    assert result.errors == []
+    assert [text for _, text in device.log] == [c.decode() for c in commands]
+    assert result.link.held_off > 0  # the board's FIFO filled and held the line
+
+
+def test_device_errors_come_from_the_error_log_and_from_error_replies():
+    device, transport = simcmd.open_simulator("hp7475a", {}, "fast")
+    result = simcmd.replay(device, b"IN;XX;PA0,0;", transport)
+    assert len(result.errors) == 1 and "HP-GL error 1" in result.errors[0] and "XX" in result.errors[0]
+    assert simcmd.device_errors(device, b"ok\r\nerror:20\r\nALARM:2\r\n!8 Err: Unknown command\r\n")[1:] == [
+        "error:20", "ALARM:2", "!8 Err: Unknown command"]
+
+
+def test_cli_replay_writes_the_paper_and_reports(tmp_path, capsys):
+    src = tmp_path / "drawing.hpgl"
+    data = b"IN;SP1;PU2000,2000;PD6000,2000,6000,6000,2000,6000,2000,2000;PU;XX;SP0;"
+    src.write_bytes(data)
+    out = tmp_path / "paper.png"
+    assert main(["sim", "hp7475a", "--replay", str(src), "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert f"replayed {len(data)} bytes" in text and "errors: 1" in text and "HP-GL error 1" in text
+    img = np.asarray(Image.open(out).convert("L"))
+    assert (img < 128).any() and (img == 255).mean() > 0.9
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["sim", "hp9999", "--replay", "x"], "known: "),
+    (["sim", "grbl", "--replay", "/nonexistent/file.nc"], "cannot read /nonexistent/file.nc"),
+    (["sim", "grbl"], "either --pty or --replay"),
+    (["sim", "grbl", "--pty", "--replay", "x"], "either --pty or --replay"),
+])
+def test_cli_errors_are_one_line(argv, needle, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert needle in err and len(err.strip().splitlines()) == 1
+
+
+def test_options_are_key_value_pairs():
+    assert simcmd.parse_options(["paper=a3", "Pens = black,red"]) == {"paper": "a3", "pens": "black,red"}
+    for bad in (["paper"], ["=a3"], ["paper=a3", "paper=a4"]):
+        with pytest.raises(URLError):
+            simcmd.parse_options(bad)
+    with pytest.raises(URLError, match="unknown option"):
+        simcmd.open_simulator("grbl", {"bogus": "1"}, "fast")
+    with pytest.raises(URLError, match="--speed"):
+        simcmd.open_simulator("grbl", {"speed": "fast"}, "fast")
+
+
+def test_pty_serves_the_device_until_stopped(capsys):
+    device, _ = simcmd.open_simulator("hp7475a", {}, "fast")
+    stop = threading.Event()
+    server = threading.Thread(target=simcmd.run_pty, args=(device, TransportOptions(), stop))
+    server.start()
+    try:
+        for _ in range(500):
+            path = capsys.readouterr().out.strip()
+            if path:
+                break
+            stop.wait(0.01)
+        with serial.Serial(path, timeout=10) as port:
+            port.write(b"IN;SP1;PU0,0;PD2000,0;OA;")
+            assert port.read_until(b"\r").strip() == b"2000,0,1"
+    finally:
+        stop.set()
+        server.join(10)
+    seg, _, _ = device.segments()
+    np.testing.assert_allclose(seg, [[0, 0, 2000, 0]])
+
+
+def test_pty_command_writes_the_paper_on_ctrl_c(tmp_path):
+    out = tmp_path / "pty.png"
+    proc = subprocess.Popen([sys.executable, "-m", "pixelpen", "sim", "grbl", "--pty", "--speed", "fast", "-o", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        path = proc.stdout.readline().strip()
+        with serial.Serial(path, timeout=20) as port:
+            port.write(b"G21\nG90\nM3 S50\nG1 X10 Y10 F3000\nG1 X60 Y10\nM3 S500\nG4 P0.1\n")
+            replies = b""
+            while replies.count(b"ok") < 7:
+                chunk = port.read(max(1, port.in_waiting))
+                assert chunk, f"no reply from the simulator; got {replies!r}"
+                replies += chunk
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(30) == 0
+    finally:
+        if proc.poll() is None:
+            os.kill(proc.pid, signal.SIGKILL)
+    img = np.asarray(Image.open(out).convert("L"))
+    assert (img < 128).any()
