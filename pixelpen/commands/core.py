@@ -11,6 +11,7 @@ from ..display.pictfile import load_picture
 from ..display.registry import known_schemes, open_display
 from ..scene import draw_reference
 from ..urls import format_url
+from .plot import plot_demo
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -71,7 +72,7 @@ def cmd_draw(args: argparse.Namespace) -> int:
 
 
 def demo_targets(out: Path) -> list[str]:
-    """The display URLs the demo draws on: the file displays and every simulated device."""
+    """The file displays the demo draws on (simulated plotters are plotted by ``plot_demo``)."""
     return [
         format_url("png", str(out / "scene.png"), {"size": "2080x1120"}),
         format_url("svg", str(out / "scene.svg"), {"size": "260x140mm"}),
@@ -86,6 +87,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
         with open_display(url) as display:
             draw_reference(display)
         print(f"  {url}", file=sys.stderr)
+    for paper in plot_demo(out):
+        print(f"  plotted on a simulated plotter: {paper}", file=sys.stderr)
     print(f"pixelpen demo: the reference scene was drawn into {out.resolve()}/")
     for path in sorted(out.iterdir()):
         print(f"  {path}")

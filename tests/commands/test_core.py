@@ -10,7 +10,7 @@ from pixelpen.display.pictfile import save_picture
 from pixelpen.display.picture import Picture, Polyline, Rectangle, Style, Fill
 
 
-def test_demo_writes_a_png_and_an_svg_of_the_scene(tmp_path, capsys):
+def test_demo_writes_the_scene_as_png_svg_and_simulated_plotter_papers(tmp_path, capsys):
     assert main(["demo", "-o", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     png, svg = tmp_path / "scene.png", tmp_path / "scene.svg"
@@ -21,6 +21,9 @@ def test_demo_writes_a_png_and_an_svg_of_the_scene(tmp_path, capsys):
     assert (img == 255).all(axis=2).mean() > 0.5
     assert ((img[..., 0] > 200) & (img[..., 1] < 60) & (img[..., 2] < 60)).any()  # red
     assert ((img[..., 2] > 200) & (img[..., 0] < 60) & (img[..., 1] < 60)).any()  # blue
+    for model in ("hp7475a", "grbl", "axidraw"):  # the scene plotted on each simulated plotter
+        paper = np.asarray(PILImage.open(tmp_path / f"paper-{model}.png").convert("L"))
+        assert (paper < 128).mean() > 0.005, model
     text = svg.read_text()
     assert 'width="260mm"' in text.replace(".0mm", "mm") and "<g" in text
 
