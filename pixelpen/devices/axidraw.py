@@ -68,6 +68,8 @@ BUTTON_POLL_S = 0.05
 IDLE_POLL_S = 0.01
 FIFO_DEPTH = 1
 """Motion FIFO depth at boot (ebb.html CU,4); the driver does not change it."""
+USB_BAUD = 12_000_000
+"""Line speed of a ``sim:axidraw`` link without ``baud=`` (USB full speed, not a serial port's 9600)."""
 FLUSH = "#"
 """Sent alone before the first command: ends any half-received command as a syntax error, so it cannot run."""
 
@@ -164,8 +166,12 @@ class AxiDrawPlotter(PlotterDisplay):
 
     @classmethod
     def simulator_options(cls, sim_options: dict[str, str], options: Options, profile: DeviceProfile) -> dict[str, str]:
-        """The simulated AxiDraw of the same model (the EBB simulator has no paper option: it is the travel)."""
+        """The simulated AxiDraw of the same model (the EBB simulator has no paper option: it is the travel).
+
+        The board is USB CDC: its simulated line runs at ``USB_BAUD`` unless the URL gives ``baud``.
+        """
         out = {k: v for k, v in sim_options.items() if k != "paper"}
+        out.setdefault("baud", str(USB_BAUD))
         if "model" in options:
             out.setdefault("model", options.get("model", _model, "v3"))
         return out

@@ -27,6 +27,8 @@ Flow control (option ``handshake``, plotters.md §1.5):
 
 With ``xonxoff`` and ``hardwire`` the plotter's handshake holds every byte, queries included, so a
 pause longer than ``stall`` with a full buffer counts as a stall there; ``escb`` asks ESC.O instead.
+Writes there go out in chunks of ``WRITE_CHUNK`` bytes, each allowed ``stall`` seconds: the limit is on
+the plotter taking nothing, not on the time a long stroke needs at the line's speed.
 
 Connecting sends ``ESC.(`` and ``ESC.K`` (before any byte that enters the buffer: a connection that
 broke mid-instruction may have left half a number there), the handshake preamble, ``IN;`` with
@@ -110,6 +112,8 @@ PAUSE_CHECK_S = 1.0
 SAFE_WAIT_S = 10.0
 """Longest wait for the safe-stop sequence to be executed before closing."""
 DISCOVERY_TIMEOUT_S = 0.5
+WRITE_CHUNK = 512
+"""Bytes written at a time under xonxoff/hardwire; each chunk must be taken within ``stall`` seconds."""
 _NO_WRITE_TIMEOUT = ("rfc2217://",)
 """pyserial URL schemes whose ports take no write timeout."""
 _MAX_REPLY = 256
@@ -482,11 +486,17 @@ class HPGLDisplay(PlotterDisplay):
     def _write(self, data: bytes, *, graphics: bool) -> None:
         link = self._require_link()
         # with a device-driven handshake a write may rightly wait as long as the plotter is busy
+        # (stall_s per chunk: a stall is no chunk taken for that long, however long the whole stroke takes)
         held = self.handshake in ("xonxoff", "hardwire")
-        link.write(data, timeout=self._limit(link, self.stall_s) if held else None)
-        self._wire.sent += len(data)
-        if graphics:
-            self._wire.written += len(data)
+        step = WRITE_CHUNK if held else max(1, len(data))
+        for at in range(0, len(data), step):
+            chunk = data[at:at + step]
+            link.write(chunk, timeout=self._limit(link, self.stall_s) if held else None)
+            self._wire.sent += len(chunk)
+            if graphics:
+                self._wire.written += len(chunk)
+            if held:
+                self._wire.progress_at = self.clock.now()  # the handshake let it through: the plotter is taking bytes
 
     def _ask(self, kind: str, *, sync: _SyncPoint | None = None) -> None:
         """Send ``ESC.<kind>`` and expect its immediate answer (deadline: time for the bytes ahead + timeout)."""

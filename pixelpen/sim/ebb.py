@@ -571,7 +571,9 @@ class EbbSimulator:
             else:
                 text = f"!8 Err: Unknown command '{name}:{ord(name[0]):02X}{ord(name[1]):02X}'"
             self._emit((prefix + text + self._ending(error=True)).encode())
-            log.warning("%s: unknown command %r", self.model, line)
+            # a lone '#' is how drivers flush a half-received command (pixelpen's AxiDraw sends it on every
+            # connect): the board answers it as unknown like any other, but it is expected, not a fault
+            (log.debug if line == "#" else log.warning)("%s: unknown command %r", self.model, line)
             return
         _, specs, method = handler
         try:

@@ -145,6 +145,14 @@ def test_model_option_picks_the_profile_and_the_simulator():
     assert sim.profile.name == "axidraw_minikit" and "model=minikit" in sim.port
 
 
+def test_sim_urls_run_the_link_at_usb_speed_unless_baud_is_given():
+    with pixelpen.open("sim:axidraw?speed=fast") as plotter:
+        assert plotter.link.port.sim_port.baud == 12_000_000
+    assert "baud=12000000" in AxiDrawPlotter.from_url(parse_url("sim:axidraw?speed=fast")).port
+    with pixelpen.open("sim:axidraw?speed=fast&baud=115200") as plotter:
+        assert plotter.link.port.sim_port.baud == 115200
+
+
 @pytest.mark.parametrize("query", ["model=a2", "moves=hm", "pen_up=101", "pen_down=-5", "feed=3"])
 def test_bad_url_options_are_refused(query):
     with pytest.raises(URLError):

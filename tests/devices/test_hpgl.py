@@ -19,7 +19,7 @@ from pixelpen.display.registry import known_schemes
 from pixelpen.drivers import discovery
 from pixelpen.drivers.link import Link
 from pixelpen.errors import ConfigError, LinkError, LinkTimeout, ProtocolError, URLError
-from pixelpen.sim.base import create_simulator
+from pixelpen.sim.base import create_simulator, forget_simulator, named_simulator
 from pixelpen.sim.transport import open_sim_port
 from pixelpen.urls import parse_url
 from pixelpen.vector.displaylist import DisplayList
@@ -314,6 +314,24 @@ def test_device_handshakes_plot_without_overflow(handshake, preamble):
     assert bytes(links[0].sent).startswith(b"\x1b.(\x1b.K" + preamble + b"IN;")
     assert device.stats.bytes_overflowed == 0 and device.error_log == []
     assert len(device.segments()[0]) == len(dl.segments())
+
+
+@pytest.mark.parametrize("handshake", ["xonxoff", "hardwire"])
+def test_a_stroke_longer_than_the_stall_limit_on_the_wire_plots_completely(handshake):
+    # ~60 KB of PD coordinates: over a minute at 9600 baud, longer than stall=60 s; the plotter is progressing
+    n = 6000
+    stroke = np.column_stack([1000 + np.arange(n), 1000 + 10 * (np.arange(n) % 2)]).astype(float)
+    dl = DisplayList.from_polylines([stroke], pens=1, unit_mm=UNIT)
+    ident = f"long-stroke-{handshake}"
+    try:
+        with pixelpen.open(f"sim:hp7475a?speed=fast&handshake={handshake}&id={ident}") as d:
+            d.plot(dl)
+            device = named_simulator(ident)
+            assert d.link.port.sim_port.stats().bytes_sent * 10.0 / 9600 > d.stall_s
+        assert device.error_log == [] and device.stats.bytes_overflowed == 0
+        assert len(device.segments()[0]) == len(dl.segments()) == n - 1
+    finally:
+        forget_simulator(ident)
 
 
 def test_escb_does_not_starve_a_plotter_that_is_slower_than_the_link():

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import re
 
 import numpy as np
@@ -97,6 +98,15 @@ def test_unknown_commands():
     assert rig.send("B\r") == b"B,!8 Err: Unknown command 'B:42'\n"
     old = Rig(firmware="2.8.1")
     assert old.send("ZZ\r") == b"!8 Err: Unknown command 'ZZ:5A5A'\r\n"
+
+
+def test_the_flush_hash_is_answered_as_unknown_but_logged_only_at_debug(caplog):
+    rig = Rig()
+    with caplog.at_level(logging.DEBUG, logger="pixelpen.sim.ebb"):
+        assert rig.send("#\rV\r") == b"!8 Err: Unknown command '#:23'OK\r\n" + VERSION + b"\r\n"
+        assert rig.send("ZZ\r") == b"!8 Err: Unknown command 'ZZ:5A5A'OK\r\n"
+    levels = {r.getMessage().rpartition(" ")[2]: r.levelno for r in caplog.records if "unknown command" in r.getMessage()}
+    assert levels == {"'#'": logging.DEBUG, "'ZZ'": logging.WARNING}
 
 
 def test_parameter_errors_as_documented():
