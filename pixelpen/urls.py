@@ -94,11 +94,23 @@ def _parse_query(query: str, url: str) -> dict[str, str]:
 
 def format_url(scheme: str, target: str, options: Mapping[str, object] | None = None) -> str:
     """Build a URL string that :func:`parse_url` reads back to the same parts."""
-    needs_brackets = "?" in target or target.startswith("[")
-    text = f"{scheme}:" + (f"[{target}]" if needs_brackets else quote(target, safe="/:@.-_~,=+;!$'()*\\ "))
+    if ("?" in target or target.startswith("[")) and _balanced(target):
+        text = f"{scheme}:[{target}]"
+    else:
+        text = f"{scheme}:" + quote(target, safe="/:@.-_~,=+;!$'()*\\ ")
     if options:
         text += "?" + "&".join(f"{quote(str(k))}={quote(str(v), safe='/:.,-_x')}" for k, v in options.items())
     return text
+
+
+def _balanced(text: str) -> bool:
+    """True when ``[text]`` reads back as one bracketed target (brackets nest and close within it)."""
+    depth = 0
+    for ch in text:
+        depth += (ch == "[") - (ch == "]")
+        if depth < 0:
+            return False
+    return depth == 0
 
 
 class Options:

@@ -85,3 +85,8 @@ def test_sizes_and_units():
     assert parse_bool("On") is True and parse_bool("0") is False
     with pytest.raises(ValueError):
         parse_bool("maybe")
+
+
+@pytest.mark.parametrize("target", ["[", "]", "a]b?c", "[x?", "x?]", "[a][b]?q"])
+def test_unbalanced_brackets_round_trip_percent_encoded(target):
+    assert parse_url(format_url("png", target, {"size": "1x1"})).target == target
