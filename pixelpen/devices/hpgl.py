@@ -114,8 +114,6 @@ SAFE_WAIT_S = 10.0
 DISCOVERY_TIMEOUT_S = 0.5
 WRITE_CHUNK = 512
 """Bytes written at a time under xonxoff/hardwire; each chunk must be taken within ``stall`` seconds."""
-_NO_WRITE_TIMEOUT = ("rfc2217://",)
-"""pyserial URL schemes whose ports take no write timeout."""
 _MAX_REPLY = 256
 MAX_OE = 31
 """Largest number taken as an OE answer (HP-GL/1 error numbers are 0..8)."""
@@ -307,9 +305,6 @@ class HPGLDisplay(PlotterDisplay):
             return self._usb_link()
         if self.port.lower() == "auto":
             return self._discover()
-        if self.port.lower().startswith(_NO_WRITE_TIMEOUT):
-            # pyserial's rfc2217 handler refuses write timeouts; the plotter's handshake bounds writes instead
-            return SerialLink(self.port, self.baudrate, self.flow, self.timeout, write_timeout=None)
         return super()._make_link()
 
     def _usb_link(self) -> Link:

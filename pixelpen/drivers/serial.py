@@ -41,6 +41,11 @@ def known_ports() -> list[str]:
         return []
 
 
+NO_WRITE_TIMEOUT = ("rfc2217://",)
+"""pyserial URL schemes whose ports refuse write timeouts (pyserial's rfc2217 raises NotImplementedError):
+their writes go to a socket and block until sent; the Link's own deadlines still bound XOFF holds."""
+
+
 class SerialLink(Link):
     """A Link over a pyserial port or URL, mapping its failures onto pixelpen's LinkError family."""
 
@@ -59,6 +64,7 @@ class SerialLink(Link):
         if flow not in FLOWS:
             raise LinkError(f"{url}: flow must be one of {', '.join(FLOWS)}, got {flow!r}")
         is_sim = isinstance(url, str) and url.lower().startswith("sim://")
+        self._port_takes_write_timeout = not (isinstance(url, str) and url.lower().startswith(NO_WRITE_TIMEOUT))
         if clock is not None and is_sim:
             port_options["clock"] = clock
         try:
@@ -68,7 +74,7 @@ class SerialLink(Link):
                 rtscts=flow == "rtscts",
                 xonxoff=flow == "xonxoff",
                 timeout=0,
-                write_timeout=write_timeout,
+                write_timeout=write_timeout if self._port_takes_write_timeout else None,
                 **port_options,
             )
         except PixelpenError:
@@ -90,7 +96,7 @@ class SerialLink(Link):
             soft_xonxoff=(flow == "xonxoff") if soft_xonxoff is None else soft_xonxoff,
         )
         self._port_timeout: float | None = 0
-        self._port_write_timeout: float | None = write_timeout
+        self._port_write_timeout: float | None = write_timeout if self._port_takes_write_timeout else None
 
     @property
     def baudrate(self) -> int:
@@ -122,10 +128,14 @@ class SerialLink(Link):
         self._set_timeout(0)
         return self.port.read(n)
 
-    def _write_raw(self, data: bytes, wait: float | None) -> int:
-        if wait != self._port_write_timeout:
+    def _set_write_timeout(self, wait: float | None) -> None:
+        """Give the port ``wait`` as its write timeout (ports that take none block until the bytes are out)."""
+        if self._port_takes_write_timeout and wait != self._port_write_timeout:
             self.port.write_timeout = wait
             self._port_write_timeout = wait
+
+    def _write_raw(self, data: bytes, wait: float | None) -> int:
+        self._set_write_timeout(wait)
         try:
             n = self.port.write(data)
         except serial.SerialTimeoutException as exc:
@@ -141,9 +151,7 @@ class SerialLink(Link):
             raise self._lost(exc) from exc
 
     def _flush_raw(self, wait: float | None) -> None:
-        if wait != self._port_write_timeout:
-            self.port.write_timeout = wait
-            self._port_write_timeout = wait
+        self._set_write_timeout(wait)
         try:
             self.port.flush()
         except serial.SerialTimeoutException as exc:

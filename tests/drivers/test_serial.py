@@ -133,3 +133,43 @@ def test_unplugged_os_port_raises_disconnected():
         with pytest.raises(Disconnected, match=bridge.path):
             link.read_until(b"\r")
         link.close()
+
+
+def test_rfc2217_ports_get_no_port_write_timeout(monkeypatch):
+    """pyserial's rfc2217 handler refuses write timeouts: SerialLink must not hand it one."""
+    import serial
+
+    from pixelpen.drivers import serial as serial_mod
+
+    seen = {}
+
+    class Port:
+        baudrate, rtscts, xonxoff, in_waiting = 9600, False, False, 0
+
+        @property
+        def write_timeout(self):
+            return None
+
+        @write_timeout.setter
+        def write_timeout(self, value):
+            raise NotImplementedError("write_timeout is currently not supported")
+
+        def write(self, data):
+            return len(data)
+
+        def flush(self):
+            pass
+
+        def close(self):
+            pass
+
+    def fake_for_url(url, **kwargs):
+        seen.update(kwargs)
+        return Port()
+
+    monkeypatch.setattr(serial, "serial_for_url", fake_for_url)
+    link = serial_mod.SerialLink("rfc2217://127.0.0.1:1", write_timeout=5.0)
+    assert seen["write_timeout"] is None and link.write_timeout == 5.0
+    link.write(b"IN;")  # would raise NotImplementedError if the link set the port's write timeout
+    link.flush()
+    link.close()
