@@ -5,10 +5,12 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import asdict
 from pathlib import Path
 
 from ..display.pictfile import load_picture
 from ..display.registry import known_schemes, open_display
+from ..drivers.discovery import DiscoveredDevice, discover
 from ..scene import draw_reference
 from ..urls import format_url
 from .plot import plot_demo
@@ -40,9 +42,7 @@ def cmd_devices(args: argparse.Namespace) -> int:
     }
     present: list[dict] = []
     if not args.no_probe:
-        from ..drivers.discovery import discover
-
-        present = [dict(record) for record in discover()]
+        present = [_record(device) for device in discover()]
     if args.json:
         json.dump({"schemes": schemes, "present": present}, sys.stdout, indent=2, default=str)
         print()
@@ -57,6 +57,16 @@ def cmd_devices(args: argparse.Namespace) -> int:
     for rec in present:
         print("  " + "  ".join(f"{k}={v}" for k, v in rec.items() if v not in (None, "")))
     return 0
+
+
+def _record(device: DiscoveredDevice) -> dict:
+    """A discovered device as a flat dict, USB IDs as VID:PID hex."""
+    rec = {k: v for k, v in asdict(device).items() if k not in ("vid", "pid", "identity") and v not in (None, "")}
+    if device.vid is not None and device.pid is not None:
+        rec["usb_id"] = f"{device.vid:04X}:{device.pid:04X}"
+    if device.identity is not None:
+        rec["identity"] = str(device.identity)
+    return rec
 
 
 def cmd_draw(args: argparse.Namespace) -> int:

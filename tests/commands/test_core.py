@@ -58,3 +58,17 @@ def test_devices_lists_schemes_with_options(capsys):
     assert main(["devices", "--json", "--no-probe"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert {"png", "svg"} <= set(data["schemes"]) and "size" in data["schemes"]["png"]["options"]
+
+
+def test_devices_reports_what_discovery_finds(capsys, monkeypatch):
+    from pixelpen.commands import core
+    from pixelpen.drivers.discovery import DiscoveredDevice
+
+    found = [DiscoveredDevice("serial", "/dev/ttyUSB0", "FT232R", 0x0403, 0x6001, model="hp7475a")]
+    monkeypatch.setattr(core, "discover", lambda: found)
+    assert main(["devices", "--json"]) == 0
+    (rec,) = json.loads(capsys.readouterr().out)["present"]
+    assert rec == {"kind": "serial", "path": "/dev/ttyUSB0", "description": "FT232R", "model": "hp7475a",
+                   "usb_id": "0403:6001"}
+    assert main(["devices"]) == 0
+    assert "usb_id=0403:6001" in capsys.readouterr().out
