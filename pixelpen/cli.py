@@ -37,6 +37,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except PixelpenError as exc:
         print(f"pixelpen {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into `head` and the like: stop quietly
+        sys.stderr.close()
+        return 0
     except KeyboardInterrupt:
         print(f"pixelpen {args.command}: interrupted; devices were left safe", file=sys.stderr)
         return 130
