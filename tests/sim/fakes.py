@@ -151,3 +151,33 @@ class ScriptedDevice:
 
     def close(self) -> None:
         self.closed = True
+
+
+class DeviceRig:
+    """A simulator on a simulated clock, driven byte-exactly: send bytes, run time, settle."""
+
+    def __init__(self, dev, clock) -> None:
+        self.dev, self.clock = dev, clock
+
+    def send(self, data: bytes | str) -> bytes:
+        """Feed host bytes; return what the device answered at once."""
+        self.dev.receive(data.encode() if isinstance(data, str) else data)
+        return self.dev.take_output()
+
+    def run(self, seconds: float) -> bytes:
+        """Let ``seconds`` of clock time pass; return what the device said meanwhile."""
+        self.clock.advance(seconds)
+        self.dev.advance_to(self.clock.now())
+        return self.dev.take_output()
+
+    def until_idle(self, limit: int = 100_000) -> bytes:
+        """Jump from event to event until the device has nothing scheduled; return its output."""
+        out = b""
+        for _ in range(limit):
+            te = self.dev.next_event_time()
+            if te is None:
+                return out + self.dev.take_output()
+            self.clock.advance(te - self.clock.now())
+            self.dev.advance_to(te)
+            out += self.dev.take_output()
+        raise AssertionError("simulator did not settle")

@@ -14,36 +14,17 @@ from pixelpen.clock import SimulatedClock
 from pixelpen.errors import ConfigError, URLError
 from pixelpen.sim.base import WireDevice
 from pixelpen.sim.ebb import EbbSimulator, _factory
+from tests.sim.fakes import DeviceRig
 
 VERSION = b"EBBv13_and_above EB Firmware Version 3.0.2"
 
 
-class Rig:
+class Rig(DeviceRig):
     """An EBB simulator on a simulated clock."""
 
     def __init__(self, **options):
-        self.clock = SimulatedClock()
-        self.dev = EbbSimulator(self.clock, **options)
-
-    def send(self, data: bytes | str) -> bytes:
-        self.dev.receive(data.encode() if isinstance(data, str) else data)
-        return self.dev.take_output()
-
-    def run(self, seconds: float) -> bytes:
-        self.clock.advance(seconds)
-        self.dev.advance_to(self.clock.now())
-        return self.dev.take_output()
-
-    def until_idle(self) -> bytes:
-        out = b""
-        for _ in range(100_000):
-            te = self.dev.next_event_time()
-            if te is None:
-                return out + self.dev.take_output()
-            self.clock.advance(te - self.clock.now())
-            self.dev.advance_to(te)
-            out += self.dev.take_output()
-        raise AssertionError("simulator did not settle")
+        clock = SimulatedClock()
+        super().__init__(EbbSimulator(clock, **options), clock)
 
 
 def test_is_a_wire_device():

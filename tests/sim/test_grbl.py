@@ -14,38 +14,19 @@ from pixelpen.clock import SimulatedClock
 from pixelpen.errors import ConfigError, URLError
 from pixelpen.sim.base import WireDevice, create_simulator
 from pixelpen.sim.grbl import GrblSimulator, fmt_float
+from tests.sim.fakes import DeviceRig
 
 WELCOME = b"\r\nGrbl 1.1h ['$' for help]\r\n"
 UNLOCK = b"[MSG:'$H'|'$X' to unlock]\r\n"
 
 
-class Rig:
-    """A GRBL simulator on a simulated clock, driven byte-exactly."""
+class Rig(DeviceRig):
+    """A GRBL simulator on a simulated clock, past its welcome line."""
 
     def __init__(self, **options):
-        self.clock = SimulatedClock()
-        self.dev = GrblSimulator(self.clock, **options)
+        clock = SimulatedClock()
+        super().__init__(GrblSimulator(clock, **options), clock)
         self.dev.take_output()
-
-    def send(self, data: bytes | str) -> bytes:
-        self.dev.receive(data.encode() if isinstance(data, str) else data)
-        return self.dev.take_output()
-
-    def run(self, seconds: float) -> bytes:
-        self.clock.advance(seconds)
-        self.dev.advance_to(self.clock.now())
-        return self.dev.take_output()
-
-    def until_idle(self, limit: int = 100_000) -> bytes:
-        out = b""
-        for _ in range(limit):
-            te = self.dev.next_event_time()
-            if te is None:
-                return out + self.dev.take_output()
-            self.clock.advance(te - self.clock.now())
-            self.dev.advance_to(te)
-            out += self.dev.take_output()
-        raise AssertionError("simulator did not settle")
 
     def status(self) -> str:
         return self.send(b"?").decode()
