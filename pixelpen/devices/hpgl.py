@@ -414,11 +414,12 @@ class HPGLDisplay(PlotterDisplay):
         return bool(self._wire.status & (STATUS_VIEW | STATUS_PAPER_LEVER))
 
     def _make_safe(self) -> None:
-        """ESC.K (drop buffered graphics), ``PU;SP0;`` and the park move, then wait (bounded) until they ran."""
+        """Drop host-queued bytes, ESC.K (drop buffered graphics), ``PU;SP0;`` and park, then wait (bounded) until they ran."""
         link = self.link
         if link is None or link.closed:
             return
         try:
+            link.reset_output()  # bytes still queued on the host would reach the plotter after the abort
             link.write(enc.ABORT_GRAPHICS, timeout=self._limit(link, self.timeout))
             self._wire = _Wire(progress_at=self.clock.now())
             link.write(b"".join(enc.trailer(self.paper.park)) + b"OI;", timeout=self._limit(link, self.timeout))

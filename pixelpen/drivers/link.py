@@ -98,6 +98,9 @@ class Link:
     def _reset_input_raw(self) -> None:
         """Discard input the transport itself buffers (default: the base buffer is all there is)."""
 
+    def _reset_output_raw(self) -> None:
+        """Discard output the transport still holds unsent (default: it holds none)."""
+
     # -- the driver-facing contract ------------------------------------------------------------
 
     @property
@@ -197,6 +200,11 @@ class Link:
         self._check_open()
         limit = self.write_timeout if timeout is None else timeout
         self._flush_raw(None if limit is None or math.isinf(limit) else limit)
+
+    def reset_output(self) -> None:
+        """Discard bytes written but not yet sent, so that the next write (a stop command) goes out first."""
+        self._check_open()
+        self._reset_output_raw()
 
     def reset_input(self) -> None:
         """Discard every byte received and not yet read."""

@@ -144,6 +144,12 @@ class SerialLink(Link):
             raise self._lost(exc) from exc
         return len(data) if n is None else int(n)
 
+    def _reset_output_raw(self) -> None:
+        try:
+            self.port.reset_output_buffer()
+        except (serial.SerialException, OSError) as exc:
+            raise self._lost(exc) from exc
+
     def _raw_in_waiting(self) -> int:
         try:
             return int(self.port.in_waiting)

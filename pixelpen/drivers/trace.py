@@ -338,6 +338,9 @@ class RecordingLink(Link):
     def _flush_raw(self, wait: float | None) -> None:
         self.inner.flush(math.inf if wait is None else wait)
 
+    def _reset_output_raw(self) -> None:
+        self.inner.reset_output()
+
     def _close_raw(self) -> None:
         try:
             self.inner.close()

@@ -160,6 +160,9 @@ def test_rfc2217_ports_get_no_port_write_timeout(monkeypatch):
         def flush(self):
             pass
 
+        def reset_output_buffer(self):
+            seen["reset_output"] = True
+
         def close(self):
             pass
 
@@ -172,4 +175,6 @@ def test_rfc2217_ports_get_no_port_write_timeout(monkeypatch):
     assert seen["write_timeout"] is None and link.write_timeout == 5.0
     link.write(b"IN;")  # would raise NotImplementedError if the link set the port's write timeout
     link.flush()
+    link.reset_output()
+    assert seen["reset_output"] is True  # queued bytes are dropped at the port
     link.close()
