@@ -2,16 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, asdict
+from dataclasses import dataclass, field
 from typing import Literal
 
 Category = Literal["output", "input", "output+input", "file"]
 Kind = Literal["raster", "vector", "none"]
 ColourModel = Literal["mono", "grey", "indexed", "rgb565", "rgb666", "rgb888", "rgba", "pens"]
 
-ALL_PRIMITIVES = frozenset(
-    {"polyline", "polygon", "rectangle", "circle", "ellipse", "arc", "bezier", "bspline", "marker", "text", "image"}
-)
 
 
 @dataclass(frozen=True)
@@ -40,9 +37,3 @@ class Capabilities:
     def size_mm(self) -> tuple[float, float]:
         """Drawable area in millimetres."""
         return (self.size[0] * self.unit_mm, self.size[1] * self.unit_mm)
-
-    def as_dict(self) -> dict:
-        """A JSON-ready dict of the table (for ``pixelpen devices --json`` and docs)."""
-        d = asdict(self)
-        d["native_primitives"] = sorted(self.native_primitives)
-        return d

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Iterator, Literal, Union
 
 import numpy as np
@@ -338,19 +338,3 @@ class Picture:
 
     def __len__(self) -> int:
         return len(self.items)
-
-
-def with_style(item: Primitive, **changes: object) -> Primitive:
-    """Return a copy of ``item`` with some style attributes replaced."""
-    return replace(item, style=replace(item.style, **changes))
-
-
-def style_of(**kwargs: object) -> Style:
-    """Build a Style, accepting ``fill`` as a style name or Fill and ``color`` as an alias of ``colour``."""
-    if "color" in kwargs:
-        kwargs["colour"] = kwargs.pop("color")
-    fill = kwargs.get("fill")
-    if isinstance(fill, str):
-        kwargs["fill"] = Fill(fill)
-    return Style(**kwargs)  # type: ignore[arg-type]
-
