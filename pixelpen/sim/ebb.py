@@ -10,6 +10,7 @@ figures from ``plotters.md`` §2.  Models "axidraw" and "ebb"; URL options:
 ``syntax=legacy``        response syntax at boot; ``future`` is what ``CU,10,1`` selects (fw >= 3.0)
 ``pen_colour=C``         ink colour of the rendered paper (default black)
 ``pen_width=MM``         line width of the rendered paper (default 0.3)
+``contact=17944``        servo pulse width (83.3 ns units) below which the pen touches the paper
 =======================  ========================================================================
 
 Commands are ``\\r`` (or ``\\n``) terminated, case-insensitive, at most 255 characters (longer:
@@ -17,8 +18,13 @@ Commands are ``\\r`` (or ``\\n``) terminated, case-insensitive, at most 255 char
 executes, ``n`` wait, and one more blocks the USB parser, its reply held back until it fits; while the
 parser is blocked the board reads only one more 64-byte USB packet (``ready_to_receive`` goes low).
 The paper: AxiDraw mixed axes (motor1 = A+B, motor2 = A−B) at 80 steps/mm per axis in 1/16 stepping
-(halved per coarser EM mode), x right, y down, origin at the home corner (top left).  The pen touches
-the paper while the servo's pulse width is past the midpoint between SC,4 (up) and SC,5 (down).  Servo
+(halved per coarser EM mode), x right, y down, origin at the home corner (top left).  The motor enables
+(RE0, RC1, active low) and microstep selects (MS1 RE2, MS2 RE1, MS3 RA6) are port pins: EBB_Init drives
+them high (disabled, 1/16), EM/ES/PO and the CU,61 timeout change them, and PI, I and QE read them.  The
+pen is mechanical: the servo pulse slews at the SC,11/12 or S2 rate and the pen touches the paper while
+the pulse is below ``contact`` (on an AxiDraw a larger pulse raises the pen), whatever SC,4/SC,5 say;
+QP reports the commanded state (S2 on RP4 counts as up only at exactly SC,4, as in ebb.c).  SC,4 / SC,5
+boot at 22565 / 15302 (firmware >= 2.6.0, RCServo2_Init) or 12000 / 16000 (older).  Servo
 power (RB1) is off at boot and after ``R`` (SR: "On boot, the power to the RC Servo ... will be off"), so
 the pen rests up until a command moves the servo (SP, TP, S2 on RP4); that first move starts from the
 pen-up position, SC,4.  Ink is recorded once per move (and where a pen or motor change splits one).
@@ -47,6 +53,7 @@ from .ebb_motion import MAX_STEP_RATE, MIN_STEP_RATE, TICK, AccumulatorAxis, Ser
 from .ebb_params import (
     EbbError,
     ParamSpec,
+    ascii_digits,
     checksum,
     error_text,
     parse_params,
@@ -74,7 +81,15 @@ USB_PACKET = 64  # bytes the board buffers while its parser is blocked
 MAX_FIFO = 32  # QU,2 on this simulated build
 STEPS_PER_MM_16 = 80.0  # per mixed axis at 1/16 microstepping
 SUPPLY_VOLTS = 9.0
-SERVO_MIN, SERVO_MAX = 12000, 16000  # SC,4 / SC,5 defaults
+SERVO_BOOT = (22565, 15302)
+"""SC,4 (up) / SC,5 (down) at boot since firmware 2.6.0 (RCServo2_Init; ebb.html still says 12000 / 16000)."""
+SERVO_BOOT_OLD = (12000, 16000)
+"""SC,4 / SC,5 at boot before firmware 2.6.0."""
+SERVO_RANGE = (9855, 27831)
+"""pyaxidraw's servo range (0.82 .. 2.32 ms): pen height 0 % .. 100 %, a larger pulse raising the pen."""
+CONTACT_DEFAULT = 17944
+"""Pulse width at which the pen meets the paper: 45 % of SERVO_RANGE, midway between pyaxidraw's
+30 % (down, 15248) and 60 % (up, 20641) defaults, and between saxi's 15700 (down) and 28000 (up)."""
 SERVO_TIMEOUT_MS = 60000
 
 P = ParamSpec
@@ -97,17 +112,49 @@ class _Command:
     moving: tuple[bool, bool] = (False, False)
 
 
+ENABLE_PINS = (("E", 0), ("C", 1))
+"""Motor 1 and 2 driver enables, active low (HardwareProfile_EBB_V13_and_above.h: Enable1IO RE0, Enable2IO RC1)."""
+MS_PINS = (("E", 2), ("E", 1), ("A", 6))
+"""Microstep selects MS1, MS2, MS3 (RE2, RE1, RA6), shared by both drivers."""
+MS_LEVELS = {1: (1, 1, 1), 2: (1, 1, 0), 3: (0, 1, 0), 4: (1, 0, 0), 5: (0, 0, 0)}
+"""EM mode -> MS1..MS3 levels (ebb.c, COMMAND_EM): 1 = 1/16 ... 5 = full step."""
+MS_MICROSTEPS = {(0, 0, 0): 1, (1, 0, 0): 2, (0, 1, 0): 4, (1, 1, 0): 8}
+"""MS1..MS3 levels -> microsteps as QE decodes them (parse_QE_packet); anything else reads 16."""
+
+
 @dataclass
 class _Ports:
-    """PORTA..E latches and directions (1 = input); inputs on port B read high (weak pull-ups)."""
+    """PORTA..E latches and directions (1 = input); inputs on port B read high (weak pull-ups).
+
+    UserInit makes every pin an input with its latch low; EBB_Init then drives MS1..MS3 and both motor
+    enables high (1/16 stepping, drivers disabled) and the step/direction pins low.
+    """
 
     lat: dict[str, int] = field(default_factory=lambda: dict.fromkeys("ABCDE", 0))
-    tris: dict[str, int] = field(default_factory=lambda: {"A": 0xFF, "B": 0xED, "C": 0xFF, "D": 0xFF, "E": 0xFF})
+    tris: dict[str, int] = field(default_factory=lambda: {"A": 0xFF, "B": 0xED, "C": 0xFF, "D": 0x03, "E": 0xFF})
+
+    def __post_init__(self) -> None:
+        for port, pin in MS_PINS + ENABLE_PINS:
+            self.drive(port, pin, 1)
 
     def read(self, port: str) -> int:
         """Digital value of every pin of ``port``."""
         pulled = 0xFF if port == "B" else 0x00
         return (self.lat[port] & ~self.tris[port] | pulled & self.tris[port]) & 0xFF
+
+    def pin(self, port: str, pin: int) -> int:
+        """Digital value of one pin."""
+        return (self.read(port) >> pin) & 1
+
+    def set_latch(self, port: str, pin: int, value: int) -> None:
+        """Write one output latch (the pin follows only while it is an output)."""
+        bit = 1 << pin
+        self.lat[port] = (self.lat[port] | bit) if value else (self.lat[port] & ~bit)
+
+    def drive(self, port: str, pin: int, value: int) -> None:
+        """Make ``pin`` an output at ``value``."""
+        self.set_latch(port, pin, value)
+        self.tris[port] &= ~(1 << pin)
 
 
 class EbbSimulator:
@@ -123,6 +170,7 @@ class EbbSimulator:
         syntax: str = "legacy",
         pen_colour: str = "black",
         pen_width: float = 0.3,
+        contact: int = CONTACT_DEFAULT,
     ) -> None:
         if machine not in TRAVEL_MM:
             raise ConfigError(f"{model}: model must be one of {', '.join(TRAVEL_MM)}, got {machine!r}")
@@ -135,6 +183,10 @@ class EbbSimulator:
         if syntax == "future" and self.version < (3, 0, 0):
             raise ConfigError(f"{model}: future syntax needs firmware >= 3.0.0, got {firmware}")
         self._boot_syntax = syntax
+        if not 1 <= contact <= 65535:
+            raise ConfigError(f"{model}: contact must be a servo pulse width 1..65535, got {contact!r}")
+        self._contact_pulse = contact
+        self._servo_defaults = SERVO_BOOT if self.version >= (2, 6, 0) else SERVO_BOOT_OLD
         self.clock = clock if clock is not None else REAL_CLOCK
         width, height = TRAVEL_MM[machine]
         self._paper = Paper(width, height, y_down=True, pen_colours={1: pen_colour}, pen_width_mm=pen_width)
@@ -281,9 +333,7 @@ class EbbSimulator:
         self._in_cr = False
         self._steps = [0, 0]
         self._acc = [0, 0]
-        self._mode = 1  # EM code: 1 = 1/16 ... 5 = full step
-        self._enabled = [False, False]
-        self._servo_min, self._servo_max = SERVO_MIN, SERVO_MAX
+        self._servo_min, self._servo_max = self._servo_defaults
         self._rate_up = self._rate_down = 0
         self._servo: ServoTrack | None = None  # RB1 servo power is off at boot: the pen rests up
         self._pen_state_up = True
@@ -307,15 +357,23 @@ class EbbSimulator:
         return self.version >= (3, 0, 0)
 
     def _steps_per_mm(self) -> float:
-        return STEPS_PER_MM_16 / (2 ** (self._mode - 1))
+        return STEPS_PER_MM_16 * self._microsteps() / 16
 
     def _microsteps(self) -> int:
-        return 16 >> (self._mode - 1)
+        """Stepping the MS1..MS3 pins select (QE's decoding)."""
+        return MS_MICROSTEPS.get(tuple(self._ports.pin(p, n) for p, n in MS_PINS), 16)
+
+    def _set_enables(self, *states: bool | None) -> None:
+        """Drive the motor enable pins (active low); None leaves a motor as it is."""
+        for (port, pin), on in zip(ENABLE_PINS, states):
+            if on is not None:
+                self._ports.set_latch(port, pin, 0 if on else 1)
 
     def _motors_enabled(self, t: float) -> list[bool]:
+        """Motor enables as the pins read, after the CU,61 stepper timeout has had its say."""
         if self._stepper_timeout and self._exec is None and t - self._last_motion_end > self._stepper_timeout:
-            return [False, False]
-        return list(self._enabled)
+            self._set_enables(False, False)
+        return [self._ports.pin(port, pin) == 0 for port, pin in ENABLE_PINS]
 
     # ---- time and engine -------------------------------------------------------------------------
     def _catch_up(self) -> None:
@@ -431,21 +489,14 @@ class EbbSimulator:
         return interrupted
 
     # ---- pen and paper ---------------------------------------------------------------------------
-    def _servo_down_side(self) -> tuple[float, int]:
-        """Midpoint pulse width and the direction (+1/-1) in which the pen goes down (0: never)."""
-        mid = 0.5 * (self._servo_min + self._servo_max)
-        side = 0 if self._servo_max == self._servo_min else (1 if self._servo_max > self._servo_min else -1)
-        return mid, side
-
     def _contact(self, t: float) -> bool:
-        mid, side = self._servo_down_side()
-        return self._servo is not None and side != 0 and (self._servo.position(t) - mid) * side > 0
+        """Whether the pen touches the paper: the servo's pulse is below the contact position."""
+        return self._servo is not None and self._servo.position(t) < self._contact_pulse
 
     def _contact_change(self, t0: float, t1: float) -> float | None:
-        mid, side = self._servo_down_side()
-        if side == 0 or self._servo is None:
+        if self._servo is None:
             return None
-        tc = self._servo.crossing(mid)
+        tc = self._servo.crossing(self._contact_pulse)
         return tc if tc is not None and t0 < tc < t1 else None
 
     def _sync_pen(self, t: float) -> None:
@@ -586,7 +637,7 @@ class EbbSimulator:
     def _strip_checksum(self, line: str) -> str | None:
         cut = line.rfind(",")
         prefix = (split_name(line)[0] + ",") if self._future else ""
-        if cut < 0 or not line[cut + 1:].isdigit() or len(line) - cut - 1 > 3:
+        if cut < 0 or not ascii_digits(line[cut + 1:]) or len(line) - cut - 1 > 3:
             self._emit((prefix + "!10 Err: No checksum found but required" + self._ending(error=True)).encode())
             return None
         expected = checksum(line[:cut])
@@ -619,7 +670,7 @@ class EbbSimulator:
     def _begin_motion(self, t: float, clear: int) -> None:
         self._split_ink(t)
         if self._auto_enable:
-            self._enabled = [True, True]
+            self._set_enables(True, True)
         for k in range(2):
             if clear & (1 << k):
                 self._acc[k] = 0
@@ -758,10 +809,9 @@ class EbbSimulator:
         def begin(t: float) -> None:
             self._split_ink(t)
             if e1:
-                self._mode = e1
-            self._enabled[0] = bool(e1)
-            if e2 is not None:
-                self._enabled[1] = bool(e2)
+                for (port, pin), level in zip(MS_PINS, MS_LEVELS[e1]):
+                    self._ports.set_latch(port, pin, level)
+            self._set_enables(bool(e1), None if e2 is None else bool(e2))
             self._steps = [0, 0]
             self._acc = [0, 0]
 
@@ -775,7 +825,7 @@ class EbbSimulator:
         (disable,) = v
         interrupted = self._stop_motion()
         if disable:
-            self._enabled = [False, False]
+            self._set_enables(False, False)
         self._reply(name, str(int(interrupted)), kind="rev")
         if not self._future:
             self._emit(self._ending("ok").encode())
@@ -834,8 +884,7 @@ class EbbSimulator:
             self._s2[pin] = position
             if pin == 4:  # RP4 = RB1, the pen-lift servo output
                 self._servo_move(t, position, rate or 0)
-                mid, side = self._servo_down_side()
-                self._pen_state_up = not (side and (position - mid) * side > 0)
+                self._pen_state_up = position == self._servo_min  # ebb.c: up only at exactly SC,4
 
         self._queue(name, _Command(name, duration=(delay or 0) / 1000.0, begin=begin))
 
@@ -1064,16 +1113,17 @@ class EbbSimulator:
 
     def _cmd_PO(self, name: str, v: list) -> None:
         port, pin, value = v
-        bit = 1 << pin
-        self._ports.lat[port] = (self._ports.lat[port] | bit) if value else (self._ports.lat[port] & ~bit)
+        self._ports.set_latch(port, pin, value)
         self._reply(name)
 
     def _cmd_PI(self, name: str, v: list) -> None:
         port, pin = v
-        value = (self._ports.read(port) >> pin) & 1
+        self._motors_enabled(self._now)
+        value = self._ports.pin(port, pin)
         self._reply(name, str(value), legacy=f"PI,{value}\r\n")
 
     def _cmd_I(self, name: str, v: list) -> None:
+        self._motors_enabled(self._now)
         data = ",".join(f"{self._ports.read(p):03d}" for p in "ABCDE")
         self._reply(name, data, legacy=f"I,{data}\r\n")
 
@@ -1202,6 +1252,12 @@ def _width(text: str) -> float:
     return value
 
 
+def _pulse(text: str) -> int:
+    if not ascii_digits(text.strip()) or not 1 <= int(text) <= 65535:
+        raise ValueError("expected a servo pulse width 1..65535 (units of 83.3 ns)")
+    return int(text)
+
+
 def _colour(text: str) -> str:
     from ..display.picture import parse_colour
 
@@ -1222,6 +1278,7 @@ def _factory(sim_model: str) -> Callable[..., EbbSimulator]:
             "syntax": (_syntax, "legacy"),
             "pen_colour": (_colour, "black"),
             "pen_width": (_width, 0.3),
+            "contact": (_pulse, CONTACT_DEFAULT),
         })
         machine = values.pop("model")
         try:

@@ -123,6 +123,11 @@ def _value(rest: str, pos: int, kind: str, fw3: bool) -> tuple[object, int]:
     return value, pos
 
 
+def ascii_digits(text: str) -> bool:
+    """True when ``text`` is one or more ASCII digits 0-9 (``str.isdigit`` also accepts '²' and other scripts)."""
+    return bool(text) and text.isascii() and text.isdigit()
+
+
 def checksum(text: str) -> int:
     """The CU,54 checksum: 0x100 minus the byte sum, modulo 256 (8-bit two's complement)."""
     return (-sum(text.encode("latin-1", "replace"))) & 0xFF
@@ -131,6 +136,6 @@ def checksum(text: str) -> int:
 def parse_version(text: str) -> tuple[int, int, int]:
     """Read a firmware version like ``3.0.2`` into a comparable tuple."""
     parts = text.strip().split(".")
-    if len(parts) != 3 or not all(p.isdigit() for p in parts):
+    if len(parts) != 3 or not all(ascii_digits(p) for p in parts):
         raise ValueError(f"firmware version must look like 3.0.2, got {text!r}")
     return (int(parts[0]), int(parts[1]), int(parts[2]))

@@ -119,6 +119,7 @@ def test_checksums():
     assert rig.send("CU,54,1\r") == b"OK\r\n"
     assert rig.send("SM,1000,1000,1000,153\r") == b"OK\r\n"  # the docs' example checksum
     assert rig.send("V\r") == b"!10 Err: No checksum found but required" + b"OK\r\n"
+    assert rig.send(b"V,\xb2\r") == b"!10 Err: No checksum found but required" + b"OK\r\n"  # '\u00b2'.isdigit()
     assert rig.send("CU,54,0,0\r") == b"!9 Err: Checksum incorrect, expected 119OK\r\n"
     assert rig.send("CU,54,0,119\r") == b"OK\r\n"
     assert rig.send("V\r") == VERSION + b"\r\n"
@@ -289,13 +290,84 @@ def test_paper_read_mid_move_shows_the_ink_so_far():
 
 
 def test_pen_contact_follows_the_servo_slew():
-    # SC,4,10000 / SC,5,15000 / rate 100: the FAQ's 1.2 s move; contact at the midpoint after 0.6 s
+    # SC,4,20000 -> SC,5,14000 at rate 100: the FAQ's |delta| x 24 ms / rate = 1.44 s slew; the pen meets
+    # the paper when the pulse passes the contact position 17944: (20000 - 17944) x 0.024 / 100 = 0.49344 s
     rig = Rig()
-    rig.send("SC,4,10000\rSC,5,15000\rSC,12,100\rSP,1\rSP,0\rXM,1200,1200,0\r")
+    rig.send("SC,4,20000\rSC,5,14000\rSC,12,100\rSP,1\rSP,0\rXM,1440,1440,0\r")  # 18 mm in 1.44 s
     rig.until_idle()
     strokes = rig.dev.paper.strokes()
     assert len(strokes) == 1
-    assert np.allclose(strokes[0][1][[0, -1]], [[7.5, 0], [15, 0]])  # 15 mm in 1.2 s, inked from 0.6 s
+    assert np.allclose(strokes[0][1][[0, -1]], [[0.49344 * 12.5, 0], [18, 0]], atol=0.02)
+
+
+def test_saxi_style_s2_pen_moves_lift_the_pen():
+    # saxi never sends SC,4/SC,5: it moves the pen with S2 on RP4 (up 28000, down 15700, ebb.ts)
+    rig = Rig()
+    rig.send("EM,1,1\rS2,28000,4,0,0\rXM,500,800,0\rS2,15700,4,0,0\rXM,500,0,800\rS2,28000,4,0,0\rXM,500,-800,0\r")
+    rig.until_idle()
+    (_, ink), = rig.dev.paper.strokes()  # only the pen-down move, from (10, 0) to (10, 10)
+    assert np.allclose(ink[[0, -1]], [[10, 0], [10, 10]])
+    assert rig.send("QP\r") == b"0\n\rOK\r\n"  # ebb.c: only a move to exactly SC,4 reports the pen up
+
+
+def test_contact_position_is_an_option():
+    # with the contact at 15000, pyaxidraw's 30 % down position (15248) no longer reaches the paper
+    for contact, inked in ((15000, 0), (15300, 1)):
+        rig = Rig(contact=contact)
+        rig.send("SC,4,20641\rSC,5,15248\rSP,0\rXM,500,800,0\rSP,1\r")
+        rig.until_idle()
+        assert len(rig.dev.paper.strokes()) == inked
+    assert _factory("axidraw")(contact="16000")._contact_pulse == 16000
+    for bad in ("0", "70000", "\u00b2", "1.5"):
+        with pytest.raises(URLError, match="contact"):
+            _factory("axidraw")(contact=bad)
+
+
+def test_boot_servo_positions_follow_the_firmware_version():
+    # RCServo2_Init: SC,4 22565 / SC,5 15302 since 2.6.0 (AxiDraw-ready); 12000 / 16000 before, both below
+    # the AxiDraw's contact position, so an old board without SC,4/SC,5 inks its pen-up moves too
+    for firmware, inked in (("3.0.2", [[0, 0], [10, 0]]), ("2.5.3", [[0, 0], [10, 0], [10, 10]])):
+        rig = Rig(firmware=firmware)
+        rig.send("SP,0\rXM,500,800,0\rSP,1\rXM,500,0,800\r")
+        rig.until_idle()
+        (_, ink), = rig.dev.paper.strokes()
+        assert np.allclose(ink, inked), firmware
+
+
+def test_pi_reads_the_motor_enable_and_microstep_pins():
+    # HardwareProfile_EBB_V13_and_above.h: enables RE0 / RC1 (active low), MS1 RE2, MS2 RE1, MS3 RA6;
+    # EBB_Init drives them all high: drivers disabled, 1/16 stepping
+    rig = Rig()
+    pins = ("PI,E,0\r", "PI,C,1\r", "PI,E,2\r", "PI,E,1\r", "PI,A,6\r")
+
+    def read() -> tuple[int, ...]:
+        return tuple(int(rig.send(p)[3:4]) for p in pins)
+
+    assert read() == (1, 1, 1, 1, 1)
+    assert rig.send("EM,1,1\rQE\r") == b"OK\r\n16,16\r\nOK\r\n"
+    assert read() == (0, 0, 1, 1, 1)
+    assert rig.send("EM,3,0\rQE\r") == b"OK\r\n4,0\r\nOK\r\n"
+    assert read() == (0, 1, 0, 1, 0)  # 1/4: MS1 0, MS2 1, MS3 0
+    assert rig.send("EM,5,5\rQE\r") == b"OK\r\n1,1\r\nOK\r\n"
+    assert read() == (0, 0, 0, 0, 0)
+    assert rig.send("EM,0,0\rQE\r") == b"OK\r\n0,0\r\nOK\r\n"
+    assert read() == (1, 1, 0, 0, 0)  # EM,0 leaves the microstep pins alone
+    assert rig.send("I\r") == b"I,000,237,002,000,001\r\n"  # port B: pulled-up inputs; RC1 and RE0 high
+    rig.send("EM,2,2\r")
+    assert rig.send("ES,1\r") == b"0\n\rOK\r\n"
+    assert read() == (1, 1, 1, 1, 0)  # ES,1 disables both drivers
+    assert rig.send("PO,E,0,0\rQE\r") == b"OK\r\n8,0\r\nOK\r\n"  # the pins are the state: PO drives them
+    rig.send("R\r")
+    assert read() == (1, 1, 1, 1, 1)  # R runs UserInit again
+
+
+def test_stepper_timeout_releases_the_enable_pins():
+    rig = Rig()
+    rig.send("CU,61,1\rXM,100,80,0\r")
+    rig.until_idle()
+    assert rig.send("PI,E,0\r") == b"PI,0\r\n"
+    rig.run(1.5)
+    assert rig.send("PI,E,0\rPI,C,1\rQE\r") == b"PI,1\r\nPI,1\r\n0,0\r\nOK\r\n"
 
 
 def test_button_power_loss_and_reset_faults():
