@@ -154,7 +154,10 @@ _COMMON_MNEMONICS = frozenset(
         "PA PD PR PT PU RA RO RR SA SC SI SL SM SP SR SS TL UC VS WG XT YT"
     ).split()
 )
-"""HP-GL/1 instructions the three models share (chiplotle3's 7475A whitelist, less digitizing and PS)."""
+"""HP-GL/1 instructions the three models share (chiplotle3's 7475A whitelist, less digitizing and PS).
+
+The 7475A's own list is chiplotle3's whole whitelist (``commands_7475A.py``), PS included: vpype's
+``hp7475a`` device (written and used on 7475As) begins every file ``IN;DF;PS4;`` or ``PS0``."""
 
 MODELS: Final[dict[str, ModelSpec]] = {
     "hp7475a": ModelSpec(
@@ -166,7 +169,7 @@ MODELS: Final[dict[str, ModelSpec]] = {
         max_velocity_cm_s=38.1, accel_cm_s2=2 * G_CM_S2, slow_accel_cm_s2=0.5 * G_CM_S2,  # 7470A manual VS
         vs_error_from=97.0,
         pen_lift_s=0.05, pen_change_s=2.0,  # assumption: solenoid lift and carousel pen change
-        mnemonics=_COMMON_MNEMONICS | {"DC", "DP", "OD"},
+        mnemonics=_COMMON_MNEMONICS | {"DC", "DP", "OD", "PS"},
         oi_needs_in=True,  # plotters.md §1.3: a 7475A answers OI only after IN (chiplotle PR #3)
     ),
     "hp7550a": ModelSpec(
@@ -1015,6 +1018,13 @@ class HPGLPlotter:
             self._ink(motion.draw, motion.pen, motion.width_mm)
 
     def _ink(self, segments: np.ndarray, pen: int, width_mm: float) -> None:
+        last = self._segments[-1] if self._segments else None
+        if (last is not None and len(last) == 1 and last[0, 0] == last[0, 2] and last[0, 1] == last[0, 3]
+                and self._segment_pens[-1] == pen and np.array_equal(last[0, :2], segments[0, :2])):
+            # the dot a bare PD left is the start of the line drawn from it: one mark, not two
+            self._segments.pop()
+            self._segment_pens.pop()
+            self._segment_widths.pop()
         self._segments.append(segments)
         self._segment_pens.append(pen)
         self._segment_widths.append(width_mm)
@@ -1160,6 +1170,15 @@ class HPGLPlotter:
                 log.warning("%s: pen down with no pen in the holder (select one with SP): nothing is inked", self.model)
             self._phys_down = down
             self._motions.append(_Motion(self.spec.pen_lift_s, self._phys, self._phys))
+
+    def _dot(self) -> None:
+        """Ink a dot where the pen stands (inside the clipping window), as a pen touching the paper does."""
+        px, py = self._phys
+        x0, y0, x1, y1 = self._clip_window()
+        if x0 <= px <= x1 and y0 <= py <= y1:
+            dot = np.array([[px, py, px, py]], dtype=np.float64)
+            self._motions.append(_Motion(0.0, self._phys, self._phys, draw=dot, pen=self._pen,
+                                         width_mm=self._g.pen_thickness_mm))
 
     def _travel(self, x: float, y: float, draw: bool, dashed: bool = True) -> None:
         """Plan the move from the current position to logical (x, y); ink it if ``draw``.
@@ -1520,7 +1539,10 @@ def _h_pu(p: HPGLPlotter, item: Instruction) -> None:
     if not item.params:
         if not p._pen_down:
             p._g.dash_pos = 0.0
+        lowered = p._pen_down and not p._phys_down
         p._pen_to(p._pen_down)
+        if lowered:
+            p._dot()  # a bare PD lowers the pen where it stands: the tip leaves a dot
         return
     _vector(p, item, p._pen_down)
 

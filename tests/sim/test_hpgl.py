@@ -163,8 +163,30 @@ def test_model_specific_instructions():
     assert ask(plotter, clock, b"OT;") == b"1,3\r"
     plotter, clock = make("hp7440a")
     assert ask(plotter, clock, b"OD;OE;") == b"1\r"  # no digitizing on the 7440A
+    plotter, clock = make("hp7440a")
+    assert ask(plotter, clock, b"IN;PS4;OE;") == b"1\r"  # not in the 7440A's HP-GL
+
+
+def test_a_vpype_hp7475a_file_plots_in_full():
+    # vpype write --device hp7475a --page-size a4: IN;DF;PS4; first (chiplotle3's 7475A list has PS too)
     plotter, clock = make()
-    assert ask(plotter, clock, b"IN;PS4;OE;") == b"1\r"  # PS is a 7550A instruction
+    ask(plotter, clock, b"IN;DF;PS4;SP1;PU1000,1000;PD2000,1000,2000,2000;PU;SP0;IN;PU11040,7721;")
+    assert plotter.error_log == []
+    assert np.allclose(segments(plotter), [[1000, 1000, 2000, 1000], [2000, 1000, 2000, 2000]])
+    # a model without PS reports error 1 (OE, the OS error bit, ESC.E untouched) and plots the rest
+    plotter, clock = make("hp7440a")
+    assert ask(plotter, clock, b"IN;DF;PS4;SP1;PU1000,1000;PD2000,1000;PU;OS;OE;OE;") == b"56\r1\r0\r"
+    assert np.allclose(segments(plotter), [[1000, 1000, 2000, 1000]])
+
+
+def test_a_bare_pd_leaves_a_dot():
+    plotter, clock = make()
+    ask(plotter, clock, b"IN;SP1;PA1500,1200;PD;PU;PD;PD;PU;PA3000,1200;PD;PA3000,1500;PU;")
+    # two touches at one point make one dot; a dot a line then starts from is part of the line
+    assert np.allclose(segments(plotter), [[1500, 1200, 1500, 1200], [3000, 1200, 3000, 1500]])
+    plotter, clock = make()
+    ask(plotter, clock, b"IN;SP1;IW2000,2000,4000,4000;PA1500,1200;PD;PU;")
+    assert len(segments(plotter)) == 0  # outside the window: the pen does not come down there
 
 
 def test_output_factors_window_options():
