@@ -11,10 +11,27 @@ A plotter family (HPGL, GRBL, EBB) subclasses :class:`PlotterDisplay` and implem
 * ``_drain()`` — wait until every stroke sent is confirmed;
 * ``_select_pen(pen)`` — take pen ``pen`` (multi-pen devices; single-pen devices never get it);
 * ``_device_paused()`` — True while the device's own pause (button, VIEW, paper lever) holds;
-* ``_make_safe()`` — best effort, never raising: stop motion, pen up, park, motors off.
+* ``_make_safe()`` — best effort, never raising: stop motion, pen up, park, motors off;
+
+and, with safe defaults in the base (see /work/notes/resume-interface.md):
+
+* ``_where()`` — on a fresh link, before ``_connect()``: let the device finish (or discard) what the
+  old connection left, then report a :class:`DeviceWhere` (default: position unknown);
+* ``_manual_pen(down)``, ``_manual_pen_state()``, ``_manual_home()``, ``_manual_motors_off()`` —
+  immediate manual control behind :meth:`PlotterDisplay.pen_up` and friends (default: ConfigError).
 
 Confirmation is the device's word that a stroke is on paper (an output request answered after it,
 a status report, an idle motor query), not merely that its bytes were received.
+
+Resuming draws each stroke exactly once: strokes from the last confirmed one to the last one sent
+are in doubt; after reconnecting the base asks the device where it stopped (``_where``) and
+:func:`locate` finds that point in the strokes in doubt (pen-up travel in a straight line to a
+stroke's first point, pen down along it, pen up at its end).  The plot continues with the rest of
+the interrupted stroke.  A position that matches nothing, matches several different amounts of
+drawing (a closed stroke seen with the pen up at its start/end, a path that revisits a point), or
+that the device lost (power loss, reset) raises :class:`PositionUnknown` instead of guessing; a
+resume with ``position_confirmed=True`` then continues from the earliest possible point (the last
+confirmed stroke when nothing is known): it may redraw, it never loses.
 """
 
 from __future__ import annotations
@@ -35,7 +52,7 @@ from ..display.capabilities import Capabilities
 from ..display.kinds import VectorDisplay
 from ..drivers.link import Link
 from ..drivers.serial import SerialLink
-from ..errors import ConfigError, LinkError, ParseError, PixelpenError, URLError
+from ..errors import ConfigError, LinkError, ParseError, PixelpenError, ProtocolError, URLError
 from ..urls import DeviceURL, Options, format_url
 from ..vector.displaylist import DisplayList
 from ..vector.motion import estimate_time
@@ -43,7 +60,9 @@ from ..vector.profiles import DeviceProfile, load_profile
 
 log = logging.getLogger(__name__)
 
-STATE_VERSION = 1
+STATE_VERSION = 2
+_STATE_VERSIONS = (1, 2)
+"""State file versions read (version 1 lacks ``sent`` and ``position_lost``)."""
 
 
 @dataclass
@@ -74,6 +93,104 @@ class PlotInterrupted(PixelpenError):
         super().__init__(f"{message}; {resume_from} strokes were confirmed{where}")
 
 
+class PositionUnknown(PixelpenError):
+    """Where the device stopped cannot be told; ``resume_from`` is where a confirmed resume restarts."""
+
+    def __init__(self, message: str, *, resume_from: int, strokes: range) -> None:
+        self.resume_from = resume_from
+        self.strokes = strokes
+        super().__init__(message)
+
+
+@dataclass(frozen=True)
+class DeviceWhere:
+    """What a device says after a fault: where the pen is (device units of the sent points) and whether it knows."""
+
+    position: tuple[float, float] | None
+    pen_down: bool | None
+    settled: bool = True
+    """The device will not move any more on bytes of the old connection (drained or aborted)."""
+    position_lost: bool = False
+    """The device restarted or lost steps: its position says nothing about the job."""
+    tolerance: float = 0.5
+    """Device units within which the position counts as on a vertex or a segment."""
+    detail: str = ""
+    """What the device said, for messages."""
+
+
+@dataclass(frozen=True)
+class ResumePoint:
+    """Where drawing stopped: strokes < ``stroke`` done, stroke ``stroke`` drawn to vertex ``vertex`` (then to ``at``)."""
+
+    stroke: int
+    vertex: int = 0
+    at: tuple[float, float] | None = None
+    """A point inside segment vertex..vertex+1 where the pen stopped (None: at the vertex)."""
+
+    def remainder(self, points: np.ndarray) -> np.ndarray | None:
+        """The stroke's points still to draw (None: the whole stroke)."""
+        if self.vertex == 0 and self.at is None:
+            return None
+        if self.at is None:
+            return points[self.vertex:]
+        head = np.rint(np.asarray([self.at], float)).astype(points.dtype)
+        return np.concatenate([head, points[self.vertex + 1:]])
+
+
+def locate(window: list[tuple[int, np.ndarray]], where: DeviceWhere, before: np.ndarray | None) -> list[ResumePoint]:
+    """Every distinct place in the strokes ``window`` ((index, sent points) in order) the device state may be, earliest first.
+
+    ``before`` is the pen position before the window's first stroke (the end of the stroke before it), or None.
+    """
+    if where.position is None:
+        return []
+    q = np.asarray(where.position, float)
+    tol = float(where.tolerance)
+    found: list[ResumePoint] = []
+    up_ok, down_ok = where.pen_down is not True, where.pen_down is not False
+    prev = before
+    for index, pts in window:
+        p = np.asarray(pts, float)
+        if prev is not None and up_ok and _near_segment(q, prev, p[0], tol) is not None:
+            found.append(ResumePoint(index))  # travelling to the stroke's start, or there with the pen still up
+        if len(p) == 1:
+            if np.hypot(*(q - p[0])) <= tol:
+                if up_ok:
+                    found.append(ResumePoint(index))
+                found.append(ResumePoint(index + 1))
+        else:
+            for j in range(len(p) - 1):
+                t = _near_segment(q, p[j], p[j + 1], tol)
+                if t is None:
+                    continue
+                length = float(np.hypot(*(p[j + 1] - p[j])))
+                if t * length >= length - tol:
+                    found.append(ResumePoint(index + 1) if j + 1 == len(p) - 1 else ResumePoint(index, j + 1))
+                elif t * length <= tol:
+                    found.append(ResumePoint(index, j))
+                else:
+                    found.append(ResumePoint(index, j, (float(q[0]), float(q[1]))))
+        prev = p[-1]
+    return _distinct(found, tol)
+
+
+def _near_segment(q: np.ndarray, a: np.ndarray, b: np.ndarray, tol: float) -> float | None:
+    """Parameter t in 0..1 of the point of segment a-b nearest q, if q lies within ``tol`` of it."""
+    d = b - a
+    dd = float(d @ d)
+    t = 0.0 if dd == 0 else min(1.0, max(0.0, float((q - a) @ d) / dd))
+    return t if float(np.hypot(*(a + t * d - q))) <= tol else None
+
+
+def _distinct(points: list[ResumePoint], tol: float) -> list[ResumePoint]:
+    out: list[ResumePoint] = []
+    for r in sorted(points, key=lambda r: (r.stroke, r.vertex, r.at is not None)):
+        if not any(o.stroke == r.stroke and o.vertex == r.vertex and (o.at is None) == (r.at is None)
+                   and (o.at is None or np.hypot(o.at[0] - r.at[0], o.at[1] - r.at[1]) <= 2 * tol) for o in out):
+            out.append(r)
+    return out
+
+
 def fingerprint(dl: DisplayList) -> str:
     """A hash of a display list's strokes and pens, to tell a state file's drawing from another."""
     h = hashlib.sha256()
@@ -90,6 +207,10 @@ class PlotState:
     fingerprint: str
     strokes: int
     confirmed: int
+    sent: int | None = None
+    """One past the last stroke whose bytes went out (None: unknown, every unconfirmed stroke is in doubt)."""
+    position_lost: bool = False
+    """The device said it lost its position; a resume needs ``position_confirmed``."""
     version: int = STATE_VERSION
 
     def save(self, path: Path) -> None:
@@ -110,20 +231,26 @@ class PlotState:
             raise ParseError(f"cannot read plot state: {exc.strerror}", source=str(path)) from None
         except json.JSONDecodeError as exc:
             raise ParseError(f"plot state is not JSON: {exc.msg}", source=str(path), line=exc.lineno, column=exc.colno) from None
-        if not isinstance(data, dict) or data.get("version") != STATE_VERSION:
+        if not isinstance(data, dict) or data.get("version") not in _STATE_VERSIONS:
             raise ParseError(f"not a version-{STATE_VERSION} pixelpen plot state", source=str(path))
         try:
-            state = cls(**data)
+            state = cls(**{**data, "version": STATE_VERSION})
         except TypeError as exc:
             raise ParseError(f"plot state has wrong fields: {exc}", source=str(path)) from None
-        if not (isinstance(state.confirmed, int) and 0 <= state.confirmed <= state.strokes):
+        if not (isinstance(state.strokes, int) and isinstance(state.confirmed, int) and 0 <= state.confirmed <= state.strokes):
             raise ParseError("plot state field 'confirmed' is out of range", source=str(path), token=state.confirmed)
+        if state.sent is not None and not (isinstance(state.sent, int) and state.confirmed <= state.sent <= state.strokes):
+            raise ParseError("plot state field 'sent' is out of range", source=str(path), token=state.sent)
+        if not isinstance(state.position_lost, bool):
+            raise ParseError("plot state field 'position_lost' is not true or false", source=str(path), token=state.position_lost)
         return state
 
 
 PenChange = Callable[[int], None]
 """Called on single-pen devices when the next stroke needs another pen; returns when it is in."""
 ProgressCallback = Callable[[PlotProgress], None]
+PauseCallback = Callable[[bool], None]
+"""Called with True once the device has actually paused (idle, pen up), with False when it goes on."""
 
 
 class PlotterDisplay(VectorDisplay):
@@ -158,6 +285,7 @@ class PlotterDisplay(VectorDisplay):
         on_progress: ProgressCallback | None = None,
         on_pen_change: PenChange | None = None,
         pause_requested: Callable[[], bool] | None = None,
+        on_pause: PauseCallback | None = None,
     ) -> None:
         self.profile = profile
         self.paper = profile.paper(paper)
@@ -183,6 +311,7 @@ class PlotterDisplay(VectorDisplay):
         self.on_progress = on_progress
         self.on_pen_change = on_pen_change
         self.pause_requested = pause_requested
+        self.on_pause = on_pause
         self.link: Link | None = None
         self.pen: int | None = None
         """Pen the device holds now (None: unknown or none)."""
@@ -193,6 +322,15 @@ class PlotterDisplay(VectorDisplay):
         self._cum_mm = np.zeros(1)
         self._estimate_s = 0.0
         self._started = 0.0
+        self._sent_end = 0
+        """One past the last stroke whose bytes started going out."""
+        self._head: tuple[int, np.ndarray] | None = None
+        """The first stroke of a resumed run and the remainder of it that was sent."""
+        self._interrupted = False
+        self._position_lost = False
+        self._where_found: DeviceWhere | None = None
+        """What ``_where()`` said on the last fresh link opened for a resume."""
+        self._paused_now = False
 
     # -- construction ------------------------------------------------------------------------
     @classmethod
@@ -235,6 +373,8 @@ class PlotterDisplay(VectorDisplay):
     def _open_device(self) -> None:
         self._attach(self._make_link())
         try:
+            if self._unfinished_state_file():
+                self._where_found = self._where()
             self._connect()
         except BaseException:
             self.link.close()
@@ -274,7 +414,18 @@ class PlotterDisplay(VectorDisplay):
                 self.link = None
         self.pen = None
         self._attach(self._make_link())
+        self._where_found = self._where() if self._interrupted else None
         self._connect()
+
+    def _unfinished_state_file(self) -> bool:
+        """True when the state file holds a job that did not finish (a resume may follow: ask the device first)."""
+        if self.state_file is None or not self.state_file.exists():
+            return False
+        try:
+            state = PlotState.load(self.state_file)
+        except ParseError:
+            return False  # plot(resume=True) reports it
+        return state.confirmed < state.strokes
 
     def _attach(self, link: Link) -> None:
         """Use ``link``; a display given no clock keeps time on the link's (a ``speed=fast`` simulator's)."""
@@ -292,34 +443,50 @@ class PlotterDisplay(VectorDisplay):
             log.warning("%s: a plotter cannot erase; put in a new sheet before the next drawing", self.profile.name)
 
     # -- plotting ------------------------------------------------------------------------------
-    def plot(self, dl: DisplayList, *, resume: bool = False) -> None:
-        """Plot a display list in device units; with ``resume`` continue a job from its state file."""
+    def plot(self, dl: DisplayList, *, resume: bool = False, position_confirmed: bool = False) -> None:
+        """Plot a display list in device units; with ``resume`` continue the interrupted job exactly where it stopped.
+
+        ``position_confirmed`` (after :class:`PositionUnknown`): the device was re-homed or checked; continue
+        from the earliest point it may have reached.
+        """
         if self.link is None:
             raise PixelpenError(f"{self.profile.name} is not open")
-        start = self._start_job(dl, resume)
         pts = self._device_points(dl)
+        start = self._start_job(dl, resume, pts, position_confirmed)
+        self._head = None
         try:
-            for i in range(start, len(dl)):
+            for i in range(start.stroke, len(dl)):
                 self._hold_while_paused()
                 pen = int(dl.pens[i])
                 if pen != self.pen:
                     self._change_pen(pen)
-                self._send_stroke(i, pts[dl.offsets[i] : dl.offsets[i + 1]], pen)
+                stroke = pts[dl.offsets[i] : dl.offsets[i + 1]]
+                if i == start.stroke and (rest := start.remainder(stroke)) is not None:
+                    stroke = rest
+                    self._head = (i, rest)
+                self._sent_end = i + 1
+                self._send_stroke(i, stroke, pen)
                 self._poll()
             self._drain()
-        except LinkError as exc:
+        except ProtocolError:  # the device refused something: said as it is, and the job stays resumable
+            self._interrupted = True
+            self._save_state(sent=self._sent_end)
+            raise
+        except (LinkError, ParseError) as exc:  # a garbled reply on a live link is a link fault
             self._poll_quietly()
+            self._interrupted = True
+            self._save_state(sent=self._sent_end)
             raise PlotInterrupted(
-                f"{self.profile.name}: plot interrupted by {type(exc).__name__}: {exc}",
-                resume_from=self.confirmed, state_file=self.state_file, cause=exc,
+                f"plot interrupted: {exc}", resume_from=self.confirmed, state_file=self.state_file, cause=exc,
             ) from exc
         except KeyboardInterrupt:
             self._make_safe()
             raise
+        self._interrupted = False
         self._confirm(len(dl))
 
-    def resume_after_fault(self, attempts: int = 3, wait_s: float = 1.0) -> None:
-        """Reconnect and plot the rest of the interrupted job from its last confirmed stroke."""
+    def resume_after_fault(self, attempts: int = 3, wait_s: float = 1.0, *, position_confirmed: bool = False) -> None:
+        """Reconnect, ask the device where it stopped and plot the rest of the interrupted job from exactly there."""
         if self._job is None:
             raise PixelpenError("there is no interrupted plot to resume")
         for attempt in range(1, attempts + 1):
@@ -331,28 +498,30 @@ class PlotterDisplay(VectorDisplay):
                     raise
                 log.warning("reconnect %d/%d failed: %s", attempt, attempts, exc)
                 self.clock.sleep(wait_s)
-        self._plot_rest()
+        self.plot(self._job, resume=True, position_confirmed=position_confirmed)
 
-    def _plot_rest(self) -> None:
-        job = self._job
-        assert job is not None
-        self.plot(job, resume=True)
-
-    def _start_job(self, dl: DisplayList, resume: bool) -> int:
+    def _start_job(self, dl: DisplayList, resume: bool, pts: np.ndarray, position_confirmed: bool = False) -> ResumePoint:
         fp = fingerprint(dl)
+        start = ResumePoint(0)
         if resume and self._job is not None and fingerprint(self._job) == fp:
-            start = self.confirmed
-        elif resume and self.state_file is not None and self.state_file.exists():
+            start = self._resume_point(dl, pts, self.confirmed, self._sent_end, position_confirmed)
+        elif resume and self.state_file is not None:
+            if not self.state_file.exists():
+                raise ConfigError(f"{self.state_file}: no plot state to resume (the file does not exist)")
             state = PlotState.load(self.state_file)
             if state.fingerprint != fp or state.strokes != len(dl):
                 raise ConfigError(f"{self.state_file}: the plot state belongs to another drawing; refusing to resume")
-            start = state.confirmed
+            self._position_lost = self._position_lost or state.position_lost
+            if self._where_found is None and not position_confirmed:
+                self._interrupted = True
+                self.reconnect()  # the display was opened without the state file: ask the device now
+            sent = len(dl) if state.sent is None else state.sent
+            self._job, self._head = dl, None
+            start = self._resume_point(dl, pts, state.confirmed, sent, position_confirmed)
         elif resume:
             raise ConfigError("nothing to resume: no interrupted plot in this process and no state file")
-        else:
-            start = 0
         self._job = dl
-        self._job_state = PlotState(self.port, fp, len(dl), start)
+        self._job_state = PlotState(self.port, fp, len(dl), start.stroke)
         seg = np.hypot(*np.diff(dl.points, axis=0).T) if len(dl.points) > 1 else np.zeros(0)
         per_stroke = np.add.reduceat(np.append(seg, 0.0), dl.offsets[:-1]) - np.where(
             dl.offsets[1:] < len(dl.points), np.append(seg, 0.0)[np.minimum(dl.offsets[1:] - 1, len(seg))], 0.0
@@ -360,9 +529,45 @@ class PlotterDisplay(VectorDisplay):
         self._cum_mm = np.concatenate([[0.0], np.cumsum(per_stroke)]) * dl.unit_mm
         self._estimate_s = _estimate_seconds(dl, self.profile)
         self._started = self.clock.now()
-        self.confirmed = start
+        self.confirmed = start.stroke
+        self._sent_end = start.stroke
         self._save_state()
         return start
+
+    def _resume_point(self, dl: DisplayList, pts: np.ndarray, confirmed: int, sent: int, confirmed_by_user: bool) -> ResumePoint:
+        """Where to continue the job: located from ``_where()`` among strokes confirmed..sent, or PositionUnknown."""
+        where, self._where_found = self._where_found, None
+        window = [(i, pts[dl.offsets[i] : dl.offsets[i + 1]]) for i in range(confirmed, sent)]
+        if self._head is not None and self._head[0] == confirmed and window:
+            window[0] = self._head
+        before = pts[dl.offsets[confirmed] - 1] if confirmed > 0 else None
+        if where is not None and where.position_lost:
+            self._position_lost = True
+        lost = self._position_lost or where is None or not where.settled
+        found = [] if lost else locate(window, where, before)
+        if len(found) == 1 and not self._position_lost:
+            return found[0]
+        if confirmed_by_user:
+            self._position_lost = False
+            return found[0] if found and not lost else ResumePoint(confirmed)
+        if confirmed == sent:
+            return ResumePoint(confirmed)  # nothing was in doubt
+        strokes = range(confirmed, sent)
+        if lost:
+            why = (where.detail if where is not None and where.detail else "the device cannot tell where it stopped")
+        elif not found:
+            why = f"it stands at {where.position} (pen {_pen_word(where.pen_down)}), on none of the strokes sent since the last confirmation"
+        else:
+            why = f"its position {where.position} (pen {_pen_word(where.pen_down)}) fits {len(found)} places: " + ", ".join(
+                f"stroke {r.stroke}" + (f" after vertex {r.vertex}" if r.vertex or r.at else "") for r in found)
+        self._save_state(sent=sent)
+        raise PositionUnknown(
+            f"{self.profile.name}: cannot tell which of strokes {confirmed}..{sent - 1} are on paper: {why}. "
+            f"Re-home the device or check the sheet, then resume with position_confirmed=True "
+            f"(pixelpen plot --resume --confirm-position): it continues from stroke {found[0].stroke if found else confirmed}"
+            + ("" if found else ", redrawing what was drawn since"),
+            resume_from=found[0].stroke if found else confirmed, strokes=strokes,
+        )
 
     def _device_points(self, dl: DisplayList) -> np.ndarray:
         """Stroke points in integer device units, offset to the paper's hard-clip origin."""
@@ -391,9 +596,12 @@ class PlotterDisplay(VectorDisplay):
         eta = max(0.0, self._estimate_s * (1.0 - share))
         return PlotProgress(self.confirmed, total, done_mm, total_mm, elapsed, eta)
 
-    def _save_state(self) -> None:
+    def _save_state(self, sent: int | None = None) -> None:
+        """Write the state file: confirmed strokes, ``sent`` when known (at a fault), the lost-position flag."""
         if self.state_file is not None and self._job_state is not None:
             self._job_state.confirmed = self.confirmed
+            self._job_state.sent = sent
+            self._job_state.position_lost = self._position_lost
             self._job_state.save(self.state_file)
 
     def _hold_while_paused(self) -> None:
@@ -403,10 +611,48 @@ class PlotterDisplay(VectorDisplay):
             if not announced:
                 self._drain()
                 log.info("%s: paused with the pen up", self.profile.name)
+                self._pause_changed(True)
                 announced = True
             self.clock.sleep(0.05)
         if announced:
             log.info("%s: resumed", self.profile.name)
+            self._pause_changed(False)
+
+    def _pause_changed(self, paused: bool) -> None:
+        """Tell ``on_pause`` the device has actually paused (True) or goes on (False); families call it for their own pauses."""
+        if paused != self._paused_now:
+            self._paused_now = paused
+            if self.on_pause is not None:
+                self.on_pause(paused)
+
+    # -- manual control ------------------------------------------------------------------------
+    def pen_up(self) -> None:
+        """Raise the pen now."""
+        self._manual("pen up")._manual_pen(False)
+
+    def pen_down(self) -> None:
+        """Lower the pen now."""
+        self._manual("pen down")._manual_pen(True)
+
+    def toggle_pen(self) -> None:
+        """Raise the pen if it is down, lower it if it is up."""
+        down = self._manual("pen toggle")._manual_pen_state()
+        if down is None:
+            raise ConfigError(f"{self.profile.name}: cannot tell whether the pen is up or down; use pen up or pen down")
+        self._manual_pen(not down)
+
+    def go_home(self) -> None:
+        """Pen up and travel to the home (park) position now."""
+        self._manual("home")._manual_home()
+
+    def motors_off(self) -> None:
+        """De-energise the motors now (the carriage can then be moved by hand)."""
+        self._manual("motors off")._manual_motors_off()
+
+    def _manual(self, what: str) -> "PlotterDisplay":
+        if self.link is None:
+            raise PixelpenError(f"{self.profile.name} is not open ({what})")
+        return self
 
     def _change_pen(self, pen: int) -> None:
         if pen < 1:
@@ -455,6 +701,30 @@ class PlotterDisplay(VectorDisplay):
     @abstractmethod
     def _make_safe(self) -> None:
         """Stop, pen up, park, motors off — best effort on ``self.link``."""
+
+    def _where(self) -> DeviceWhere:
+        """On a fresh link before ``_connect()``: let the device settle, say where it is (default: it cannot tell)."""
+        return DeviceWhere(None, None, position_lost=True, detail=f"the {self.profile.name} driver cannot ask where it stopped")
+
+    def _manual_pen(self, down: bool) -> None:
+        """Move the pen down or up now and wait until it is there."""
+        raise ConfigError(f"{self.profile.name}: pen {'down' if down else 'up'} is not supported by this driver")
+
+    def _manual_pen_state(self) -> bool | None:
+        """Whether the pen is down now (None: the device cannot tell)."""
+        return None
+
+    def _manual_home(self) -> None:
+        """Pen up and travel home now, waiting until there."""
+        raise ConfigError(f"{self.profile.name}: home is not supported by this driver")
+
+    def _manual_motors_off(self) -> None:
+        """De-energise the motors now."""
+        raise ConfigError(f"{self.profile.name}: motors off is not supported by this driver")
+
+
+def _pen_word(down: bool | None) -> str:
+    return "unknown" if down is None else "down" if down else "up"
 
 
 def _flow(text: str) -> str:
