@@ -2,6 +2,32 @@
 
 from __future__ import annotations
 
+import reprlib
+
+TOKEN_CHARS = 120
+"""Characters of a quoted token an error message shows at most (the token itself is kept whole on the error)."""
+
+
+class _TokenRepr(reprlib.Repr):
+    """reprlib with integers too long to print (Python refuses 4300 digits) shown by their size."""
+
+    def repr_int(self, x: int, level: int) -> str:
+        if x.bit_length() > 1000:
+            return f"<integer of about {int(x.bit_length() * 0.30103) + 1} digits>"
+        return super().repr_int(x, level)
+
+
+_QUOTE = _TokenRepr()
+_QUOTE.maxlevel = 3
+_QUOTE.maxstring = _QUOTE.maxother = TOKEN_CHARS
+_QUOTE.maxlist = _QUOTE.maxtuple = _QUOTE.maxdict = _QUOTE.maxset = 6
+
+
+def quote_token(value: object, limit: int = TOKEN_CHARS) -> str:
+    """A short repr of ``value`` for an error message: depth, length and size bounded, never recursing deeply."""
+    text = _QUOTE.repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
 
 class PixelpenError(Exception):
     """Base of every error pixelpen raises on purpose."""
@@ -9,6 +35,14 @@ class PixelpenError(Exception):
 
 class ConfigError(PixelpenError, ValueError):
     """A setting, option or profile value is missing, unknown or out of range."""
+
+
+class InvalidArgument(PixelpenError, ValueError):
+    """An argument of a library call has a bad value (NaN or inf, out of range, a degenerate rectangle)."""
+
+
+class InvalidArgumentType(PixelpenError, TypeError):
+    """An argument of a library call has the wrong type."""
 
 
 class URLError(ConfigError):
@@ -46,7 +80,7 @@ class ParseError(PixelpenError, ValueError):
             where.append(f"byte offset {self.offset}")
         text = self.message
         if self.token is not None:
-            text += f" (found {self.token!r})"
+            text += f" (found {quote_token(self.token)})"
         return f"{': '.join([', '.join(where), text]) if where else text}"
 
 

@@ -14,18 +14,34 @@ enclosed in square brackets, so the two queries never mix::
     png:out/scene.png?size=800x600
 
 Brackets nest, so ``[socket://[::1]:4000]`` keeps its IPv6 brackets.  Values are
-percent-decoded.  A target without brackets ends at the first ``?``.
+percent-decoded (as UTF-8; an undecodable byte is an error naming the option).  A target without
+brackets ends at the first ``?``.
+
+Limits: a URL of at most :data:`MAX_URL` characters; sizes of at most :data:`MAX_SIZE` in any unit;
+file names (:func:`check_path`) without NUL, at most :data:`MAX_NAME` bytes per component and
+:data:`MAX_PATH` bytes in all (module attributes, read at call time).
 """
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable, Iterable, Mapping, TypeVar
 from urllib.parse import quote, unquote
 
-from .errors import URLError
+from .errors import ConfigError, URLError, quote_token
 
 T = TypeVar("T")
+
+MAX_URL = 65536
+"""Characters of a device URL."""
+MAX_SIZE = 1e7
+"""Largest width or height a size option may give (in its own unit)."""
+MAX_NAME = 255
+"""Bytes of one file-name component (NAME_MAX of Linux, macOS and Windows)."""
+MAX_PATH = 4096
+"""Bytes of a whole file name (PATH_MAX of Linux)."""
 
 
 @dataclass(frozen=True)
@@ -44,7 +60,9 @@ class DeviceURL:
 def parse_url(url: str) -> DeviceURL:
     """Split ``scheme:target?options`` into its parts (see the module docstring)."""
     if not isinstance(url, str) or not url:
-        raise URLError(f"a device URL must be a non-empty string like 'svg:out.svg', got {url!r}")
+        raise URLError(f"a device URL must be a non-empty string like 'svg:out.svg', got {quote_token(url)}")
+    if len(url) > MAX_URL:
+        raise URLError(f"a device URL of {len(url)} characters is longer than {MAX_URL}: {quote_token(url)}")
     scheme, sep, rest = url.partition(":")
     if not sep or not scheme:
         raise URLError(f"{url!r}: expected 'scheme:target', e.g. 'png:out.png' or 'sim:hp7475a'")
@@ -59,7 +77,7 @@ def parse_url(url: str) -> DeviceURL:
         query = tail[1:]
     else:
         raw_target, _, query = rest.partition("?")
-        target = unquote(raw_target)
+        target = _decode(raw_target, "the target", url)
     return DeviceURL(scheme, target, _parse_query(query, url), url)
 
 
@@ -83,13 +101,49 @@ def _parse_query(query: str, url: str) -> dict[str, str]:
         if not part:
             continue
         key, eq, value = part.partition("=")
-        key = unquote(key).strip().lower()
+        key = _decode(key, f"option name {key!r}", url).strip().lower()
         if not key:
             raise URLError(f"{url!r}: empty option name in {part!r}")
         if key in options:
             raise URLError(f"{url!r}: option {key!r} given twice")
-        options[key] = unquote(value) if eq else "true"
+        options[key] = _decode(value, f"option {key!r}", url) if eq else "true"
     return options
+
+
+def _decode(text: str, what: str, url: str) -> str:
+    """Percent-decode ``text`` as UTF-8; an undecodable byte is a URLError naming ``what``."""
+    try:
+        return unquote(text, errors="strict")
+    except UnicodeDecodeError as exc:
+        raise URLError(f"{quote_token(url)}: {what} holds percent-encoded bytes that are not UTF-8 ({exc.reason})") from None
+
+
+def check_path(path: str | os.PathLike[str], what: str) -> Path:
+    """``path`` as a Path, or a ConfigError naming ``what`` when no file system could take the name.
+
+    Refused: NUL characters, a component longer than MAX_NAME bytes, a name longer than MAX_PATH bytes,
+    characters that cannot be encoded for the file system.
+    """
+    if not isinstance(path, (str, os.PathLike)):
+        raise ConfigError(f"{what} must be a file name, got {type(path).__name__}")
+    text = os.fspath(path)
+    if not isinstance(text, str):
+        raise ConfigError(f"{what} must be a text file name, got {type(text).__name__}")
+    if not text:
+        raise ConfigError(f"{what} is empty: give a file name")
+    if "\x00" in text:
+        raise ConfigError(f"{what} {quote_token(text)} contains a NUL character at index {text.index(chr(0))}")
+    try:
+        encoded = os.fsencode(text)
+    except UnicodeError as exc:
+        raise ConfigError(f"{what} {quote_token(text)} cannot be encoded for the file system: {exc.reason}") from None
+    if len(encoded) > MAX_PATH:
+        raise ConfigError(f"{what} is {len(encoded)} bytes long, more than the {MAX_PATH} a file system takes")
+    longest = max(encoded.replace(b"\\", b"/").split(b"/"), key=len)
+    if len(longest) > MAX_NAME:
+        raise ConfigError(f"{what} has a component of {len(longest)} bytes, more than the {MAX_NAME} a file system "
+                          f"takes: {quote_token(longest.decode(errors='replace'))}")
+    return Path(text)
 
 
 def format_url(scheme: str, target: str, options: Mapping[str, object] | None = None) -> str:
@@ -175,8 +229,8 @@ def parse_size(text: str, default_unit: str = "px") -> tuple[float, float, str]:
     if not sep:
         raise ValueError(f"expected WIDTHxHEIGHT[unit] or a paper name ({', '.join(PAPER_MM)}), got {text!r}")
     w, h = float(w_text), float(h_text)
-    if not (w > 0 and h > 0) or w != w or h != h:
-        raise ValueError(f"size must be positive, got {text!r}")
+    if not (0 < w <= MAX_SIZE and 0 < h <= MAX_SIZE):
+        raise ValueError(f"size must be positive and at most {MAX_SIZE:g}, got {text!r}")
     return w, h, unit
 
 

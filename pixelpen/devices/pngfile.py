@@ -1,4 +1,9 @@
-"""The ``png:`` file display: a raster display drawn by the raster engine and saved as PNG."""
+"""The ``png:`` file display: a raster display drawn by the raster engine and saved as PNG.
+
+Limits (class attributes of :class:`PngFileDisplay`, read at call time): ``MAX_PIXELS`` (width x height,
+default 100 million: a 300 MB RGB framebuffer), ``MAX_DPI`` (100,000); the file name must suit the file
+system (:func:`pixelpen.urls.check_path`).
+"""
 
 from __future__ import annotations
 
@@ -9,7 +14,7 @@ from ..display.kinds import RasterDisplay
 from ..display.registry import register_display
 from ..raster.canvas import Canvas
 from ..errors import ConfigError, URLError
-from ..urls import DeviceURL, parse_size
+from ..urls import DeviceURL, check_path, parse_size
 
 _MODES = {"1": "mono", "L": "grey", "P": "indexed", "RGB565": "rgb565", "RGB": "rgb888", "RGBA": "rgba"}
 
@@ -24,6 +29,10 @@ class PngFileDisplay(RasterDisplay):
         "mode": "pixel mode: 1, L, P, RGB565, RGB or RGBA; default RGB",
         "background": "background colour, a name or #rrggbb; default white",
     }
+    MAX_PIXELS = 100_000_000
+    """Pixels of the image (width x height)."""
+    MAX_DPI = 100_000.0
+    """Pixels per inch."""
 
     def __init__(
         self, path: str | Path, *, size: tuple[int, int] = (800, 600), dpi: float = 96.0, mode: str = "RGB",
@@ -31,6 +40,14 @@ class PngFileDisplay(RasterDisplay):
     ) -> None:
         if mode not in _MODES:
             raise ConfigError(f"png mode must be one of {', '.join(_MODES)}, got {mode!r}")
+        path = check_path(path, "png file name (the URL target)")
+        width, height = size
+        if not (isinstance(width, int) and isinstance(height, int) and width > 0 and height > 0):
+            raise ConfigError(f"png size must be whole pixels > 0, got {size!r}")
+        if width * height > self.MAX_PIXELS:
+            raise ConfigError(f"png size {width}x{height} is more than PngFileDisplay.MAX_PIXELS = {self.MAX_PIXELS} pixels")
+        if not 0 < dpi <= self.MAX_DPI:
+            raise ConfigError(f"png dpi must be > 0 and at most {self.MAX_DPI:g}, got {dpi!r}")
         caps = Capabilities(
             model="png", category="file", kind="raster", size=(float(size[0]), float(size[1])), unit_mm=25.4 / dpi,
             colour_model=_MODES[mode], y_down=True, can_erase=True, tolerance=0.25, limits={"file": str(path)},

@@ -1,4 +1,9 @@
-"""The ``svg:`` file display: a vector display writing an SVG of true millimetre size, one group per layer."""
+"""The ``svg:`` file display: a vector display writing an SVG of true millimetre size, one group per layer.
+
+Limits: the page size comes through :func:`pixelpen.urls.parse_size` (at most ``urls.MAX_SIZE`` in its
+unit); ``pen_width`` is finite and at most :data:`MAX_PEN_WIDTH_MM`; the file name must suit the file
+system (:func:`pixelpen.urls.check_path`).
+"""
 
 from __future__ import annotations
 
@@ -7,9 +12,14 @@ from pathlib import Path
 from ..display.capabilities import Capabilities
 from ..display.kinds import VectorDisplay
 from ..display.registry import register_display
-from ..urls import DeviceURL, parse_size, to_mm
+from ..errors import ConfigError
+from ..urls import DeviceURL, check_path, parse_size, to_mm
 from ..vector.displaylist import DisplayList
 from ..vector.svgimport import write_svg
+
+
+MAX_PEN_WIDTH_MM = 1000.0
+"""Widest pen width in millimetres."""
 
 
 @register_display("svg")
@@ -22,6 +32,9 @@ class SvgFileDisplay(VectorDisplay):
     }
 
     def __init__(self, path: str | Path, *, size_mm: tuple[float, float] = (210.0, 297.0), pen_width_mm: float = 0.3) -> None:
+        path = check_path(path, "svg file name (the URL target)")
+        if not 0 < pen_width_mm <= MAX_PEN_WIDTH_MM:
+            raise ConfigError(f"svg pen_width must be > 0 and at most {MAX_PEN_WIDTH_MM:g} mm, got {pen_width_mm!r}")
         caps = Capabilities(
             model="svg", category="file", kind="vector", size=size_mm, unit_mm=1.0, colour_model="rgb888",
             y_down=True, native_primitives=frozenset({"polyline"}), can_erase=True, tolerance=0.02,

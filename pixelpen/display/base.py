@@ -96,17 +96,20 @@ class Display(ABC):
 
     # -- viewing -----------------------------------------------------------------------------
     def window(self, xmin: float, ymin: float, xmax: float, ymax: float, *, angle: float = 0.0) -> None:
-        """Set the world-coordinate window (optionally rotated by ``angle`` radians about its corner)."""
-        self._window = (float(xmin), float(ymin), float(xmax), float(ymax))
-        self._window_angle = float(angle)
+        """Set the world-coordinate window (optionally rotated by ``angle`` radians about its corner).
+
+        A degenerate, non-finite or overflowing window raises ``InvalidArgument`` (a ValueError) at once.
+        """
+        self._window = geo.as_rect((xmin, ymin, xmax, ymax), "window")
+        self._window_angle = geo.as_number(angle, "window angle")
         self._pipeline = None
 
     def viewport(self, xmin: float, ymin: float, xmax: float, ymax: float, *, preserve_aspect: bool = True) -> None:
         """Set the viewport in normalized device coordinates [0, 1]^2."""
-        for v in (xmin, ymin, xmax, ymax):
-            if not 0.0 <= v <= 1.0:
-                raise ConfigError(f"viewport coordinates are normalized to [0, 1], got {(xmin, ymin, xmax, ymax)}")
-        self._viewport = (float(xmin), float(ymin), float(xmax), float(ymax))
+        viewport = geo.as_rect((xmin, ymin, xmax, ymax), "viewport")
+        if not all(0.0 <= v <= 1.0 for v in viewport):
+            raise ConfigError(f"viewport coordinates are normalized to [0, 1], got {viewport}")
+        self._viewport = viewport
         self._preserve_aspect = preserve_aspect
         self._pipeline = None
 

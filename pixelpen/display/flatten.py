@@ -15,6 +15,7 @@ from typing import Iterator, Literal
 import numpy as np
 
 from .. import geometry as geo
+from ..errors import InvalidArgument
 from .picture import (
     Arc, Bezier, BSpline, Circle, Ellipse, Image, Marker, Picture, Polygon, Polyline, Primitive, Rectangle, Style, Text,
 )
@@ -47,15 +48,24 @@ def flatten_picture(
     unit_mm: float,
     clip: bool = True,
 ) -> Iterator[DeviceShape]:
-    """Yield the device-space shapes of every visible primitive, in drawing order."""
+    """Yield the device-space shapes of every visible primitive, in drawing order.
+
+    A primitive the geometry cannot draw (its device coordinates overflow, a dash pattern far finer than
+    the device, an arc needing millions of points) raises ``InvalidArgument`` naming the item.
+    """
     if isinstance(picture, Picture):
         items = picture.walk()
     else:
         items = iter([(picture, np.eye(3), None)])
     rect = pipeline.clip_rect if clip else None
-    for prim, seg_transform, _segment in items:
-        matrix = geo.compose(pipeline.matrix, seg_transform)
-        yield from _shapes_of(prim, matrix, tolerance, unit_mm, rect)
+    for index, (prim, seg_transform, segment) in enumerate(items):
+        try:
+            matrix = geo.compose(pipeline.matrix, seg_transform)
+            shapes = list(_shapes_of(prim, matrix, tolerance, unit_mm, rect))
+        except InvalidArgument as exc:
+            where = f"segment {segment.name!r}, " if segment is not None else ""
+            raise InvalidArgument(f"cannot draw {where}visible item {index} ({type(prim).__name__}): {exc}") from exc
+        yield from shapes
 
 
 def _shapes_of(prim: Primitive, matrix: np.ndarray, tolerance: float, unit_mm: float, rect) -> Iterator[DeviceShape]:
@@ -111,12 +121,11 @@ def _world_paths(prim: Primitive, tol: float) -> tuple[list[np.ndarray], bool]:
         x0, y0, x1, y1 = prim.x0, prim.y0, prim.x1, prim.y1
         return [np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], float)], True
     if isinstance(prim, Circle):
-        return [_open_ring(geo.flatten_arc(prim.center, prim.r, prim.r, 0.0, TWO_PI, tolerance=tol))], True
+        return [_open_ring(_arc(prim.center, prim.r, prim.r, 0.0, TWO_PI, 0.0, tol))], True
     if isinstance(prim, Ellipse):
-        ring = geo.flatten_arc(prim.center, prim.rx, prim.ry, 0.0, TWO_PI, angle=prim.angle, tolerance=tol)
-        return [_open_ring(ring)], True
+        return [_open_ring(_arc(prim.center, prim.rx, prim.ry, 0.0, TWO_PI, prim.angle, tol))], True
     if isinstance(prim, Arc):
-        pts = geo.flatten_arc(prim.center, prim.rx, prim.ry, prim.start, prim.end, angle=prim.angle, tolerance=tol)
+        pts = _arc(prim.center, prim.rx, prim.ry, prim.start, prim.end, prim.angle, tol)
         if prim.close == "open":
             return [pts], False
         if prim.close == "pie":
@@ -138,6 +147,19 @@ def _world_paths(prim: Primitive, tol: float) -> tuple[list[np.ndarray], bool]:
         )
         return list(strokes), False
     raise TypeError(f"cannot flatten a {type(prim).__name__}")
+
+
+def _arc(center: tuple[float, float], rx: float, ry: float, start: float, end: float, angle: float,
+         tol: float) -> np.ndarray:
+    """A flattened arc; with a zero radius the ellipse is a segment or a point, drawn exactly through its extremes."""
+    if rx > 0.0 and ry > 0.0:
+        return geo.flatten_arc(center, rx, ry, start, end, angle=angle, tolerance=tol)
+    sweep = float(np.clip(end - start, -TWO_PI, TWO_PI))
+    quarters = np.arange(np.ceil(min(start, start + sweep) / (np.pi / 2)), max(start, start + sweep) / (np.pi / 2))
+    u = np.unique(np.concatenate([[start, start + sweep], quarters * (np.pi / 2)]))
+    u = u if sweep >= 0 else u[::-1]
+    local = np.stack([rx * np.cos(u), ry * np.sin(u)], axis=1)
+    return geo.apply(geo.compose(geo.translate(*center), geo.rotate(angle)), local)
 
 
 def _open_ring(ring: np.ndarray) -> np.ndarray:

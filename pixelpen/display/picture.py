@@ -1,13 +1,24 @@
-"""Device-independent pictures: primitives in world coordinates with their attributes, and named segments."""
+"""Device-independent pictures: primitives in world coordinates with their attributes, and named segments.
+
+Every field is checked when a primitive is made: a wrong type raises ``InvalidArgumentType`` (also a
+TypeError), a bad value ``ConfigError`` (also a ValueError). Limits (module attributes, read at call time):
+
+* :data:`MAX_COORDINATE` -- world coordinates, radii and lengths beyond +-1e15 are refused (their
+  differences would have no precision left and their extents overflow on the way to a device);
+* :data:`MAX_PEN` -- pen numbers; :data:`MAX_TEXT` -- characters of one text primitive;
+  :data:`MAX_PATTERN` -- rows and columns of a fill pattern; :data:`MIN_SPACING_MM` -- hatch spacing.
+"""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Iterator, Literal, Union
 
 import numpy as np
 
-from ..errors import ConfigError
+from .. import geometry as geo
+from ..errors import ConfigError, InvalidArgumentType, quote_token
 
 FillStyle = Literal["hollow", "solid", "hatch", "crosshatch", "pattern"]
 Align = Literal["left", "center", "right"]
@@ -20,6 +31,69 @@ NAMED_COLOURS = {
     "orange": (255, 140, 0), "brown": (139, 69, 19), "purple": (128, 0, 128), "grey": (128, 128, 128),
     "gray": (128, 128, 128),
 }
+
+
+MAX_COORDINATE = 1e15
+"""Largest magnitude of a world coordinate, radius or length."""
+MAX_PEN = 65535
+"""Largest pen number."""
+MAX_TEXT = 100_000
+"""Characters of one text primitive."""
+MAX_PATTERN = 256
+"""Rows and columns of a fill pattern."""
+MIN_SPACING_MM = 0.001
+"""Smallest hatch spacing in millimetres."""
+
+
+def _number(value: object, name: str, low: float | None = None, *, above: bool = False) -> float:
+    """A finite real number of magnitude <= MAX_COORDINATE (and >= or > ``low``), as float."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InvalidArgumentType(f"{name} must be a number, got {type(value).__name__}")
+    try:
+        number = float(value)
+    except OverflowError:
+        number = math.inf
+    if not abs(number) <= MAX_COORDINATE:
+        raise ConfigError(f"{name} must be a finite number of magnitude <= {MAX_COORDINATE:g}, got {number}")
+    if low is not None and (number <= low if above else number < low):
+        raise ConfigError(f"{name} must be {'>' if above else '>='} {low:g}, got {number}")
+    return number
+
+
+def _pair(value: object, name: str) -> tuple[float, float]:
+    """An (x, y) pair of numbers."""
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__") or len(value) != 2:  # type: ignore[arg-type]
+        raise InvalidArgumentType(f"{name} must be a pair (x, y) of numbers, got {type(value).__name__}")
+    return _number(value[0], f"{name}[0]"), _number(value[1], f"{name}[1]")  # type: ignore[index]
+
+
+def _choice(value: object, name: str, options: tuple[str, ...]) -> str:
+    """One of the names in ``options``."""
+    if not isinstance(value, str) or value not in options:
+        raise ConfigError(f"{name} must be one of {', '.join(options)}, got {value!r}"[:300])
+    return value
+
+
+def _flag(value: object, name: str) -> bool:
+    """A boolean."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InvalidArgumentType(f"{name} must be true or false, got {type(value).__name__}")
+    return bool(value)
+
+
+def _integer(value: object, name: str, low: int, high: int) -> int:
+    """An integer in low..high."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise InvalidArgumentType(f"{name} must be an integer, got {type(value).__name__}")
+    if not low <= value <= high:
+        raise ConfigError(f"{name} must be in {low}..{high}, got {value if abs(value) < 10**30 else 'a huge integer'}")
+    return int(value)
+
+
+def _set(obj: object, **values: object) -> None:
+    """Store checked values on a frozen dataclass."""
+    for key, value in values.items():
+        object.__setattr__(obj, key, value)
 
 
 def parse_colour(colour: object) -> tuple[int, int, int]:
@@ -36,11 +110,13 @@ def parse_colour(colour: object) -> tuple[int, int, int]:
                 return (int(digits[0:2], 16), int(digits[2:4], 16), int(digits[4:6], 16))
             except ValueError:
                 pass
-        raise ConfigError(f"unknown colour {colour!r}: use a name ({', '.join(sorted(NAMED_COLOURS))}) or #rrggbb")
-    if isinstance(colour, (tuple, list)) and len(colour) == 3 and all(isinstance(c, (int, np.integer)) for c in colour):
+        raise ConfigError(f"unknown colour {quote_token(colour)}: use a name ({', '.join(sorted(NAMED_COLOURS))}) or #rrggbb")
+    if isinstance(colour, (tuple, list)) and len(colour) == 3 and all(
+        isinstance(c, (int, np.integer)) and not isinstance(c, bool) for c in colour
+    ):
         if all(0 <= int(c) <= 255 for c in colour):
             return (int(colour[0]), int(colour[1]), int(colour[2]))
-    raise ConfigError(f"colour must be a name, '#rrggbb' or (r, g, b) in 0..255, got {colour!r}")
+    raise ConfigError(f"colour must be a name, '#rrggbb' or (r, g, b) in 0..255, got {quote_token(colour)}")
 
 
 def colour_hex(rgb: tuple[int, int, int]) -> str:
@@ -62,12 +138,25 @@ class Fill:
     """Also draw the boundary with the line attributes (GKS fill areas have none; plotters want one)."""
 
     def __post_init__(self) -> None:
-        if self.style not in ("hollow", "solid", "hatch", "crosshatch", "pattern"):
-            raise ConfigError(f"fill style must be hollow, solid, hatch, crosshatch or pattern, got {self.style!r}")
-        if self.spacing is not None and not self.spacing > 0:
-            raise ConfigError(f"hatch spacing must be > 0 mm, got {self.spacing!r}")
+        _choice(self.style, "fill style", ("hollow", "solid", "hatch", "crosshatch", "pattern"))
+        _set(self, angle=_number(self.angle, "fill angle"), outline=_flag(self.outline, "fill outline"))
+        if self.spacing is not None:
+            _set(self, spacing=_number(self.spacing, "hatch spacing (mm)", MIN_SPACING_MM))
+        if self.pattern is not None:
+            _set(self, pattern=_pattern(self.pattern))
         if self.style == "pattern" and not self.pattern:
             raise ConfigError("a 'pattern' fill needs a pattern (rows of 0/1 cells)")
+
+
+def _pattern(rows: object) -> tuple[tuple[int, ...], ...]:
+    """Rows of 0/1 cells, all of one length, at most MAX_PATTERN by MAX_PATTERN."""
+    if not isinstance(rows, (list, tuple)) or not all(isinstance(r, (list, tuple)) for r in rows):
+        raise InvalidArgumentType(f"a fill pattern must be rows (lists) of 0/1 cells, got {quote_token(rows)}")
+    if not rows or len(rows) > MAX_PATTERN or len({len(r) for r in rows}) != 1 or not 0 < len(rows[0]) <= MAX_PATTERN:
+        raise ConfigError(f"a fill pattern needs 1..{MAX_PATTERN} rows of one length 1..{MAX_PATTERN}")
+    if not all(c in (0, 1) and not isinstance(c, float) for r in rows for c in r):
+        raise ConfigError("fill pattern cells must be 0 or 1")
+    return tuple(tuple(int(c) for c in r) for r in rows)
 
 
 @dataclass(frozen=True)
@@ -86,24 +175,34 @@ class Style:
     layer: str | None = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "colour", parse_colour(self.colour))
-        if self.width < 0:
-            raise ConfigError(f"line width must be >= 0 mm, got {self.width}")
+        _set(self, colour=parse_colour(self.colour), width=_number(self.width, "line width (mm)", 0.0))
         if self.dash is not None:
-            dash = tuple(float(d) for d in self.dash)
-            if not dash or len(dash) % 2 or any(d < 0 for d in dash) or sum(dash) <= 0:
-                raise ConfigError(f"dash pattern must be an even number of lengths >= 0 with a positive sum, got {self.dash!r}")
-            object.__setattr__(self, "dash", dash)
-        if self.pen is not None and self.pen < 1:
-            raise ConfigError(f"pen numbers start at 1, got {self.pen}")
+            if not isinstance(self.dash, (list, tuple, np.ndarray)):
+                raise InvalidArgumentType(f"a dash pattern is a sequence of lengths, got {type(self.dash).__name__}")
+            dash = tuple(_number(d, f"dash[{i}] (mm)", 0.0) for i, d in enumerate(self.dash))
+            if not dash or len(dash) % 2 or sum(dash) <= 0:
+                raise ConfigError(f"dash pattern must be an even number of lengths >= 0 with a positive sum, got {dash!r}"[:300])
+            _set(self, dash=dash)
+        if self.pen is not None:
+            _set(self, pen=_integer(self.pen, "pen number", 1, MAX_PEN))
+        if self.fill is not None and not isinstance(self.fill, Fill):
+            raise InvalidArgumentType(f"fill must be a Fill, got {type(self.fill).__name__}")
+        if self.layer is not None and not isinstance(self.layer, str):
+            raise InvalidArgumentType(f"layer must be a string, got {type(self.layer).__name__}")
 
 
 def _points(data: object, name: str, min_count: int = 1) -> np.ndarray:
-    arr = np.asarray(data, dtype=float)
+    if isinstance(data, (str, bytes, dict)):
+        raise InvalidArgumentType(f"{name} needs an (N, 2) array of points, got {type(data).__name__}")
+    try:
+        arr = np.asarray(data, dtype=float)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ConfigError(f"{name} needs an (N, 2) array of numbers: {str(exc)[:200]}") from None
     if arr.ndim != 2 or arr.shape[1] != 2 or len(arr) < min_count:
         raise ConfigError(f"{name} needs an (N, 2) array of points with N >= {min_count}, got shape {arr.shape}")
-    if not np.isfinite(arr).all():
-        raise ConfigError(f"{name} has a non-finite coordinate")
+    if not (np.abs(arr) <= MAX_COORDINATE).all():
+        row = int(np.flatnonzero(~(np.abs(arr) <= MAX_COORDINATE).all(axis=1))[0])
+        raise ConfigError(f"{name} point {row} is not finite or beyond +-{MAX_COORDINATE:g}: {arr[row].tolist()}")
     arr.setflags(write=False)
     return arr
 
@@ -128,6 +227,8 @@ class Polygon:
 
     def __post_init__(self) -> None:
         rings = self.rings
+        if isinstance(rings, (str, bytes, dict)) or not hasattr(rings, "__len__"):
+            raise InvalidArgumentType(f"polygon rings must be a sequence of (N, 2) point arrays, got {type(rings).__name__}")
         if isinstance(rings, np.ndarray) or (len(rings) and np.ndim(rings[0]) == 1):
             rings = (rings,)
         object.__setattr__(self, "rings", tuple(_points(r, "polygon ring", 3) for r in rings))
@@ -145,6 +246,9 @@ class Rectangle:
     y1: float
     style: Style = Style()
 
+    def __post_init__(self) -> None:
+        _set(self, **{key: _number(getattr(self, key), f"rectangle {key}") for key in ("x0", "y0", "x1", "y1")})
+
 
 @dataclass(frozen=True, eq=False)
 class Circle:
@@ -155,8 +259,7 @@ class Circle:
     style: Style = Style()
 
     def __post_init__(self) -> None:
-        if not self.r >= 0:
-            raise ConfigError(f"circle radius must be >= 0, got {self.r}")
+        _set(self, center=_pair(self.center, "circle center"), r=_number(self.r, "circle radius", 0.0))
 
 
 @dataclass(frozen=True, eq=False)
@@ -170,8 +273,8 @@ class Ellipse:
     style: Style = Style()
 
     def __post_init__(self) -> None:
-        if not (self.rx >= 0 and self.ry >= 0):
-            raise ConfigError(f"ellipse semi-axes must be >= 0, got {self.rx}, {self.ry}")
+        _set(self, center=_pair(self.center, "ellipse center"), rx=_number(self.rx, "ellipse rx", 0.0),
+             ry=_number(self.ry, "ellipse ry", 0.0), angle=_number(self.angle, "ellipse angle"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -187,6 +290,12 @@ class Arc:
     close: Literal["open", "chord", "pie"] = "open"
     style: Style = Style()
 
+    def __post_init__(self) -> None:
+        _set(self, center=_pair(self.center, "arc center"), rx=_number(self.rx, "arc rx", 0.0),
+             ry=_number(self.ry, "arc ry", 0.0), start=_number(self.start, "arc start"),
+             end=_number(self.end, "arc end"), angle=_number(self.angle, "arc angle"))
+        _choice(self.close, "arc close", ("open", "chord", "pie"))
+
 
 @dataclass(frozen=True, eq=False)
 class Bezier:
@@ -200,7 +309,8 @@ class Bezier:
         pts = _points(self.control_points, "Bezier", 2)
         object.__setattr__(self, "control_points", pts)
         if self.degree is not None:
-            if self.degree < 1 or (len(pts) - 1) % self.degree:
+            _integer(self.degree, "Bezier degree", 1, len(pts) - 1)
+            if (len(pts) - 1) % self.degree:
                 raise ConfigError(
                     f"a Bezier path of degree {self.degree} needs k*{self.degree}+1 control points, got {len(pts)}"
                 )
@@ -218,10 +328,13 @@ class BSpline:
     def __post_init__(self) -> None:
         pts = _points(self.control_points, "B-spline", 2)
         object.__setattr__(self, "control_points", pts)
+        _integer(self.degree, "B-spline degree", 1, MAX_PATTERN)
         if not 1 <= self.degree < len(pts):
             raise ConfigError(f"a B-spline of degree {self.degree} needs more than {self.degree} control points, got {len(pts)}")
         if self.knots is not None:
-            knots = tuple(float(k) for k in self.knots)
+            if not isinstance(self.knots, (list, tuple, np.ndarray)):
+                raise InvalidArgumentType(f"B-spline knots are a sequence of numbers, got {type(self.knots).__name__}")
+            knots = tuple(_number(k, f"knots[{i}]") for i, k in enumerate(self.knots))
             if len(knots) != len(pts) + self.degree + 1:
                 raise ConfigError(f"a B-spline needs n + degree + 1 = {len(pts) + self.degree + 1} knots, got {len(knots)}")
             if any(b < a for a, b in zip(knots, knots[1:])):
@@ -240,8 +353,8 @@ class Marker:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "points", _points(self.points, "marker", 1))
-        if self.kind not in ("dot", "plus", "cross", "star", "circle", "square", "diamond"):
-            raise ConfigError(f"unknown marker kind {self.kind!r}")
+        _choice(self.kind, "marker kind", ("dot", "plus", "cross", "star", "circle", "square", "diamond"))
+        _set(self, size=_number(self.size, "marker size (mm)", 0.0))
 
 
 @dataclass(frozen=True, eq=False)
@@ -258,8 +371,14 @@ class Text:
     style: Style = Style()
 
     def __post_init__(self) -> None:
-        if not self.height > 0:
-            raise ConfigError(f"text height must be > 0, got {self.height}")
+        if not isinstance(self.text, str):
+            raise InvalidArgumentType(f"text must be a string, got {type(self.text).__name__}")
+        if len(self.text) > MAX_TEXT:
+            raise ConfigError(f"text of {len(self.text)} characters is longer than {MAX_TEXT}")
+        _set(self, position=_pair(self.position, "text position"), height=_number(self.height, "text height", 0.0, above=True),
+             angle=_number(self.angle, "text angle"), slant=_number(self.slant, "text slant"))
+        _choice(self.align, "text align", ("left", "center", "right"))
+        _choice(self.valign, "text valign", ("bottom", "baseline", "middle", "top"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -274,7 +393,9 @@ class Image:
         px = np.asarray(self.pixels)
         if px.dtype != np.uint8 or not (px.ndim == 2 or (px.ndim == 3 and px.shape[2] in (3, 4))) or px.size == 0:
             raise ConfigError(f"image pixels must be a non-empty uint8 HxW, HxWx3 or HxWx4 array, got {px.dtype} {px.shape}")
-        object.__setattr__(self, "pixels", px)
+        if isinstance(self.rect, (str, bytes, dict)) or not hasattr(self.rect, "__len__") or len(self.rect) != 4:
+            raise InvalidArgumentType(f"image rect must be (x0, y0, x1, y1), got {type(self.rect).__name__}")
+        _set(self, pixels=px, rect=tuple(_number(v, f"image rect[{i}]") for i, v in enumerate(self.rect)))
 
 
 Primitive = Union[Polyline, Polygon, Rectangle, Circle, Ellipse, Arc, Bezier, BSpline, Marker, Text, Image]
@@ -291,6 +412,12 @@ class Segment:
     visible: bool = True
     pickable: bool = True
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise InvalidArgumentType(f"a segment needs a non-empty string name, got {quote_token(self.name)}")
+        self.transform = geo.as_matrix(self.transform, f"segment {self.name!r} transform")
+        self.visible, self.pickable = _flag(self.visible, "segment visible"), _flag(self.pickable, "segment pickable")
+
     def add(self, item: Primitive) -> Primitive:
         """Append a primitive to the segment and return it."""
         if not isinstance(item, PRIMITIVE_TYPES):
@@ -304,7 +431,7 @@ class Picture:
 
     def __init__(self, window: tuple[float, float, float, float] | None = None) -> None:
         self.items: list[Primitive | Segment] = []
-        self.window = window
+        self.window = None if window is None else geo.as_rect(window, "picture window")
         """The world-coordinate window the picture was composed for (None: its bounds)."""
 
     def add(self, item: Primitive | Segment) -> Primitive | Segment:

@@ -10,6 +10,7 @@ from typing import Literal, Sequence
 
 import numpy as np
 
+from ..errors import InvalidArgument
 from .transforms import ArrayLike, as_points, split_rows
 from .viewing import as_rect
 
@@ -44,14 +45,14 @@ def as_segments(segments: ArrayLike, name: str = "segments") -> np.ndarray:
     try:
         arr = np.asarray(segments, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be an (N, 4) array of numbers x0, y0, x1, y1: {exc}") from None
+        raise InvalidArgument(f"{name} must be an (N, 4) array of numbers x0, y0, x1, y1: {exc}") from None
     if arr.ndim == 3 and arr.shape[1:] == (2, 2):
         arr = arr.reshape(-1, 4)
     if arr.ndim != 2 or arr.shape[1] != 4:
-        raise ValueError(f"{name} must be an (N, 4) array of rows x0, y0, x1, y1, got shape {arr.shape}")
+        raise InvalidArgument(f"{name} must be an (N, 4) array of rows x0, y0, x1, y1, got shape {arr.shape}")
     if not np.isfinite(arr).all():
         row = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
-        raise ValueError(f"{name} contains a non-finite value (NaN or inf) at row {row}: {arr[row].tolist()}")
+        raise InvalidArgument(f"{name} contains a non-finite value (NaN or inf) at row {row}: {arr[row].tolist()}")
     return arr
 
 
@@ -134,7 +135,7 @@ def clip_segments(
     elif method == "liang-barsky":
         out, index = _liang_barsky(cols, rect)
     else:
-        raise ValueError(f"unknown clipping method {method!r}: use 'cohen-sutherland' or 'liang-barsky'")
+        raise InvalidArgument(f"unknown clipping method {method!r}: use 'cohen-sutherland' or 'liang-barsky'")
     xmin, ymin, xmax, ymax = rect
     np.clip(out[0::2], xmin, xmax, out=out[0::2])  # remove rounding overshoot past the border
     np.clip(out[1::2], ymin, ymax, out=out[1::2])
@@ -154,7 +155,7 @@ def as_convex_window(polygon: ArrayLike, name: str = "convex_polygon") -> np.nda
     lengths = np.hypot(edges[:, 0], edges[:, 1])
     if (lengths == 0).any():
         i = int(np.flatnonzero(lengths == 0)[0])
-        raise ValueError(f"{name} has a zero-length edge at vertex {i} (repeated point {w[i].tolist()})")
+        raise InvalidArgument(f"{name} has a zero-length edge at vertex {i} (repeated point {w[i].tolist()})")
     nxt = np.roll(edges, -1, axis=0)
     cross = edges[:, 0] * nxt[:, 1] - edges[:, 1] * nxt[:, 0]
     dot = (edges * nxt).sum(axis=1)
@@ -162,13 +163,13 @@ def as_convex_window(polygon: ArrayLike, name: str = "convex_polygon") -> np.nda
     if (cross > tol).any() and (cross < -tol).any():
         majority = 1.0 if (cross > tol).sum() >= (cross < -tol).sum() else -1.0
         i = int(np.flatnonzero(majority * cross < -tol)[0])
-        raise ValueError(f"{name} is not convex: it turns the other way at vertex {(i + 1) % len(w)}")
+        raise InvalidArgument(f"{name} is not convex: it turns the other way at vertex {(i + 1) % len(w)}")
     extent = float(np.ptp(w, axis=0).max())
     if abs(_signed_area(w)) <= 1e-12 * extent * extent:
-        raise ValueError(f"{name} is degenerate: its vertices are collinear (zero area)")
+        raise InvalidArgument(f"{name} is degenerate: its vertices are collinear (zero area)")
     turning = float(np.arctan2(cross, dot).sum())
     if abs(abs(turning) - 2 * np.pi) > 1e-6:
-        raise ValueError(
+        raise InvalidArgument(
             f"{name} is not a simple convex polygon (total turning {turning / np.pi:.3g} pi, expected 2 pi): "
             "it is degenerate or winds more than once"
         )

@@ -2,6 +2,10 @@
 
 Tolerances are in the units of the points: pass device coordinates and a device tolerance (e.g. a
 quarter pixel or one plotter step) so the flattened curve is as fine as the device and no finer.
+
+Limits (module attributes, read at call time, so assigning a new value overrides them):
+:data:`MAX_ARC_POINTS` points per flattened arc; ``_MAX_PIECES`` pieces alive in one subdivision level.
+B-spline evaluation needs O(samples x degree) memory whatever the number of control points.
 """
 
 from __future__ import annotations
@@ -11,10 +15,13 @@ from typing import Sequence
 
 import numpy as np
 
+from ..errors import InvalidArgument
 from .transforms import ArrayLike, as_number, as_points, split_rows
 
 DEFAULT_TOLERANCE = 0.1
 """Default flattening tolerance (units of the points)."""
+MAX_ARC_POINTS = 1 << 20
+"""Points one flattened arc may have (a radius of 1e12 at tolerance 0.1 would need 7 million); read at call time."""
 
 BEZIER_BASIS = np.array([
     [-1.0, 3.0, -3.0, 1.0],
@@ -45,7 +52,7 @@ def _tolerance(tolerance: object) -> float:
     """Validate a flattening tolerance: a finite number > 0."""
     tol = as_number(tolerance, "tolerance")
     if tol <= 0.0:
-        raise ValueError(f"tolerance must be > 0, got {tol}")
+        raise InvalidArgument(f"tolerance must be > 0, got {tol}")
     return tol
 
 
@@ -54,12 +61,12 @@ def _control_array(control_points: ArrayLike, name: str = "control_points", min_
     try:
         arr = np.asarray(control_points, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be an (n, d) array of numbers: {exc}") from None
+        raise InvalidArgument(f"{name} must be an (n, d) array of numbers: {exc}") from None
     if arr.ndim != 2 or arr.shape[0] < min_rows or arr.shape[1] < 1:
-        raise ValueError(f"{name} must be an (n, d) array with at least {min_rows} rows, got shape {arr.shape}")
+        raise InvalidArgument(f"{name} must be an (n, d) array with at least {min_rows} rows, got shape {arr.shape}")
     if not np.isfinite(arr).all():
         row = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
-        raise ValueError(f"{name} contains NaN or inf at row {row}: {arr[row].tolist()}")
+        raise InvalidArgument(f"{name} contains NaN or inf at row {row}: {arr[row].tolist()}")
     return arr
 
 
@@ -68,20 +75,20 @@ def _parameters(t: ArrayLike, name: str = "t") -> tuple[np.ndarray, bool]:
     try:
         arr = np.asarray(t, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a number or a 1-D array of numbers: {exc}") from None
+        raise InvalidArgument(f"{name} must be a number or a 1-D array of numbers: {exc}") from None
     if arr.ndim > 1:
-        raise ValueError(f"{name} must be a number or a 1-D array, got shape {arr.shape}")
+        raise InvalidArgument(f"{name} must be a number or a 1-D array, got shape {arr.shape}")
     scalar = arr.ndim == 0
     arr = arr.reshape(-1)
     if not np.isfinite(arr).all():
-        raise ValueError(f"{name} contains NaN or inf")
+        raise InvalidArgument(f"{name} contains NaN or inf")
     return arr, scalar
 
 
 def bernstein(n: int, i: int, t: ArrayLike) -> np.ndarray:
     """Bernstein polynomial B_{i,n}(t) = C(n, i) t^i (1 - t)^(n - i), vectorised over t."""
     if not (isinstance(n, (int, np.integer)) and isinstance(i, (int, np.integer))) or not 0 <= i <= n:
-        raise ValueError(f"bernstein needs integers 0 <= i <= n, got n={n!r}, i={i!r}")
+        raise InvalidArgument(f"bernstein needs integers 0 <= i <= n, got n={n!r}, i={i!r}")
     tt, scalar = _parameters(t)
     values = math.comb(int(n), int(i)) * tt ** int(i) * (1.0 - tt) ** int(n - i)
     return values[0] if scalar else values
@@ -137,7 +144,7 @@ def _flatten_stack(ctrl: np.ndarray, tol: float) -> list[np.ndarray]:
     """Adaptive de Casteljau subdivision of a (K, n+1, d) stack of same-degree curves, one numpy pass per level."""
     magnitude = float(np.abs(ctrl).max())
     if tol < _MIN_RELATIVE_TOLERANCE * magnitude:
-        raise ValueError(
+        raise InvalidArgument(
             f"tolerance {tol:g} is too small for coordinates of size {magnitude:g}: below floating-point "
             "resolution; use a tolerance in device units (e.g. 0.1)"
         )
@@ -157,7 +164,7 @@ def _flatten_stack(ctrl: np.ndarray, tol: float) -> list[np.ndarray]:
         if not rest.any():
             break
         if 2 * int(rest.sum()) > _MAX_PIECES:
-            raise ValueError(
+            raise InvalidArgument(
                 f"tolerance {tol:g} is too small for this curve: more than {_MAX_PIECES} pieces at subdivision "
                 f"depth {depth + 1}; use a tolerance in device units (e.g. 0.1)"
             )
@@ -204,10 +211,10 @@ def eval_basis(basis: ArrayLike, geometry: ArrayLike, t: ArrayLike) -> np.ndarra
     """Evaluate one cubic segment P(u) = [u^3 u^2 u 1] M G for a 4x4 basis matrix M and (4, d) geometry G."""
     m = np.asarray(basis, dtype=np.float64)
     if m.shape != (4, 4):
-        raise ValueError(f"basis must be a 4x4 matrix, got shape {m.shape}")
+        raise InvalidArgument(f"basis must be a 4x4 matrix, got shape {m.shape}")
     g = _control_array(geometry, "geometry", min_rows=4)
     if len(g) != 4:
-        raise ValueError(f"geometry must have exactly 4 rows for a cubic basis, got {len(g)}")
+        raise InvalidArgument(f"geometry must have exactly 4 rows for a cubic basis, got {len(g)}")
     tt, scalar = _parameters(t)
     powers = np.stack([tt ** 3, tt ** 2, tt, np.ones_like(tt)], axis=1)
     pts = powers @ m @ g
@@ -222,24 +229,24 @@ def basis_to_bezier(basis: ArrayLike, geometry: ArrayLike) -> np.ndarray:
     """
     m = np.asarray(basis, dtype=np.float64)
     if m.shape != (4, 4):
-        raise ValueError(f"basis must be a 4x4 matrix, got shape {m.shape}")
+        raise InvalidArgument(f"basis must be a 4x4 matrix, got shape {m.shape}")
     g = _control_array(geometry, "geometry", min_rows=4)
     if len(g) != 4:
-        raise ValueError(f"geometry must have exactly 4 rows for a cubic basis, got {len(g)}")
+        raise InvalidArgument(f"geometry must have exactly 4 rows for a cubic basis, got {len(g)}")
     return np.linalg.solve(BEZIER_BASIS, m @ g)
 
 
 def _degree(degree: object) -> int:
     """Validate a spline degree (integer >= 1)."""
     if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
-        raise ValueError(f"degree must be an integer >= 1, got {degree!r}")
+        raise InvalidArgument(f"degree must be an integer >= 1, got {degree!r}")
     return int(degree)
 
 
 def _count(n: object, degree: int) -> int:
     """Validate a control-point count for a spline of this degree."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < degree + 1:
-        raise ValueError(f"a degree-{degree} B-spline needs at least {degree + 1} control points, got {n!r}")
+        raise InvalidArgument(f"a degree-{degree} B-spline needs at least {degree + 1} control points, got {n!r}")
     return int(n)
 
 
@@ -261,18 +268,18 @@ def _knot_vector(knots: ArrayLike, degree: int) -> np.ndarray:
     """Validate a knot vector: 1-D, finite, non-decreasing, with a non-empty domain [k_degree, k_n]."""
     k = np.asarray(knots, dtype=np.float64)
     if k.ndim != 1 or len(k) < 2 * degree + 2:
-        raise ValueError(
+        raise InvalidArgument(
             f"knots must be a 1-D array of at least {2 * degree + 2} values for degree {degree}, got shape {k.shape}"
         )
     if not np.isfinite(k).all():
-        raise ValueError("knots contain NaN or inf")
+        raise InvalidArgument("knots contain NaN or inf")
     drops = np.flatnonzero(np.diff(k) < 0)
     if len(drops):
         i = int(drops[0])
-        raise ValueError(f"knots must be non-decreasing: knots[{i}] = {k[i]} > knots[{i + 1}] = {k[i + 1]}")
+        raise InvalidArgument(f"knots must be non-decreasing: knots[{i}] = {k[i]} > knots[{i + 1}] = {k[i + 1]}")
     n = len(k) - degree - 1
     if not k[degree] < k[n]:
-        raise ValueError(f"knot domain [knots[{degree}], knots[{n}]] = [{k[degree]}, {k[n]}] is empty")
+        raise InvalidArgument(f"knot domain [knots[{degree}], knots[{n}]] = [{k[degree]}, {k[n]}] is empty")
     return k
 
 
@@ -282,49 +289,74 @@ def _spline_knots(knots: ArrayLike | None, n: int, degree: int) -> np.ndarray:
         return open_uniform_knots(n, degree)
     k = np.asarray(knots, dtype=np.float64)
     if k.ndim != 1 or len(k) != n + degree + 1:
-        raise ValueError(f"{n} control points of degree {degree} need {n + degree + 1} knots, got shape {k.shape}")
+        raise InvalidArgument(f"{n} control points of degree {degree} need {n + degree + 1} knots, got shape {k.shape}")
     return _knot_vector(k, degree)
 
 
-def bspline_basis(knots: ArrayLike, degree: int, t: ArrayLike) -> np.ndarray:
-    """Cox–de Boor B-spline basis: the (len(t), n) matrix of N_{i,degree}(t), n = len(knots) - degree - 1.
+def _span_basis(k: np.ndarray, degree: int, tt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Knot span s of each t and the degree + 1 basis functions N_{s-degree..s} not zero there (The NURBS Book A2.2).
 
-    Vectorised over t and i (one numpy step per degree). t must lie in the domain [knots[degree],
-    knots[n]], where the functions sum to 1; the right end belongs to the last non-empty span.
+    Vectorised over t; the loops run over the degree only, so memory is O(len(t) x degree) whatever the
+    number of control points. t must lie in the domain; its right end belongs to the last non-empty span.
     """
-    degree = _degree(degree)
-    k = _knot_vector(knots, degree)
-    tt, _ = _parameters(t)
     n = len(k) - degree - 1
     lo, hi = k[degree], k[n]
     outside = (tt < lo) | (tt > hi)
     if outside.any():
         bad = float(tt[np.flatnonzero(outside)[0]])
-        raise ValueError(f"t = {bad} is outside the spline's domain [{lo}, {hi}]")
-    col = tt[:, None]
-    basis = ((k[:-1] <= col) & (col < k[1:])).astype(np.float64)  # degree 0, half-open spans
-    at_end = tt == hi
-    if at_end.any():
-        last = int(np.flatnonzero(k[:n] < k[1:n + 1])[-1])  # last non-empty span ending at k[n]
-        basis[at_end] = 0.0
-        basis[at_end, last] = 1.0
-    for p in range(1, degree + 1):
-        i = np.arange(len(k) - 1 - p)
-        d1, d2 = k[i + p] - k[i], k[i + p + 1] - k[i + 1]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            a = np.where(d1 > 0, (col - k[i]) / d1, 0.0)
-            b = np.where(d2 > 0, (k[i + p + 1] - col) / d2, 0.0)
-        basis = a * basis[:, :-1] + b * basis[:, 1:]
+        raise InvalidArgument(f"t = {bad} is outside the spline's domain [{lo}, {hi}]")
+    last = degree + int(np.flatnonzero(k[degree:n] < k[degree + 1:n + 1])[-1])  # last non-empty span
+    span = np.minimum(np.searchsorted(k, tt, side="right") - 1, last)
+    values = np.ones((len(tt), 1))
+    for j in range(1, degree + 1):
+        left = tt[:, None] - k[span[:, None] + 1 - np.arange(j + 1)]  # left[:, i] = t - k[s + 1 - i]
+        right = k[span[:, None] + np.arange(j + 1)] - tt[:, None]  # right[:, i] = k[s + i] - t
+        grown = np.empty((len(tt), j + 1))
+        saved = np.zeros(len(tt))
+        for r in range(j):
+            temp = values[:, r] / (right[:, r + 1] + left[:, j - r])  # denominators >= the span's width > 0
+            grown[:, r] = saved + right[:, r + 1] * temp
+            saved = left[:, j - r] * temp
+        grown[:, j] = saved
+        values = grown
+    return span, values
+
+
+def bspline_basis(knots: ArrayLike, degree: int, t: ArrayLike) -> np.ndarray:
+    """Cox–de Boor B-spline basis: the (len(t), n) matrix of N_{i,degree}(t), n = len(knots) - degree - 1.
+
+    t must lie in the domain [knots[degree], knots[n]], where the functions sum to 1; the right end
+    belongs to the last non-empty span. Only degree + 1 functions are non-zero at any t; to evaluate a
+    curve use :func:`bspline_point`, which never builds this (len(t), n) matrix.
+    """
+    degree = _degree(degree)
+    k = _knot_vector(knots, degree)
+    tt, _ = _parameters(t)
+    span, values = _span_basis(k, degree, tt)
+    basis = np.zeros((len(tt), len(k) - degree - 1))
+    basis[np.arange(len(tt))[:, None], span[:, None] - degree + np.arange(degree + 1)] = values
     return basis
 
 
+def _spline_points(ctrl: np.ndarray, k: np.ndarray, degree: int, tt: np.ndarray) -> np.ndarray:
+    """Curve points at parameters tt, summing only the degree + 1 non-zero basis terms per parameter."""
+    span, values = _span_basis(k, degree, tt)
+    pts = np.zeros((len(tt), ctrl.shape[1]))
+    for r in range(degree + 1):
+        pts += values[:, r:r + 1] * ctrl[span - degree + r]
+    return pts
+
+
 def bspline_point(control_points: ArrayLike, degree: int, knots: ArrayLike | None, t: ArrayLike) -> np.ndarray:
-    """Points of a B-spline curve at parameters t (knots None = open uniform), via the Cox–de Boor basis."""
+    """Points of a B-spline curve at parameters t (knots None = open uniform), via the Cox–de Boor basis.
+
+    Memory is O(len(t) x degree): only the degree + 1 basis functions non-zero in each knot span are computed.
+    """
     degree = _degree(degree)
     ctrl = _control_array(control_points, min_rows=degree + 1)
     k = _spline_knots(knots, len(ctrl), degree)
-    _, scalar = _parameters(t)
-    pts = bspline_basis(k, degree, t) @ ctrl
+    tt, scalar = _parameters(t)
+    pts = _spline_points(ctrl, k, degree, tt)
     return pts[0] if scalar else pts
 
 
@@ -347,13 +379,13 @@ def flatten_bspline(
     values, multiplicity = np.unique(k[degree + 1:n], return_counts=True)
     if (multiplicity > degree).any():
         bad = float(values[np.argmax(multiplicity > degree)])
-        raise ValueError(f"interior knot {bad} repeats more than degree={degree} times: the curve is discontinuous")
+        raise InvalidArgument(f"interior knot {bad} repeats more than degree={degree} times: the curve is discontinuous")
     j = np.arange(degree, n)
     spans = j[k[j] < k[j + 1]]
     a, b = k[spans], k[spans + 1]
     r = np.arange(degree + 1) / degree
     params = (a[:, None] + (b - a)[:, None] * r).reshape(-1)
-    samples = (bspline_basis(k, degree, params) @ ctrl).reshape(len(spans), degree + 1, dim)
+    samples = _spline_points(ctrl, k, degree, params).reshape(len(spans), degree + 1, dim)
     bern = np.stack([bernstein(degree, i, r) for i in range(degree + 1)], axis=1)  # samples = bern @ bezier
     bezier = np.einsum("ij,sjd->sid", np.linalg.inv(bern), samples)
     bezier[:, 0], bezier[:, -1] = samples[:, 0], samples[:, -1]  # span ends are curve points: keep them exact
@@ -380,7 +412,7 @@ def flatten_arc(
     cx, cy = as_points(center, "center")[0][0]
     rx, ry = as_number(rx, "rx"), as_number(ry, "ry")
     if rx <= 0.0 or ry <= 0.0:
-        raise ValueError(f"arc radii must be > 0, got rx={rx}, ry={ry}")
+        raise InvalidArgument(f"arc radii must be > 0, got rx={rx}, ry={ry}")
     start, end = as_number(start, "start"), as_number(end, "end")
     angle = as_number(angle, "angle")
     tol = _tolerance(tolerance)
@@ -389,8 +421,15 @@ def flatten_arc(
     if full:
         sweep = math.copysign(2.0 * math.pi, sweep)
     radius = max(rx, ry)
-    step = 2.0 * math.acos(max(1.0 - tol / radius, -1.0))
-    count = max(1, math.ceil(abs(sweep) / step), math.ceil(abs(sweep) / (math.pi / 2.0)))
+    # r (1 - cos(du / 2)) = 2 r sin^2(du / 4) <= tol, in a form that stays > 0 for tol << r
+    step = 4.0 * math.asin(math.sqrt(min(tol / (2.0 * radius), 1.0)))
+    pieces = abs(sweep) / step if step > 0.0 else math.inf
+    if pieces > MAX_ARC_POINTS:
+        raise InvalidArgument(
+            f"an arc of radius {radius:g} needs more than {MAX_ARC_POINTS} points at tolerance {tol:g} "
+            "(raise geometry.curves.MAX_ARC_POINTS, or use a tolerance in device units)"
+        )
+    count = max(1, math.ceil(pieces), math.ceil(abs(sweep) / (math.pi / 2.0)))
     u = start + sweep * (np.arange(count + 1) / count)
     u[-1] = start + sweep
     ex, ey = rx * np.cos(u), ry * np.sin(u)

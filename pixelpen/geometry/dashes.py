@@ -6,9 +6,11 @@ from typing import Sequence
 
 import numpy as np
 
+from ..errors import InvalidArgument
 from .transforms import ArrayLike, as_number, as_points, split_rows
 
-_MAX_DASHES = 5_000_000  # dash pieces one call may produce before the pattern is called too fine
+MAX_DASHES = 5_000_000
+"""Dash pieces one call may produce before the pattern is called too fine (read at call time: assign to override)."""
 
 
 def as_pattern(pattern: Sequence[float]) -> np.ndarray:
@@ -19,13 +21,13 @@ def as_pattern(pattern: Sequence[float]) -> np.ndarray:
     try:
         arr = np.asarray(pattern, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"dash pattern must be a sequence of lengths: {exc}") from None
+        raise InvalidArgument(f"dash pattern must be a sequence of lengths: {exc}") from None
     if arr.ndim != 1 or len(arr) == 0:
-        raise ValueError(f"dash pattern must be a non-empty 1-D sequence of lengths, got shape {arr.shape}")
+        raise InvalidArgument(f"dash pattern must be a non-empty 1-D sequence of lengths, got shape {arr.shape}")
     if not np.isfinite(arr).all() or (arr < 0).any():
-        raise ValueError(f"dash pattern lengths must be finite and >= 0, got {arr.tolist()}")
+        raise InvalidArgument(f"dash pattern lengths must be finite and >= 0, got {arr.tolist()}")
     if arr.sum() <= 0:
-        raise ValueError(f"dash pattern must have a positive total length, got {arr.tolist()}")
+        raise InvalidArgument(f"dash pattern must have a positive total length, got {arr.tolist()}")
     return np.concatenate([arr, arr]) if len(arr) % 2 else arr
 
 
@@ -58,10 +60,14 @@ def dash_polylines(polylines: Sequence[ArrayLike], pattern: Sequence[float], off
 
     # Dash k of period j covers [j P + on_start[k] - shift, j P + on_end[k] - shift] in local arc length;
     # periods j = 0 .. floor((length + shift) / P) reach the end of each polyline.
-    per_line = (np.floor((length + shift) / period).astype(np.int64) + 1) * len(on_start)
-    total = int(per_line.sum())
-    if total > _MAX_DASHES:
-        raise ValueError(f"dash pattern is too fine for these polylines: {total} dashes (limit {_MAX_DASHES})")
+    periods = np.floor((length + shift) / period) + 1.0  # floats first: a 1e-300 pattern gives inf, not garbage
+    total = float(periods.sum()) * len(on_start)
+    if not total <= MAX_DASHES:
+        raise InvalidArgument(
+            f"dash pattern is too fine for these polylines: {total:g} dashes (limit geometry.dashes.MAX_DASHES = "
+            f"{MAX_DASHES})"
+        )
+    per_line = periods.astype(np.int64) * len(on_start)
     line, within = _ragged(per_line)
     j, k = within // len(on_start), within % len(on_start)
     lo = j * period + on_start[k] - shift

@@ -7,6 +7,8 @@ from typing import Sequence, Union
 
 import numpy as np
 
+from ..errors import InvalidArgument, InvalidArgumentType
+
 ArrayLike = Union[np.ndarray, Sequence]
 
 # A homogeneous matrix whose linear part has |det| below this fraction of the product of its
@@ -19,17 +21,17 @@ def as_points(points: ArrayLike, name: str = "points", *, min_rows: int = 0) -> 
     try:
         arr = np.asarray(points, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be an (N, 2) array of numbers: {exc}") from None
+        raise InvalidArgument(f"{name} must be an (N, 2) array of numbers: {exc}") from None
     single = arr.shape == (2,)
     if single:
         arr = arr.reshape(1, 2)
     if arr.ndim != 2 or arr.shape[1] != 2:
-        raise ValueError(f"{name} must be an (N, 2) array or a single (x, y) point, got shape {arr.shape}")
+        raise InvalidArgument(f"{name} must be an (N, 2) array or a single (x, y) point, got shape {arr.shape}")
     if arr.shape[0] < min_rows:
-        raise ValueError(f"{name} needs at least {min_rows} points, got {arr.shape[0]}")
+        raise InvalidArgument(f"{name} needs at least {min_rows} points, got {arr.shape[0]}")
     if not np.isfinite(arr).all():
         row = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
-        raise ValueError(f"{name} contains a non-finite value (NaN or inf) at row {row}: {arr[row].tolist()}")
+        raise InvalidArgument(f"{name} contains a non-finite value (NaN or inf) at row {row}: {arr[row].tolist()}")
     return arr, single
 
 
@@ -44,28 +46,28 @@ def as_matrix(m: ArrayLike, name: str = "matrix") -> np.ndarray:
     try:
         arr = np.asarray(m, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a 3x3 array of numbers: {exc}") from None
+        raise InvalidArgument(f"{name} must be a 3x3 array of numbers: {exc}") from None
     if arr.shape != (3, 3):
-        raise ValueError(f"{name} must be a 3x3 homogeneous matrix, got shape {arr.shape}")
+        raise InvalidArgument(f"{name} must be a 3x3 homogeneous matrix, got shape {arr.shape}")
     if not np.isfinite(arr).all():
-        raise ValueError(f"{name} contains NaN or inf: {arr.tolist()}")
+        raise InvalidArgument(f"{name} contains NaN or inf: {arr.tolist()}")
     return arr
 
 
 def as_number(value: object, name: str) -> float:
     """Return value as a finite float or raise a ValueError/TypeError naming the parameter."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name} must be a real number, got {type(value).__name__} {value!r}")
+        raise InvalidArgumentType(f"{name} must be a real number, got {type(value).__name__} {value!r}")
     result = float(value)
     if not math.isfinite(result):
-        raise ValueError(f"{name} must be finite, got {result}")
+        raise InvalidArgument(f"{name} must be finite, got {result}")
     return result
 
 
 def as_pair(value: object, name: str) -> tuple[float, float]:
     """Return value as a pair of finite floats (a point)."""
     if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:  # type: ignore[arg-type]
-        raise ValueError(f"{name} must be a pair (x, y), got {value!r}")
+        raise InvalidArgument(f"{name} must be a pair (x, y), got {value!r}")
     return as_number(value[0], f"{name}[0]"), as_number(value[1], f"{name}[1]")  # type: ignore[index]
 
 
@@ -118,18 +120,18 @@ def reflect(axis: str | Sequence[Sequence[float]]) -> np.ndarray:
     """Reflection about "x", "y", "origin", "y=x", "y=-x", or the line through two points ((x0, y0), (x1, y1))."""
     if isinstance(axis, str):
         if axis not in _NAMED_REFLECTIONS:
-            raise ValueError(f"unknown reflection axis {axis!r}: use one of {sorted(_NAMED_REFLECTIONS)} or two points")
+            raise InvalidArgument(f"unknown reflection axis {axis!r}: use one of {sorted(_NAMED_REFLECTIONS)} or two points")
         m = np.eye(3)
         m[:2, :2] = _NAMED_REFLECTIONS[axis]
         return m
     if not hasattr(axis, "__len__") or len(axis) != 2:  # type: ignore[arg-type]
-        raise ValueError(f"reflection axis must be a name or two points ((x0, y0), (x1, y1)), got {axis!r}")
+        raise InvalidArgument(f"reflection axis must be a name or two points ((x0, y0), (x1, y1)), got {axis!r}")
     x0, y0 = as_pair(axis[0], "axis[0]")
     x1, y1 = as_pair(axis[1], "axis[1]")
     dx, dy = x1 - x0, y1 - y0
     length = math.hypot(dx, dy)
     if length == 0.0:
-        raise ValueError(f"reflection line needs two distinct points, got ({x0}, {y0}) twice")
+        raise InvalidArgument(f"reflection line needs two distinct points, got ({x0}, {y0}) twice")
     ux, uy = dx / length, dy / length
     c2, s2 = ux * ux - uy * uy, 2.0 * ux * uy  # cos 2a, sin 2a of the line's angle a
     linear = np.array([[c2, s2], [s2, -c2]])
@@ -171,7 +173,7 @@ def apply(m: ArrayLike, points: ArrayLike) -> np.ndarray:
         w = pts @ mat[2, :2] + mat[2, 2]
         if (np.abs(w) < 1e-300).any():
             row = int(np.flatnonzero(np.abs(w) < 1e-300)[0])
-            raise ValueError(f"point {pts[row].tolist()} (row {row}) maps to infinity (w = 0) under this matrix")
+            raise InvalidArgument(f"point {pts[row].tolist()} (row {row}) maps to infinity (w = 0) under this matrix")
         out = out / w[:, None]
     return out[0] if single else out
 
@@ -193,7 +195,7 @@ def invert(m: ArrayLike) -> np.ndarray:
     mat = as_matrix(m)
     ratio = _singular_ratio(mat)
     if ratio < _SINGULAR_RATIO:
-        raise ValueError(
+        raise InvalidArgument(
             f"matrix is singular (|det| / row norms = {ratio:.3g}); it collapses the plane onto a line or point "
             f"and has no inverse: {mat.tolist()}"
         )

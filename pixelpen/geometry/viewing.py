@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any, Literal, Sequence
 
 import numpy as np
 
+from ..errors import InvalidArgument, InvalidArgumentType
 from .transforms import ArrayLike, as_number, as_pair, apply, compose, invert, rotate, scale_factor, translate
 
 Rect = tuple[float, float, float, float]
@@ -15,12 +17,14 @@ Align = Literal["center", "lower-left"]
 def as_rect(rect: object, name: str = "window") -> Rect:
     """Validate a rectangle (xmin, ymin, xmax, ymax) with xmin < xmax and ymin < ymax; return it as floats."""
     if isinstance(rect, (str, bytes)) or not hasattr(rect, "__len__") or len(rect) != 4:  # type: ignore[arg-type]
-        raise ValueError(f"{name} must be a rectangle (xmin, ymin, xmax, ymax), got {rect!r}")
+        raise InvalidArgument(f"{name} must be a rectangle (xmin, ymin, xmax, ymax), got {rect!r}")
     xmin, ymin, xmax, ymax = (as_number(v, f"{name}[{i}]") for i, v in enumerate(rect))  # type: ignore[union-attr]
     if not xmin < xmax:
-        raise ValueError(f"{name} is degenerate: xmin must be < xmax, got xmin={xmin}, xmax={xmax}")
+        raise InvalidArgument(f"{name} is degenerate: xmin must be < xmax, got xmin={xmin}, xmax={xmax}")
     if not ymin < ymax:
-        raise ValueError(f"{name} is degenerate: ymin must be < ymax, got ymin={ymin}, ymax={ymax}")
+        raise InvalidArgument(f"{name} is degenerate: ymin must be < ymax, got ymin={ymin}, ymax={ymax}")
+    if not (math.isfinite(xmax - xmin) and math.isfinite(ymax - ymin)):
+        raise InvalidArgument(f"{name} is too large: its width or height overflows, got {(xmin, ymin, xmax, ymax)}")
     return (xmin, ymin, xmax, ymax)
 
 
@@ -68,10 +72,10 @@ class ViewingPipeline:
         self.window = as_rect(window, "window")
         self.viewport = as_rect(viewport, "viewport")
         if min(self.viewport) < 0.0 or max(self.viewport) > 1.0:
-            raise ValueError(f"viewport must lie inside the normalized square [0, 1]^2, got {self.viewport}")
+            raise InvalidArgument(f"viewport must lie inside the normalized square [0, 1]^2, got {self.viewport}")
         width, height = as_pair(device_size, "device_size")
         if width <= 0.0 or height <= 0.0:
-            raise ValueError(f"device_size must be positive (W, H), got ({width}, {height})")
+            raise InvalidArgument(f"device_size must be positive (W, H), got ({width}, {height})")
         self.device_size = (width, height)
         self.y_down = bool(y_down)
         self.window_angle = as_number(window_angle, "window_angle")
@@ -82,7 +86,7 @@ class ViewingPipeline:
         """The viewing frame's origin in world coordinates (the window's centre unless given)."""
         self.preserve_aspect = bool(preserve_aspect)
         if align not in ("center", "lower-left"):
-            raise ValueError(f"align must be 'center' or 'lower-left', got {align!r}")
+            raise InvalidArgument(f"align must be 'center' or 'lower-left', got {align!r}")
         self.align: Align = align
         self._build()
 
@@ -157,7 +161,7 @@ class ViewingPipeline:
         """A copy with some constructor arguments changed."""
         unknown = set(changes) - set(self._params())
         if unknown:
-            raise TypeError(f"unknown ViewingPipeline parameter(s): {', '.join(sorted(unknown))}")
+            raise InvalidArgumentType(f"unknown ViewingPipeline parameter(s): {', '.join(sorted(unknown))}")
         params = self._params()
         params.update(changes)
         return ViewingPipeline(**params)
