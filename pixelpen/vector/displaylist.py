@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+
+from dataclasses import dataclass, field, replace
 from typing import Iterable, Iterator, Sequence
 
 import numpy as np
@@ -26,6 +28,8 @@ class DisplayList:
     unit_mm: float = 1.0
     pen_colours: dict[int, str] = field(default_factory=dict)
     """Colour (``#rrggbb``) of each pen number used, for previews; missing pens draw black."""
+    page: tuple[float, float] | None = None
+    """Size (width, height) in device units of the page the points refer to, origin at its top left, if known."""
 
     def __post_init__(self) -> None:
         self.points = np.ascontiguousarray(self.points, dtype=np.float64).reshape(-1, 2)
@@ -37,6 +41,14 @@ class DisplayList:
             raise ConfigError("display list offsets must start at 0, end at the point count and give each stroke >= 1 point")
         if len(self.pens) != n or len(self.layers) != n:
             raise ConfigError(f"display list has {n} strokes but {len(self.pens)} pens and {len(self.layers)} layers")
+        if self.page is not None:
+            try:
+                page = tuple(float(v) for v in self.page)
+            except (TypeError, ValueError):
+                page = ()
+            if len(page) != 2 or not all(math.isfinite(v) and v > 0 for v in page):
+                raise ConfigError(f"display list page must be (width, height) > 0, got {self.page!r}")
+            self.page = page  # type: ignore[assignment]
 
     @classmethod
     def from_polylines(
@@ -47,6 +59,7 @@ class DisplayList:
         layer_names: dict[int, str] | None = None,
         unit_mm: float = 1.0,
         pen_colours: dict[int, str] | None = None,
+        page: tuple[float, float] | None = None,
     ) -> "DisplayList":
         """Build a display list from a sequence of (N, 2) arrays (empty arrays are skipped)."""
         polys = [np.asarray(p, dtype=np.float64).reshape(-1, 2) for p in polylines]
@@ -56,7 +69,7 @@ class DisplayList:
         points = np.concatenate([polys[i] for i in keep]) if keep else np.zeros((0, 2))
         pen_arr = np.broadcast_to(np.asarray(pens, dtype=np.int32), (len(polys),))[keep] if polys else np.zeros(0, np.int32)
         layer_arr = np.broadcast_to(np.asarray(layers, dtype=np.int32), (len(polys),))[keep] if polys else np.zeros(0, np.int32)
-        return cls(points, offsets, pen_arr, layer_arr, dict(layer_names or {}), unit_mm, dict(pen_colours or {}))
+        return cls(points, offsets, pen_arr, layer_arr, dict(layer_names or {}), unit_mm, dict(pen_colours or {}), page)
 
     def __len__(self) -> int:
         return len(self.offsets) - 1
@@ -124,9 +137,9 @@ class DisplayList:
         src_start = self.offsets[order][stroke_of_point]
         src_len = lengths[stroke_of_point]
         idx = np.where(rev[stroke_of_point], src_start + src_len - 1 - k, src_start + k)
-        return DisplayList(
-            self.points[idx], new_offsets, self.pens[order], self.layers[order],
-            dict(self.layer_names), self.unit_mm, dict(self.pen_colours),
+        return replace(
+            self, points=self.points[idx], offsets=new_offsets, pens=self.pens[order], layers=self.layers[order],
+            layer_names=dict(self.layer_names), pen_colours=dict(self.pen_colours),
         )
 
     def select(self, mask: np.ndarray) -> "DisplayList":
@@ -135,7 +148,7 @@ class DisplayList:
 
     @staticmethod
     def concat(lists: Sequence["DisplayList"]) -> "DisplayList":
-        """Join display lists in order (unit of the first; layer names merged)."""
+        """Join display lists in order (unit and page of the first; layer names merged)."""
         lists = [d for d in lists]
         if not lists:
             return DisplayList()
@@ -147,7 +160,7 @@ class DisplayList:
         pts = np.concatenate([d.points for d in lists])
         base = np.cumsum([0] + [len(d.points) for d in lists[:-1]])
         offsets = np.concatenate([[0]] + [d.offsets[1:] + b for d, b in zip(lists, base)])
-        return DisplayList(
-            pts, offsets, np.concatenate([d.pens for d in lists]), np.concatenate([d.layers for d in lists]),
-            names, lists[0].unit_mm, colours,
+        return replace(
+            lists[0], points=pts, offsets=offsets, pens=np.concatenate([d.pens for d in lists]),
+            layers=np.concatenate([d.layers for d in lists]), layer_names=names, pen_colours=colours,
         )

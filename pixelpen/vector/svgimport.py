@@ -1,7 +1,28 @@
-"""SVG files to display lists in millimetres (svgelements: transforms, units, viewBox) and display lists back to SVG."""
+"""SVG files to display lists in millimetres (svgelements: transforms, units, viewBox) and display lists back to SVG.
+
+Every element is flattened in its own coordinates and then mapped through its full transform (nested groups,
+``<use>``, viewBox, units), so shapes land where a browser draws them. The document's page (width and height,
+origin at its top left) is kept on the display list and written back by :func:`write_svg`.
+
+Limits per file (:class:`SvgLimits`; pass ``read_svg(..., limits=SvgLimits(max_points=...))`` to change them),
+each exceeded one a :class:`~pixelpen.errors.ParseError` naming the file, the element and the limit:
+
+- ``max_bytes`` (64 MiB): size of the document.
+- ``max_elements`` (200,000): elements as written (svgelements needs ~2.5 kB and ~0.2 ms per element).
+- ``max_use_elements`` (20,000): elements instantiated by ``<use>`` (each copy costs as much as an element).
+- ``max_depth`` (200): element nesting, counting what ``<use>`` nests; a ``<use>`` that contains itself is an error.
+- ``max_number_chars`` (64): characters of one number in an attribute (svgelements' regexes are cubic in it).
+- ``max_strokes`` (1,000,000) and ``max_points`` (10,000,000): polylines and points after flattening.
+
+Malformed syntax that would make svgelements' regexes backtrack for minutes is refused up front: a ``points``
+list that is not pairs of numbers, a ``<style>`` with an unclosed comment or a rule that is not
+``selector { declarations }`` (beyond 10,000 characters). One curve segment is flattened into at most
+:data:`MAX_SEGMENT_POINTS` points (guards absurd tolerances).
+"""
 
 from __future__ import annotations
 
+import functools
 import io
 import logging
 import math
@@ -9,8 +30,9 @@ import os
 import re
 from collections import Counter
 from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, fields
 from typing import IO, Any, Literal
-from xml.etree.ElementTree import ParseError as XMLParseError
+from xml.parsers import expat
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
@@ -27,45 +49,283 @@ MM_PER_PX = 25.4 / PPI
 MAX_SEGMENT_POINTS = 100_000
 """Upper bound on the points one curve segment is flattened into (guards absurd tolerances)."""
 INKSCAPE_NS = "http://www.inkscape.org/namespaces/inkscape"
+SVG_NS = "http://www.w3.org/2000/svg"
+XLINK_HREF = "{http://www.w3.org/1999/xlink}href"
+MM_PER_UNIT = {"": MM_PER_PX, "px": MM_PER_PX, "mm": 1.0, "cm": 10.0, "q": 0.25, "in": 25.4, "pt": 25.4 / 72,
+               "pc": 25.4 / 6}
+"""Millimetres per absolute CSS length unit (exact; svgelements rounds the inch to 25.39999 mm)."""
+CSS_CHECKED_CHARS = 10_000
+"""A ``<style>`` longer than this must be plain ``selector { declarations }`` rules (svgelements' CSS regex is
+quadratic in anything else)."""
 LayerBy = Literal["auto", "stroke", "group"]
 Source = str | os.PathLike | bytes | IO[bytes] | IO[str]
 
+# svgelements' number and separator grammar, written possessively so that checking is linear
+_NUM = r"[-+]?+(?:[0-9]*+\.[0-9]++|[0-9]++)(?:[eE][-+]?+[0-9]++)?+"
+_SEP = r"(?:\s*+,\s*+|\s++|(?=-))"
+_PAIR = rf"{_NUM}{_SEP}{_NUM}"
+_POINTS = re.compile(rf"\s*+(?:{_PAIR}(?:{_SEP}{_PAIR})*+)?+\s*+")
+_TRANSFORM = re.compile(r"\s*+(?:[A-Za-z]++\s*+(?:\([^()]*+\))?+[\s,]*+)*+")
+_CSS_RULES = re.compile(r"(?:[^{}]*+\{[^{}]*+\})*+\s*+")
+_CSS_COMMENT = re.compile(r"/\*.*?\*/", re.S)
+_LENGTH = re.compile(rf"\s*({_NUM})\s*([A-Za-z]*)\s*")
 
-def _read_bytes(source: Source) -> tuple[bytes, str]:
-    """The document bytes and a name for messages."""
+
+@dataclass(frozen=True)
+class SvgLimits:
+    """Per-file limits of :func:`read_svg` (see the module docstring); each exceeded one is a ParseError."""
+
+    max_bytes: int = 64 * 2**20
+    max_elements: int = 200_000
+    max_use_elements: int = 20_000
+    max_depth: int = 200
+    max_number_chars: int = 64
+    max_strokes: int = 1_000_000
+    max_points: int = 10_000_000
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
+                raise ConfigError(f"SvgLimits.{f.name} must be an integer >= 1, got {value!r}")
+
+
+def _read_bytes(source: Source, limit: int) -> tuple[bytes, str]:
+    """The document bytes (at most ``limit``) and a name for messages."""
     if isinstance(source, (bytes, bytearray)):
-        return bytes(source), "<bytes>"
-    if isinstance(source, (str, os.PathLike)):
+        data, name = bytes(source), "<bytes>"
+    elif isinstance(source, (str, os.PathLike)):
         name = os.fspath(source)
         try:
             with open(name, "rb") as fh:
-                return fh.read(), name
-        except OSError as exc:
-            raise ParseError(f"cannot read SVG file: {exc.strerror or exc}", source=name) from None
-    name = str(getattr(source, "name", "<stream>"))
+                data = fh.read(limit + 1)
+        except (OSError, ValueError) as exc:
+            raise ParseError(f"cannot read SVG file: {getattr(exc, 'strerror', None) or exc}", source=name) from None
+    else:
+        name = str(getattr(source, "name", "<stream>"))
+        try:
+            raw = source.read(limit + 1)
+        except (OSError, ValueError) as exc:
+            raise ParseError(f"cannot read SVG stream: {exc}", source=name) from None
+        data = raw.encode("utf-8") if isinstance(raw, str) else bytes(raw)
+    if len(data) > limit:
+        raise ParseError(f"file larger than {limit} bytes (limit max_bytes)", source=name)
+    return data, name
+
+
+@functools.lru_cache(maxsize=8)
+def _number_run(max_chars: int) -> re.Pattern[str]:
+    return re.compile(rf"[0-9.]{{{max_chars + 1},}}")
+
+
+def _longest_number(run: str) -> int:
+    """Characters of the longest number in a run of digits and dots (a second dot starts a new number)."""
+    parts = run.split(".")
+    head = len(parts[0]) + (len(parts[1]) + 1 if len(parts) > 1 else 0)
+    return max([head] + [len(p) + 1 for p in parts[2:]])
+
+
+def _declarations(text: str) -> Iterator[tuple[str, str]]:
+    """(property, value) of each ``name: value`` in a style attribute or CSS rule body, as svgelements splits them."""
+    for item in text.split(";"):
+        pair = item.split(":")
+        if len(pair) == 2:
+            yield pair[0].strip(), pair[1].strip()
+
+
+class _Document:
+    """One expat pass over an SVG: its element tree with ids and ``<use>`` links, checked against the limits.
+
+    Syntax that svgelements' regular expressions would take minutes over (over-long numbers, malformed
+    ``points`` and ``transform`` lists, unclosed CSS) is refused here, before svgelements sees the text.
+    """
+
+    def __init__(self, data: bytes, name: str, limits: SvgLimits) -> None:
+        self.name, self.limits = name, limits
+        self.tags: list[str] = []
+        self.ids: list[str | None] = []
+        self.where: list[tuple[int, int]] = []
+        self.children: list[list[int]] = []
+        self.href: dict[int, str] = {}
+        self.by_id: dict[str, int] = {}
+        self.root: dict[str, str] = {}
+        self._open: list[int] = []
+        self._text: list[str] = []
+        self._parser = expat.ParserCreate(namespace_separator="}")
+        self._parser.buffer_text = True
+        self._parser.StartElementHandler = self._start
+        self._parser.EndElementHandler = self._end
+        self._parser.CharacterDataHandler = self._chars
+        try:
+            self._parser.Parse(data, True)
+        except expat.ExpatError as exc:
+            reason = re.sub(r":? line \d+, column \d+$", "", str(exc))
+            raise ParseError(f"not well-formed XML, so not an SVG document ({reason})",
+                             source=name, line=exc.lineno, column=exc.offset + 1) from None
+        self._check_expansion()
+
+    def error(self, i: int, message: str) -> ParseError:
+        """A ParseError about element ``i``, naming it and its position."""
+        line, column = self.where[i]
+        what = f"<{self.tags[i]}" + (f" id={self.ids[i]!r}>" if self.ids[i] else ">")
+        return ParseError(f"{what}: {message}", source=self.name, line=line, column=column)
+
+    def _start(self, tag: str, attrs: dict[str, str]) -> None:
+        i = len(self.tags)
+        if i >= self.limits.max_elements:
+            raise ParseError(f"more than {self.limits.max_elements} elements (limit max_elements)", source=self.name,
+                             line=self._parser.CurrentLineNumber, column=self._parser.CurrentColumnNumber + 1)
+        tag = tag.removeprefix(SVG_NS + "}")
+        tag = "{" + tag if "}" in tag else tag
+        attrs = {("{" + k if "}" in k else k): v for k, v in attrs.items()}
+        self.tags.append(tag)
+        self.ids.append(attrs.get("id"))
+        self.where.append((self._parser.CurrentLineNumber, self._parser.CurrentColumnNumber + 1))
+        self.children.append([])
+        if self._open:
+            self.children[self._open[-1]].append(i)
+        elif tag != "svg":
+            raise ParseError(f"not an SVG document: the root element is <{tag}>, expected <svg>", source=self.name)
+        else:
+            self.root = attrs
+        if len(self._open) >= self.limits.max_depth:
+            raise self.error(i, f"nested deeper than {self.limits.max_depth} elements (limit max_depth)")
+        self._open.append(i)
+        self._text = []
+        if "id" in attrs:
+            self.by_id[attrs["id"]] = i
+        href = attrs.get("href", attrs.get(XLINK_HREF))
+        if tag == "use" and href is not None:
+            self.href[i] = href[1:]  # as svgelements resolves it: the id after the first character
+        for key, value in attrs.items():
+            self._check_value(i, key, value)
+        for key, value in _declarations(attrs.get("style", "")):
+            self._check_value(i, key, value)
+
+    def _chars(self, text: str) -> None:
+        self._text.append(text)
+
+    def _end(self, tag: str) -> None:
+        i = self._open.pop()
+        if self.tags[i] == "style":
+            self._check_css(i, "".join(self._text))
+        self._text = []
+
+    def _check_value(self, i: int, key: str, value: str) -> None:
+        run = _number_run(self.limits.max_number_chars).search(value)
+        if run and _longest_number(run.group()) > self.limits.max_number_chars:
+            raise self.error(i, f"attribute {key!r} has a number longer than {self.limits.max_number_chars} "
+                                f"characters (limit max_number_chars)")
+        if key == "points" and not _POINTS.fullmatch(value):
+            raise self.error(i, "'points' is not a list of coordinate pairs")
+        if key == "transform" and not _TRANSFORM.fullmatch(value):
+            raise self.error(i, f"'transform' is not a list of transform functions: {value[:60]!r}")
+
+    def _check_css(self, i: int, text: str) -> None:
+        start = text.rfind("/*")
+        if start >= 0 and text.find("*/", start + 2) < 0:
+            raise self.error(i, "unclosed /* comment in the style sheet")
+        text = _CSS_COMMENT.sub("", text)
+        if len(text) > CSS_CHECKED_CHARS and not _CSS_RULES.fullmatch(text):
+            raise self.error(i, "style sheet is not a list of 'selector { declarations }' rules")
+        for body in re.split(r"[{}]", text):
+            self._check_value(i, "style", body)
+            for key, value in _declarations(body):
+                self._check_value(i, key, value)
+
+    def _successors(self, i: int) -> list[int]:
+        target = self.by_id.get(self.href.get(i, ""), -1) if i in self.href else -1
+        return self.children[i] + ([target] if target >= 0 else [])
+
+    def _check_expansion(self) -> None:
+        """Refuse ``<use>`` cycles, and fan-out or nesting beyond the limits once every ``<use>`` is expanded."""
+        n, limits = len(self.tags), self.limits
+        cap = n + limits.max_use_elements + 1
+        size, depth, state = [0] * n, [0] * n, bytearray(n)
+        stack = [0]
+        while stack:
+            i = stack[-1]
+            if state[i] == 0:
+                state[i] = 1
+                for j in self._successors(i):
+                    if state[j] == 1:
+                        raise self.error(i, f"refers to #{self.href[i]}, which contains it (a <use> cycle)")
+                    if state[j] == 0:
+                        stack.append(j)
+                continue
+            stack.pop()
+            if state[i] == 1:
+                succ = self._successors(i)
+                size[i] = min(cap, 1 + sum(size[j] for j in succ))
+                depth[i] = 1 + max((depth[j] for j in succ), default=0)
+                state[i] = 2
+        if size[0] - n > limits.max_use_elements:
+            worst = max(self.href, key=lambda u: size[self.by_id.get(self.href[u], u)])
+            raise self.error(worst, f"<use> elements would copy more than {limits.max_use_elements} elements "
+                                    f"(limit max_use_elements)")
+        if depth[0] > limits.max_depth:
+            i = 0
+            for _ in range(limits.max_depth):
+                i = max(self._successors(i), key=depth.__getitem__)
+            raise self.error(i, f"nested deeper than {limits.max_depth} elements once <use> is expanded "
+                                f"(limit max_depth)")
+
+
+def _length_mm(text: str | None) -> float | None:
+    """An absolute CSS length in millimetres, or None (missing, relative or not a length)."""
+    m = _LENGTH.fullmatch(text or "")
+    if m is None or m.group(2).lower() not in MM_PER_UNIT:
+        return None
+    return float(m.group(1)) * MM_PER_UNIT[m.group(2).lower()]
+
+
+def _affine(matrix: se.Matrix) -> np.ndarray:
+    """A 3x3 numpy matrix of an svgelements Matrix (x' = a x + c y + e, y' = b x + d y + f)."""
+    return np.array([[matrix.a, matrix.c, matrix.e], [matrix.b, matrix.d, matrix.f], [0.0, 0.0, 1.0]])
+
+
+def _page(doc: se.SVG, root: dict[str, str]) -> tuple[tuple[float, float] | None, np.ndarray]:
+    """The page (width, height in mm) of the document, if it has one, and the matrix that makes its units exact.
+
+    svgelements converts the root's mm/cm/in with 0.0393701 in/mm; the correction replaces its viewport
+    transform by the one computed from the exact size, so a page written in mm reads back unchanged.
+    """
+    vb = doc.viewbox
+    sides = []
+    for attr, se_px in (("width", doc.width), ("height", doc.height)):
+        exact = _length_mm(root.get(attr))
+        sides.append(exact if exact is not None else (se_px * MM_PER_PX if vb is not None else None))
+    if not all(s is not None and math.isfinite(s) and s > 0 for s in sides):
+        return None, np.eye(3)
+    page = (float(sides[0]), float(sides[1]))
+    if vb is None or vb.width is None or vb.height is None:
+        return page, np.eye(3)
     try:
-        data = source.read()
-    except (OSError, ValueError) as exc:
-        raise ParseError(f"cannot read SVG stream: {exc}", source=name) from None
-    return (data.encode("utf-8") if isinstance(data, str) else bytes(data)), name
+        used = _affine(se.Matrix(doc.viewbox_transform))
+        exact = _affine(se.Matrix(se.Viewbox.viewbox_transform(
+            doc.x, doc.y, page[0] / MM_PER_PX, page[1] / MM_PER_PX, vb.x, vb.y, vb.width, vb.height,
+            vb.preserve_aspect_ratio)))
+        own = _affine(se.Matrix(root.get("transform", "")))
+        correction = own @ exact @ np.linalg.inv(used) @ np.linalg.inv(own)
+    except (ValueError, ZeroDivisionError, np.linalg.LinAlgError):
+        return page, np.eye(3)
+    return page, (correction if np.isfinite(correction).all() else np.eye(3))
 
 
-def _parse(data: bytes, name: str) -> se.SVG:
+def _parse(data: bytes, name: str, limits: SvgLimits) -> tuple[se.SVG | None, tuple[float, float] | None, np.ndarray]:
+    """The svgelements document (None when the root is not displayed), its page and its unit correction."""
     if not data.strip():
         raise ParseError("empty file: expected an SVG document", source=name)
+    checked = _Document(data, name, limits)
     try:
-        doc = se.SVG.parse(io.BytesIO(data), reify=True, ppi=PPI)
-    except XMLParseError as exc:
-        line, column = getattr(exc, "position", (None, None))
-        reason = re.sub(r":? line \d+, column \d+$", "", str(exc))
-        raise ParseError(f"not well-formed XML, so not an SVG document ({reason})",
-                         source=name, line=line, column=None if column is None else column + 1) from None
-    except (ValueError, TypeError, IndexError, KeyError, AttributeError, ZeroDivisionError) as exc:
+        doc = se.SVG.parse(io.BytesIO(data), reify=False, ppi=PPI)
+    except (ValueError, TypeError, IndexError, KeyError, AttributeError, ZeroDivisionError, OverflowError,
+            SyntaxError) as exc:
         raise ParseError(f"invalid SVG content: {exc}", source=name) from None
     if not isinstance(doc, se.SVG):
-        tag = getattr(doc, "values", {}).get("tag", "?") if doc is not None else "nothing"
-        raise ParseError(f"not an SVG document: the root element is <{tag}>, expected <svg>", source=name)
-    return doc
+        return None, None, np.eye(3)
+    page, correction = _page(doc, checked.root)
+    return doc, page, correction
 
 
 def _is_layer(group: se.Group) -> bool:
@@ -80,22 +340,34 @@ def _group_label(group: se.Group, number: int) -> str:
     )
 
 
-def _walk(
-    node: Iterable[Any], layer: str | None, top: bool, by_group: bool, inkscape: bool
-) -> Iterator[tuple[Any, str | None]]:
-    """Yield (element, layer name) for every element below ``node``; layer = top-level Inkscape layer or group."""
-    for number, child in enumerate(node, start=1):
+def _walk(doc: se.SVG, by_group: bool, inkscape: bool) -> Iterator[tuple[Any, str | None]]:
+    """Yield (element, layer name) for every element of ``doc``; layer = top-level Inkscape layer or group."""
+    stack: list[tuple[Iterator[tuple[int, Any]], str | None, bool]] = [(enumerate(doc, start=1), None, True)]
+    while stack:
+        children, layer, top = stack[-1]
+        item = next(children, None)
+        if item is None:
+            stack.pop()
+            continue
+        number, child = item
         if isinstance(child, (se.Group, se.Use)):
             child_layer = layer
             if layer is None and isinstance(child, se.Group) and ((inkscape and _is_layer(child)) or (by_group and top)):
                 child_layer = _group_label(child, number)
-            yield from _walk(child, child_layer, False, by_group, inkscape)
+            stack.append((enumerate(child, start=1), child_layer, False))
         else:
             yield child, layer
 
 
-def _has_layers(node: Iterable[Any]) -> bool:
-    return any(isinstance(c, se.Group) and (_is_layer(c) or _has_layers(c)) for c in node)
+def _has_layers(doc: se.SVG) -> bool:
+    """Whether any group below ``doc``, through groups only, is an Inkscape layer."""
+    groups = [c for c in doc if isinstance(c, se.Group)]
+    while groups:
+        group = groups.pop()
+        if _is_layer(group):
+            return True
+        groups.extend(c for c in group if isinstance(c, se.Group))
+    return False
 
 
 def _colour(paint: object) -> str | None:
@@ -104,49 +376,19 @@ def _colour(paint: object) -> str | None:
     return paint.hexrgb  # type: ignore[attr-defined]
 
 
-def _flatten(path: se.Path, tol_px: float) -> list[np.ndarray]:
-    """Subpaths of ``path`` as polylines in px, curves flattened to within ``tol_px``."""
-    out: list[np.ndarray] = []
-    pts: list[tuple[float, float]] = []
-    for seg in path:
-        if isinstance(seg, se.Move):
-            if len(pts) >= 2:
-                out.append(np.array(pts, dtype=np.float64))
-            pts = [(seg.end.x, seg.end.y)]
-            continue
-        if not pts:  # a drawing command without a preceding move starts at its own start
-            pts = [(seg.start.x, seg.start.y)]
-        if isinstance(seg, se.Close):
-            # end exactly where the subpath started: replace a last point that only differs by round-off
-            start, last = pts[0], pts[-1]
-            if len(pts) > 1 and math.hypot(last[0] - start[0], last[1] - start[1]) <= 1e-9 * (1 + math.hypot(*start)):
-                pts[-1] = start
-            elif last != start:
-                pts.append(start)
-            continue
-        if isinstance(seg, se.Line):
-            pts.append((seg.end.x, seg.end.y))
-            continue
-        n = _segment_count(seg, tol_px)
-        pts.extend(map(tuple, np.asarray(seg.npoint(np.linspace(0.0, 1.0, n + 1)[1:]), dtype=np.float64).tolist()))
-    if len(pts) >= 2:
-        out.append(np.array(pts, dtype=np.float64))
-    return out
-
-
-def _segment_count(seg: object, tol_px: float) -> int:
-    """Chords needed for a curve segment to stay within ``tol_px`` of the curve."""
+def _segment_count(seg: object, tol: float) -> int:
+    """Chords needed for a curve segment to stay within ``tol`` of the curve."""
     if isinstance(seg, se.CubicBezier):
         p = np.array([[seg.start.x, seg.start.y], [seg.control1.x, seg.control1.y],
                       [seg.control2.x, seg.control2.y], [seg.end.x, seg.end.y]])
         dd = np.hypot(*(p[:-2] - 2 * p[1:-1] + p[2:]).T).max()
-        n = math.sqrt(0.75 * dd / tol_px)  # |curve - chords| <= d(d-1)/8 * max|second difference| / n^2
+        n = math.sqrt(0.75 * dd / tol)  # |curve - chords| <= d(d-1)/8 * max|second difference| / n^2
     elif isinstance(seg, se.QuadraticBezier):
         p = np.array([[seg.start.x, seg.start.y], [seg.control.x, seg.control.y], [seg.end.x, seg.end.y]])
-        n = math.sqrt(0.25 * float(np.hypot(*(p[0] - 2 * p[1] + p[2]))) / tol_px)
+        n = math.sqrt(0.25 * float(np.hypot(*(p[0] - 2 * p[1] + p[2]))) / tol)
     elif isinstance(seg, se.Arc):
-        r = max(abs(seg.rx), abs(seg.ry))
-        half_step = math.acos(1 - tol_px / r) if r > tol_px else math.pi
+        r = max(abs(seg.rx), abs(seg.ry))  # an ellipse is a circle of its larger radius, squeezed: no farther off
+        half_step = math.acos(1 - tol / r) if r > tol else math.pi
         # sagitta of each chord <= tol
         n = abs(seg.sweep) / (2 * half_step) if half_step > 0 else MAX_SEGMENT_POINTS
     else:
@@ -156,30 +398,162 @@ def _segment_count(seg: object, tol_px: float) -> int:
     return int(min(MAX_SEGMENT_POINTS, max(1, math.ceil(n))))
 
 
-def read_svg(source: Source, *, tolerance: float = 0.05, layer_by: LayerBy = "auto") -> DisplayList:
+def _largest_stretch(m: np.ndarray) -> float:
+    """The largest singular value of the linear part of an affine 3x3 matrix: how much it can lengthen."""
+    a, b, c, d = m[0, 0], m[0, 1], m[1, 0], m[1, 1]
+    f2 = a * a + b * b + c * c + d * d
+    det = a * d - b * c
+    return math.sqrt(max(0.0, (f2 + math.sqrt(max(0.0, f2 * f2 - 4 * det * det))) / 2))
+
+
+class _Subpath:
+    """Points of one subpath in the element's own coordinates: runs of line ends and flattened curves."""
+
+    def __init__(self, x: float, y: float) -> None:
+        self.start = (x, y)
+        self.pieces: list[np.ndarray] = []
+        self.run: list[tuple[float, float]] = [self.start]
+        self.count = 1
+        self.curve_points = 0
+
+    def line(self, x: float, y: float) -> None:
+        self.run.append((x, y))
+        self.count += 1
+
+    def curve(self, pts: np.ndarray) -> None:
+        self._flush()
+        self.pieces.append(pts)
+        self.count += len(pts)
+        self.curve_points += len(pts)
+
+    def close(self) -> None:
+        """End exactly where the subpath started: replace a last point that only differs by round-off."""
+        last = self.run[-1] if self.run else tuple(self.pieces[-1][-1])
+        sx, sy = self.start
+        if self.count > 1 and math.hypot(last[0] - sx, last[1] - sy) <= 1e-9 * (1 + math.hypot(sx, sy)):
+            if self.run:
+                self.run[-1] = self.start
+            else:
+                self.pieces[-1] = self.pieces[-1].copy()
+                self.pieces[-1][-1] = self.start
+        elif last != self.start:
+            self.line(sx, sy)
+
+    def array(self) -> np.ndarray:
+        """All points as one (N, 2) array."""
+        self._flush()
+        return np.concatenate(self.pieces)
+
+    def _flush(self) -> None:
+        if self.run:
+            self.pieces.append(np.array(self.run, dtype=np.float64))
+            self.run = []
+
+
+class _Flattener:
+    """Flattens elements into polylines in mm within a tolerance, counting strokes and points against the limits."""
+
+    def __init__(self, name: str, tolerance_mm: float, correction: np.ndarray, limits: SvgLimits) -> None:
+        self.name, self.limits = name, limits
+        self.tol_px = tolerance_mm / MM_PER_PX
+        self.correction = correction
+        self.strokes = 0
+        self.points = 0
+
+    def element(self, element: se.Shape, what: str) -> list[np.ndarray]:
+        """The subpaths of ``element`` as (N, 2) polylines in mm, after its full transform."""
+        m = self.correction @ _affine(element.transform)
+        if not np.isfinite(m).all():
+            raise ParseError(f"{what} has a non-finite transform", source=self.name)
+        stretch = _largest_stretch(m)
+        tol = self.tol_px / stretch if stretch > 0 else math.inf
+        try:
+            local = self._subpaths(element.segments(transformed=False), tol, what)
+        except (ValueError, TypeError, AttributeError, ZeroDivisionError, OverflowError, IndexError) as exc:
+            raise ParseError(f"{what} cannot be flattened: {exc or type(exc).__name__}", source=self.name) from None
+        out = []
+        for pts in local:
+            with np.errstate(all="ignore"):
+                pts = (pts @ m[:2, :2].T + m[:2, 2]) * MM_PER_PX
+            if not np.isfinite(pts).all():
+                raise ParseError(f"{what} has a non-finite coordinate after transforms", source=self.name)
+            out.append(pts)
+        return out
+
+    def _subpaths(self, segments: Iterable[Any], tol: float, what: str) -> list[np.ndarray]:
+        out: list[np.ndarray] = []
+        current: _Subpath | None = None
+        for seg in segments:
+            if isinstance(seg, se.Move):
+                self._finish(current, out, what)
+                current = _Subpath(seg.end.x, seg.end.y)
+                continue
+            if current is None:  # a drawing command without a preceding move starts at its own start
+                current = _Subpath(seg.start.x, seg.start.y)
+            if isinstance(seg, se.Close):
+                current.close()
+            elif isinstance(seg, se.Line):
+                current.line(seg.end.x, seg.end.y)
+            else:
+                n = _segment_count(seg, tol)
+                self._take_points(n, what)
+                current.curve(np.asarray(seg.npoint(np.linspace(0.0, 1.0, n + 1)[1:]), dtype=np.float64))
+        self._finish(current, out, what)
+        return out
+
+    def _finish(self, sub: _Subpath | None, out: list[np.ndarray], what: str) -> None:
+        if sub is None or sub.count < 2:
+            return
+        self.strokes += 1
+        if self.strokes > self.limits.max_strokes:
+            raise ParseError(f"{what}: more than {self.limits.max_strokes} strokes in the file (limit max_strokes)",
+                             source=self.name)
+        self._take_points(sub.count - sub.curve_points, what)  # curves were counted before flattening
+        out.append(sub.array())
+
+    def _take_points(self, n: int, what: str) -> None:
+        self.points += n
+        if self.points > self.limits.max_points:
+            raise ParseError(f"{what}: more than {self.limits.max_points} points in the file after flattening "
+                             f"(limit max_points)", source=self.name)
+
+
+def _describe(element: se.SVGElement, number: int) -> str:
+    tag = element.values.get("tag", type(element).__name__.lower())
+    return f"<{tag} id={element.id!r}>" if element.id else f"<{tag}> (drawable element {number})"
+
+
+def read_svg(
+    source: Source, *, tolerance: float = 0.05, layer_by: LayerBy = "auto", limits: SvgLimits | None = None
+) -> DisplayList:
     """Read an SVG into a display list in millimetres (unit_mm 1.0, y down, origin at the document's top left).
 
     Paths and basic shapes are flattened to within ``tolerance`` mm after all transforms, viewBox and units are
     applied. ``layer_by``: ``stroke`` makes one layer per stroke colour, ``group`` one per top-level group (or
     Inkscape layer), ``auto`` uses Inkscape layers when the file has them and stroke colours otherwise. Pens are
-    numbered by stroke colour in order of appearance, with ``pen_colours`` set. Hidden elements are skipped,
-    fill-only shapes are imported as their outlines, text and images are skipped (all with a logged warning).
+    numbered by stroke colour in order of appearance, with ``pen_colours`` set; ``page`` is the document's size
+    in mm when it has one. Hidden elements are skipped, fill-only shapes are imported as their outlines, text
+    and images are skipped (all with a logged warning). ``limits`` bound the work per file (:class:`SvgLimits`).
     """
     if not (isinstance(tolerance, (int, float)) and math.isfinite(tolerance) and tolerance > 0):
         raise ConfigError(f"SVG flattening tolerance must be > 0 mm, got {tolerance!r}")
     if layer_by not in ("auto", "stroke", "group"):
         raise ConfigError(f"layer_by must be 'auto', 'stroke' or 'group', got {layer_by!r}")
-    data, name = _read_bytes(source)
-    doc = _parse(data, name)
-    inkscape = _has_layers(doc) and layer_by in ("auto", "group")
+    if limits is None:
+        limits = SvgLimits()
+    elif not isinstance(limits, SvgLimits):
+        raise ConfigError(f"limits must be an SvgLimits, got {type(limits).__name__}")
+    data, name = _read_bytes(source, limits.max_bytes)
+    doc, page, correction = _parse(data, name, limits)
+    inkscape = doc is not None and _has_layers(doc) and layer_by in ("auto", "group")
     by_colour = layer_by == "stroke" or (layer_by == "auto" and not inkscape)
-    tol_px = tolerance / MM_PER_PX
+    flattener = _Flattener(name, tolerance, correction, limits)
 
     polylines: list[np.ndarray] = []
     colours: list[str] = []
     layer_keys: list[str] = []
     skipped: Counter[str] = Counter()
-    for element, layer in _walk(doc, None, True, layer_by == "group", inkscape):
+    for number, (element, layer) in enumerate(_walk(doc, layer_by == "group", inkscape) if doc else (), start=1):
         if isinstance(element, se.Text):
             skipped["text element(s) skipped (convert text to paths to plot it)"] += 1
             continue
@@ -198,11 +572,8 @@ def read_svg(source: Source, *, tolerance: float = 0.05, layer_by: LayerBy = "au
         if stroke is None:
             skipped["fill-only shape(s) imported as outlines"] += 1
         colour = stroke or fill
-        for pts in _flatten(element if isinstance(element, se.Path) else se.Path(element), tol_px):
-            if not np.isfinite(pts).all():
-                what = element.id or type(element).__name__.lower()
-                raise ParseError(f"element {what!r} has a non-finite coordinate after transforms", source=name)
-            polylines.append(pts * MM_PER_PX)
+        for pts in flattener.element(element, _describe(element, number)):
+            polylines.append(pts)
             colours.append(colour)  # type: ignore[arg-type]
             layer_keys.append(colour if by_colour else (layer or "root"))  # type: ignore[arg-type]
     for what, count in skipped.items():
@@ -219,6 +590,7 @@ def read_svg(source: Source, *, tolerance: float = 0.05, layer_by: LayerBy = "au
         layer_names={i: k for k, i in layer_of.items()},
         unit_mm=1.0,
         pen_colours={p: c for c, p in pen_of.items()},
+        page=page,
     )
 
 
@@ -236,8 +608,9 @@ def write_svg(
     """Write ``dl`` as an SVG of its true size: one Inkscape layer (``<g>``) per layer, one ``<path>`` per stroke.
 
     Coordinates stay in display-list units; the viewBox maps them to millimetres through ``unit_mm``. The page
-    is ``size_mm`` (width, height) from the origin, or reaches from the origin (or the drawing's minimum, if
-    negative) to the drawing's maximum. Single-point strokes are written as zero-length lines.
+    is ``size_mm`` (width, height) from the origin, else the display list's ``page``, else it reaches from the
+    origin (or the drawing's minimum, if negative) to the drawing's maximum. Single-point strokes are written as
+    zero-length lines.
     """
     if not (dl.unit_mm > 0 and math.isfinite(dl.unit_mm)):
         raise ConfigError(f"display list unit must be > 0 mm, got {dl.unit_mm!r}")
@@ -248,6 +621,10 @@ def write_svg(
         if not (w_mm > 0 and h_mm > 0 and math.isfinite(w_mm) and math.isfinite(h_mm)):
             raise ConfigError(f"SVG page size must be two sizes > 0 mm, got {size_mm!r}")
         w, h = w_mm / dl.unit_mm, h_mm / dl.unit_mm
+    elif dl.page is not None:
+        x0 = y0 = 0.0
+        w, h = dl.page
+        w_mm, h_mm = w * dl.unit_mm, h * dl.unit_mm
     else:
         w, h = max(bounds[2] - x0, 0.0), max(bounds[3] - y0, 0.0)
         if w == 0 or h == 0:  # an empty or flat drawing still gets a valid page
