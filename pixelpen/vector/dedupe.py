@@ -1,7 +1,12 @@
-"""Removing ink drawn twice (repeated points, overlapping collinear segments, repeated dots) and short strokes."""
+"""Removing ink drawn twice within one layer and pen (repeated points, overlapping segments, repeated dots) and short strokes.
+
+Strokes of different layers or pens never remove each other's ink: a second pass of the same lines in another
+layer or pen (another colour, or a line darkened on purpose) is kept.
+"""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -9,8 +14,20 @@ from scipy.spatial import cKDTree
 
 from ..errors import ConfigError
 from .displaylist import DisplayList
+from .merge import group_ids
 
-__all__ = ["remove_duplicates", "filter_min_length", "stroke_lengths"]
+__all__ = ["remove_duplicates", "deduplicate", "DuplicateRemoval", "filter_min_length", "stroke_lengths"]
+
+
+@dataclasses.dataclass(frozen=True)
+class DuplicateRemoval:
+    """What duplicate removal took from one (layer, pen): strokes dropped whole, strokes cut, ink length (device units)."""
+
+    layer: int
+    pen: int
+    strokes_removed: int
+    strokes_shortened: int
+    length: float
 
 
 def stroke_lengths(dl: DisplayList) -> np.ndarray:
@@ -31,21 +48,29 @@ def filter_min_length(dl: DisplayList, min_length: float) -> DisplayList:
 
 
 def remove_duplicates(dl: DisplayList, tolerance: float = 1e-6) -> DisplayList:
-    """Draw nothing twice: drop repeated points, duplicate and overlapping segments, and repeated dots.
+    """The display list of :func:`deduplicate`, without its account of what went."""
+    return deduplicate(dl, tolerance)[0]
 
-    Segments whose lines agree within ``tolerance`` (device units) share a line; along it, each stretch
-    covered by several segments is kept in the earliest one drawn and cut from the later ones, so a later
-    stroke may split where it retraced earlier ink. A point within ``tolerance`` of the point before it
-    in its stroke is dropped (a stroke keeps at least one point), as is a dot (single-point stroke) within
-    ``tolerance`` of an earlier dot. Strokes left without ink are removed.
+
+def deduplicate(dl: DisplayList, tolerance: float = 1e-6) -> tuple[DisplayList, list[DuplicateRemoval]]:
+    """Draw nothing twice in one layer and pen; returns the result and what was removed per (layer, pen).
+
+    Segments of one layer and pen whose lines agree within ``tolerance`` (device units) share a line; along it,
+    each stretch covered by several segments is kept in the earliest one drawn and cut from the later ones, so a
+    later stroke may split where it retraced earlier ink. A point within ``tolerance`` of the point before it in
+    its stroke is dropped (a stroke keeps at least one point), as is a dot (single-point stroke) within
+    ``tolerance`` of an earlier dot of the same layer and pen. Strokes left without ink are removed. The account
+    lists each (layer, pen) that lost ink or strokes, in order of first appearance; dropping repeated points
+    removes no ink and is not counted.
     """
     if not isinstance(tolerance, (int, float)) or not math.isfinite(tolerance) or tolerance < 0:
         raise ConfigError(f"remove_duplicates: tolerance must be a finite number >= 0, got {tolerance!r}")
     if not len(dl):
-        return dl.reordered(np.arange(0))
+        return dl.reordered(np.arange(0)), []
     tol = float(tolerance)
     dl = _drop_repeated_points(dl, tol)
     n = len(dl)
+    group = group_ids(dl)
     # segments of every stroke, in drawing order
     owner = np.repeat(np.arange(n), np.diff(dl.offsets))
     inner = np.ones(max(len(dl.points) - 1, 0), bool)
@@ -53,12 +78,13 @@ def remove_duplicates(dl: DisplayList, tolerance: float = 1e-6) -> DisplayList:
     seg_owner = owner[:-1][inner]
     p0 = dl.points[:-1][inner]
     p1 = dl.points[1:][inner]
-    keep_seg, pieces = _resolve_overlaps(p0, p1, tol)
-    # dots: single-point strokes; the later of two close dots goes
+    keep_seg, pieces = _resolve_overlaps(p0, p1, group[seg_owner], tol)
+    # dots: single-point strokes; the later of two close dots of one group goes
     dots = np.flatnonzero(np.diff(dl.offsets) == 1)
     dot_keep = np.ones(len(dots), bool)
     if len(dots) > 1:
         pairs = cKDTree(dl.points[dl.offsets[dots]]).query_pairs(tol, output_type="ndarray")
+        pairs = pairs[group[dots[pairs[:, 0]]] == group[dots[pairs[:, 1]]]]
         dot_keep[pairs.max(axis=1)] = False
     # output segments: whole kept segments plus partial pieces, ordered by (segment, position along it)
     whole = np.flatnonzero(keep_seg)
@@ -67,12 +93,40 @@ def remove_duplicates(dl: DisplayList, tolerance: float = 1e-6) -> DisplayList:
     a = np.concatenate([p0[whole], pieces[2]])
     b = np.concatenate([p1[whole], pieces[3]])
     o = np.lexsort((seg_t, seg_idx))
-    return _assemble(dl, seg_owner[seg_idx[o]], a[o], b[o], dots[dot_keep])
+    out, sources = _assemble(dl, seg_owner[seg_idx[o]], a[o], b[o], dots[dot_keep])
+    # the account: ink lost per source stroke (whole length less what its pieces keep), strokes gone or cut
+    seg_len = np.hypot(*(p1 - p0).T)
+    kept_len = np.where(keep_seg, seg_len, 0.0) + np.bincount(
+        pieces[0], weights=np.hypot(*(pieces[3] - pieces[2]).T), minlength=len(p0))
+    lost = np.bincount(seg_owner, weights=np.maximum(seg_len - kept_len, 0.0), minlength=n)
+    survives = np.zeros(n, bool)
+    survives[sources] = True
+    cut = np.zeros(n, bool)
+    cut[seg_owner[~keep_seg]] = True
+    return out, _account(dl, group, ~survives, cut & survives, lost)
+
+
+def _account(dl: DisplayList, group: np.ndarray, removed: np.ndarray, cut: np.ndarray, lost: np.ndarray
+             ) -> list[DuplicateRemoval]:
+    """One :class:`DuplicateRemoval` per group that lost strokes or ink, groups in order of first appearance."""
+    n_groups = int(group.max()) + 1
+    gone = np.bincount(group, weights=removed, minlength=n_groups)
+    shortened = np.bincount(group, weights=cut, minlength=n_groups)
+    length = np.bincount(group, weights=lost, minlength=n_groups)
+    _, first = np.unique(group, return_index=True)
+    return [
+        DuplicateRemoval(int(dl.layers[first[g]]), int(dl.pens[first[g]]), int(gone[g]), int(shortened[g]),
+                         float(length[g]))
+        for g in np.argsort(first).tolist() if gone[g] or shortened[g]
+    ]
 
 
 def _assemble(dl: DisplayList, strokes: np.ndarray, a: np.ndarray, b: np.ndarray, dot_strokes: np.ndarray
-              ) -> DisplayList:
-    """Strokes from segments ``a``→``b`` (in drawing order, ``strokes`` their source stroke) and kept dots."""
+              ) -> tuple[DisplayList, np.ndarray]:
+    """Strokes from segments ``a``→``b`` (in drawing order, ``strokes`` their source stroke) and kept dots.
+
+    Returns the display list and the source stroke of each of its strokes.
+    """
     # a new stroke starts where the source stroke changes or the pen would have to jump
     new = np.ones(len(a), bool)
     new[1:] = (strokes[1:] != strokes[:-1]) | np.any(a[1:] != b[:-1], axis=1)
@@ -98,10 +152,9 @@ def _assemble(dl: DisplayList, strokes: np.ndarray, a: np.ndarray, b: np.ndarray
     src_start = all_pts_start[order]
     gather = np.repeat(src_start - offsets[:-1], lengths) + np.arange(offsets[-1])
     stroke_of = all_stroke[order]
-    return DisplayList(
-        all_pts[gather], offsets, dl.pens[stroke_of], dl.layers[stroke_of],
-        dict(dl.layer_names), dl.unit_mm, dict(dl.pen_colours),
-    )
+    out = dataclasses.replace(dl, points=all_pts[gather], offsets=offsets, pens=dl.pens[stroke_of],
+                              layers=dl.layers[stroke_of])
+    return out, stroke_of
 
 
 def _drop_repeated_points(dl: DisplayList, tol: float) -> DisplayList:
@@ -115,12 +168,11 @@ def _drop_repeated_points(dl: DisplayList, tol: float) -> DisplayList:
     if not drop.any():
         return dl
     kept_before = np.concatenate([[0], np.cumsum(~drop)])
-    return DisplayList(dl.points[~drop], kept_before[dl.offsets], dl.pens, dl.layers,
-                       dict(dl.layer_names), dl.unit_mm, dict(dl.pen_colours))
+    return dataclasses.replace(dl, points=dl.points[~drop], offsets=kept_before[dl.offsets])
 
 
-def _resolve_overlaps(p0: np.ndarray, p1: np.ndarray, tol: float):
-    """Find segments that retrace earlier ones on a common line.
+def _resolve_overlaps(p0: np.ndarray, p1: np.ndarray, group: np.ndarray, tol: float):
+    """Find segments that retrace earlier ones of the same ``group`` on a common line.
 
     Returns ``keep`` (segments drawn whole) and the partial pieces of the others as
     (segment index, position along the segment, start points, end points).
@@ -138,7 +190,7 @@ def _resolve_overlaps(p0: np.ndarray, p1: np.ndarray, tol: float):
     theta = np.mod(np.arctan2(d[:, 1], d[:, 0]), np.pi)
     # fold the wrap-around at pi: directions within ang_tol below pi belong with those just above 0
     theta[theta > np.pi - ang_tol] -= np.pi
-    dir_id, ref = _cluster_1d(theta, np.zeros(m, np.int64), ang_tol)
+    dir_id, ref = _cluster_1d(theta, group, ang_tol)
     ux, uy = np.cos(ref), np.sin(ref)
     offset = -uy * q0[:, 0] + ux * q0[:, 1]
     t0 = ux * q0[:, 0] + uy * q0[:, 1]

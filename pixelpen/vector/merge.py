@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -149,7 +150,5 @@ def join_chains(dl: DisplayList, join: np.ndarray) -> DisplayList:
     new_first = first[keep_stroke]
     shift = np.concatenate([[0], np.cumsum(drop)])
     offsets = np.append(new_first - shift[new_first], len(dl.points) - int(drop.sum()))
-    return DisplayList(
-        dl.points[~drop], offsets, dl.pens[keep_stroke], dl.layers[keep_stroke],
-        dict(dl.layer_names), dl.unit_mm, dict(dl.pen_colours),
-    )
+    return dataclasses.replace(dl, points=dl.points[~drop], offsets=offsets, pens=dl.pens[keep_stroke],
+                               layers=dl.layers[keep_stroke])

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -63,7 +64,6 @@ def simplify(dl: DisplayList, tolerance: float) -> DisplayList:
         raise ConfigError(f"simplify: tolerance must be a finite number >= 0, got {tolerance!r}")
     keep = simplify_mask(dl.points, dl.offsets, float(tolerance))
     kept_before = np.concatenate([[0], np.cumsum(keep)])
-    return DisplayList(
-        dl.points[keep], kept_before[dl.offsets], dl.pens.copy(), dl.layers.copy(),
-        dict(dl.layer_names), dl.unit_mm, dict(dl.pen_colours),
-    )
+    return dataclasses.replace(dl, points=dl.points[keep], offsets=kept_before[dl.offsets], pens=dl.pens.copy(),
+                               layers=dl.layers.copy(), layer_names=dict(dl.layer_names),
+                               pen_colours=dict(dl.pen_colours))

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pixelpen.errors import ConfigError
-from pixelpen.vector.dedupe import filter_min_length, remove_duplicates, stroke_lengths
+from pixelpen.vector.dedupe import DuplicateRemoval, deduplicate, filter_min_length, remove_duplicates, stroke_lengths
 from pixelpen.vector.displaylist import DisplayList
 
 
@@ -42,10 +42,38 @@ def test_collinear_overlap_is_trimmed_from_the_later_stroke():
 
 
 def test_later_stroke_around_an_earlier_one_splits():
-    dl = DisplayList.from_polylines([[(1, 1), (2, 2)], [(0, 0), (3, 3)]], pens=[1, 2])
-    out = remove_duplicates(dl)
+    dl = DisplayList.from_polylines([[(1, 1), (2, 2)], [(0, 0), (3, 3)]], pens=2, layers=[4, 4])
+    out, account = deduplicate(dl)
     assert lists(out) == [[[1, 1], [2, 2]], [[0, 0], [1, 1]], [[2, 2], [3, 3]]]
-    assert out.pens.tolist() == [1, 2, 2]
+    assert out.pens.tolist() == [2, 2, 2] and out.layers.tolist() == [4, 4, 4]
+    assert account == [DuplicateRemoval(layer=4, pen=2, strokes_removed=0, strokes_shortened=1,
+                                        length=pytest.approx(2 ** 0.5))]
+
+
+def test_second_pass_in_another_layer_or_pen_is_kept():
+    square = [(0, 0), (10, 0), (10, 10), (0, 10), (0, 0)]
+    for pens, layers in (([1, 2], [0, 0]), ([1, 1], [0, 1]), ([1, 2], [0, 1])):
+        dl = DisplayList.from_polylines([square, square[::-1]], pens=pens, layers=layers)
+        out, account = deduplicate(dl)
+        assert unit_steps(out) == unit_steps(dl) and len(unit_steps(out)) == 2 * 40
+        assert out.pens.tolist() == pens and out.layers.tolist() == layers and account == []
+    dl = DisplayList.from_polylines([[(3, 3)], [(3, 3)]], pens=[1, 2])
+    assert len(remove_duplicates(dl)) == 2  # a dot in each pen
+
+
+def test_duplicates_within_a_layer_and_pen_are_counted():
+    # layer 1 pen 2: a 5 mm segment drawn three times (two go), a dot twice (one goes), a 10 mm line overlapped
+    # by 4 mm of a later one (cut); layer 0 pen 1 has a copy of everything and loses only its own repeats
+    polys = [[(0, 0), (3, 4)], [(3, 4), (0, 0)], [(0, 0), (3, 4)], [(7, 7)], [(7, 7)],
+             [(0, 20), (10, 20)], [(6, 20), (14, 20)]]
+    dl = DisplayList.from_polylines(polys + polys[:2], pens=[2] * 7 + [1, 1], layers=[1] * 7 + [0, 0])
+    out, account = deduplicate(dl)
+    assert account == [
+        DuplicateRemoval(layer=1, pen=2, strokes_removed=3, strokes_shortened=1, length=pytest.approx(14.0)),
+        DuplicateRemoval(layer=0, pen=1, strokes_removed=1, strokes_shortened=0, length=pytest.approx(5.0)),
+    ]
+    assert lists(out) == [[[0, 0], [3, 4]], [[7, 7]], [[0, 20], [10, 20]], [[10, 20], [14, 20]], [[0, 0], [3, 4]]]
+    assert dl.pen_down_length() - out.pen_down_length() == pytest.approx(sum(r.length for r in account))
 
 
 def test_a_stroke_retracing_itself():
@@ -114,6 +142,24 @@ def test_ink_is_kept_and_drawn_once(polys):
     before, after = unit_steps(dl), unit_steps(out)
     assert after == sorted(set(before))  # the same unit steps, each exactly once
     assert len(out.points) <= len(dl.points) + 2 * len(dl.points)
+
+
+@settings(max_examples=100, deadline=None)
+@given(grid_polylines(), st.data())
+def test_each_layer_and_pen_is_deduplicated_on_its_own(polys, data):
+    pens = data.draw(st.lists(st.sampled_from([1, 2]), min_size=len(polys), max_size=len(polys)))
+    layers = data.draw(st.lists(st.sampled_from([0, 5]), min_size=len(polys), max_size=len(polys)))
+    dl = DisplayList.from_polylines([np.array(p, float) for p in polys], pens=pens, layers=layers)
+    out, account = deduplicate(dl)
+    reported = {(r.layer, r.pen): r for r in account}
+    for key in set(zip(layers, pens)):
+        mine = (dl.layers == key[0]) & (dl.pens == key[1])
+        got = out.select((out.layers == key[0]) & (out.pens == key[1]))
+        assert unit_steps(got) == sorted(set(unit_steps(dl.select(mine))))  # each group's ink, once
+        lost = dl.select(mine).pen_down_length() - got.pen_down_length()
+        assert lost == pytest.approx(reported[key].length if key in reported else 0.0, abs=1e-9)
+        alone, alone_account = deduplicate(dl.select(mine))
+        assert lists(got) == lists(alone) and alone_account == ([reported[key]] if key in reported else [])
 
 
 def test_min_length():
