@@ -22,6 +22,8 @@ Trace format, version 1 (also in ``docs/trace-format.md``).  A UTF-8 text file o
 * A chunk line holds at most 4096 bytes (longer chunks are written as several lines with the same
   time) and no line is longer than 64 KiB; the file's last line ends with ``\\n`` (a file that does
   not was cut short).  Readers refuse traces of more than ``max_bytes`` payload bytes.
+* The version is ASCII digits; ``SECONDS`` has at most :data:`MAX_STAMP_DIGITS` digits before the
+  point (a longer one would not be a finite float, and no recording runs for 10^15 s).
 
 Replaying compares byte streams, not chunks: the host stream is the concatenation of all ``>``
 bytes, and each ``<`` chunk is released to the program once it has sent every ``>`` byte written
@@ -39,7 +41,8 @@ from typing import IO, Final, Iterable, Mapping
 from urllib.parse import quote, unquote
 
 from ..clock import Clock, SimulatedClock
-from ..errors import LinkError, ParseError, TraceMismatch
+from ..errors import ConfigError, LinkError, ParseError, TraceMismatch
+from ..urls import check_path
 from .link import Link, printable
 
 TRACE_MAGIC: Final = "#pixelpen-trace"
@@ -50,7 +53,9 @@ MAX_LINE: Final = 65536
 """Characters per line a reader accepts."""
 DEFAULT_MAX_BYTES: Final = 256 * 1024 * 1024
 """Payload bytes a reader accepts unless told otherwise."""
-_SECONDS = re.compile(r"[0-9]+(\.[0-9]*)?")
+MAX_STAMP_DIGITS: Final = 15
+"""Digits of a timestamp before its decimal point."""
+_SECONDS = re.compile(r"([0-9]+)(\.[0-9]*)?")
 HOST_TO_DEVICE: Final = ">"
 DEVICE_TO_HOST: Final = "<"
 
@@ -149,7 +154,7 @@ def _parse_header(trace: Trace, text: str, source: str) -> None:
         raise ParseError(
             f"expected the header '{TRACE_MAGIC} {TRACE_VERSION} url=...'", source=source, line=1, token=text[:40]
         )
-    if len(fields) < 2 or not fields[1].isdigit():
+    if len(fields) < 2 or not (fields[1].isascii() and fields[1].isdigit()) or len(fields[1]) > 9:
         raise ParseError("header lacks the format version number", source=source, line=1, token=text[:40])
     trace.version = int(fields[1])
     if trace.version != TRACE_VERSION:
@@ -180,9 +185,11 @@ def _parse_chunk(body: str, source: str, line_no: int, last_time: float) -> Trac
             "expected 'SECONDS >|< HEX...' (line cut short?)", source=source, line=line_no, token=body[:40]
         )
     stamp, direction, hex_fields = fields[0], fields[1], fields[2:]
-    if not _SECONDS.fullmatch(stamp):
+    seconds = _SECONDS.fullmatch(stamp)
+    if not seconds or len(seconds[1]) > MAX_STAMP_DIGITS:
         raise ParseError(
-            "timestamp must be non-negative decimal seconds like 0.041667",
+            f"timestamp must be non-negative decimal seconds like 0.041667 (at most {MAX_STAMP_DIGITS} digits "
+            "before the point)",
             source=source,
             line=line_no,
             column=1,
@@ -221,14 +228,18 @@ def _read_lines(f: IO[str]) -> Iterable[str]:
 
 
 def read_trace(source: PathOrFile, max_bytes: int = DEFAULT_MAX_BYTES) -> Trace:
-    """Read a trace from a path or an open text file (ParseError on malformed content)."""
+    """Read a trace from a path or an open text file (ParseError on malformed content or an unreadable file)."""
     if isinstance(source, (str, os.PathLike)):
         name = os.fspath(source)
         try:
-            with open(name, encoding="utf-8", newline="") as f:
+            with open(check_path(name, "trace file"), encoding="utf-8", newline="") as f:
                 return parse_trace(_read_lines(f), name, max_bytes)
         except UnicodeDecodeError as exc:
             raise ParseError(f"not UTF-8 text: {exc.reason}", source=name, offset=exc.start) from None
+        except ConfigError as exc:
+            raise ParseError(str(exc), source="<trace>") from None
+        except OSError as exc:
+            raise ParseError(f"cannot read trace: {exc.strerror or exc}", source=name) from None
     return parse_trace(_read_lines(source), getattr(source, "name", "<trace>"), max_bytes)
 
 

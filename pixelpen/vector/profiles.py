@@ -1,4 +1,17 @@
-"""Device profiles as data: units, paper limits, pens, motion limits and timing of each plotter model (TOML)."""
+"""Device profiles as data: units, paper limits, pens, motion limits and timing of each plotter model (TOML).
+
+Every value is checked and an error names the file and the key. Limits (module attributes, read at
+call time: assign to override):
+
+* :data:`MAX_BYTES` -- bytes of a profile or vpype configuration file (1 MiB);
+* :data:`MAX_DEPTH` -- nesting of arrays and inline tables (32; profiles need 2);
+* :data:`MAX_PENS` -- pens of one device (1000; carousels hold 6 to 8);
+* :data:`MAX_PAPERS` -- papers of one device, and devices in one vpype file (1000);
+* :data:`MAX_VALUE` -- magnitude of any number: device units, speeds, times, baud rates (1e9);
+* :data:`MIN_UNIT_MM` -- smallest device unit (1e-6 mm).
+
+TOML integers longer than Python's 4300-digit limit and files nested too deep are ParseErrors.
+"""
 
 from __future__ import annotations
 
@@ -10,13 +23,27 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from ..errors import ConfigError, ParseError
+from ..errors import ConfigError, ParseError, quote_token
+from ..urls import check_path
 from .motion import MotionLimits
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - exercised on Python 3.10 only
     import tomli as tomllib
+
+MAX_BYTES = 1 << 20
+"""Bytes of a profile or vpype configuration file."""
+MAX_DEPTH = 32
+"""Nesting of arrays and inline tables."""
+MAX_PENS = 1000
+"""Pens of one device."""
+MAX_PAPERS = 1000
+"""Papers of one device; devices of one vpype file."""
+MAX_VALUE = 1e9
+"""Magnitude of any number in a profile."""
+MIN_UNIT_MM = 1e-6
+"""Smallest device unit in millimetres."""
 
 __all__ = [
     "DeviceProfile", "Paper", "LinkSettings", "ServoSettings",
@@ -116,15 +143,17 @@ class DeviceProfile:
 
     def __post_init__(self) -> None:
         where = f"profile {self.name!r}" + (f" ({self.source})" if self.source else "")
-        if not _positive(self.unit_mm):
-            raise ConfigError(f"{where}: unit_mm must be a number > 0, got {self.unit_mm!r}")
+        if not (_positive(self.unit_mm) and self.unit_mm >= MIN_UNIT_MM):
+            raise ConfigError(f"{where}: unit_mm must be a number >= {MIN_UNIT_MM:g}, got {quote_token(self.unit_mm)}")
         if not isinstance(self.pen_down, MotionLimits) or not isinstance(self.pen_up, MotionLimits):
             raise ConfigError(f"{where}: pen_down and pen_up must be MotionLimits")
-        if not _is_int(self.pens) or self.pens < 1:
-            raise ConfigError(f"{where}: pens must be an integer >= 1, got {self.pens!r}")
+        if not _pen_count(self.pens):
+            raise ConfigError(f"{where}: pens must be an integer 1..{MAX_PENS}, got {quote_token(self.pens)}")
+        if len(self.papers) > MAX_PAPERS:
+            raise ConfigError(f"{where}: {len(self.papers)} papers, more than {MAX_PAPERS}")
         for key in ("pen_lift_s", "pen_drop_s", "pen_change_s"):
             if not _non_negative(getattr(self, key)):
-                raise ConfigError(f"{where}: {key} must be a number >= 0, got {getattr(self, key)!r}")
+                raise ConfigError(f"{where}: {key} must be a number >= 0, got {quote_token(getattr(self, key))}")
 
     def paper(self, name: str | None = None) -> Paper:
         """The paper called ``name`` (or one of its aliases, any case); the default paper when ``name`` is None."""
@@ -154,13 +183,13 @@ class _Table:
         if keys is not None:
             extra = [k for k in data if k not in keys]
             if extra:
-                raise ConfigError(f"{source}: unknown key '{self.key(extra[0])}' (known: {', '.join(keys)})")
+                raise ConfigError(f"{source}: unknown key '{self.key(extra[0][:80])}' (known: {', '.join(keys)})")
 
     def key(self, name: str) -> str:
         return f"{self.path}.{name}" if self.path else name
 
     def fail(self, name: str, what: str, value: Any = None) -> ConfigError:
-        found = "" if value is None else f", found {_kind(value)} {value!r}"
+        found = "" if value is None else f", found {_kind(value)} {quote_token(value)}"
         return ConfigError(f"{self.source}: key '{self.key(name)}': {what}{found}")
 
     def get(self, name: str, check: Callable[[Any], bool], what: str, default: Any = None,
@@ -203,7 +232,8 @@ def _kind(value: Any) -> str:
 
 
 def _is_num(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    """A finite number of magnitude <= MAX_VALUE (a huge TOML integer is refused before float() overflows)."""
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and -MAX_VALUE <= v <= MAX_VALUE
 
 
 def _positive(v: Any) -> bool:
@@ -215,7 +245,11 @@ def _non_negative(v: Any) -> bool:
 
 
 def _is_int(v: Any) -> bool:
-    return isinstance(v, int) and not isinstance(v, bool)
+    return isinstance(v, int) and not isinstance(v, bool) and -MAX_VALUE <= v <= MAX_VALUE
+
+
+def _pen_count(v: Any) -> bool:
+    return _is_int(v) and 1 <= v <= MAX_PENS
 
 
 def _pair(check: Callable[[Any], bool]) -> Callable[[Any], bool]:
@@ -298,7 +332,7 @@ def _profile(data: dict, source: str) -> DeviceProfile:
     t = _Table(data, source, "", _PROFILE_KEYS)
     text = lambda v: isinstance(v, str)  # noqa: E731
     name = t.get("name", lambda v: isinstance(v, str) and v.strip() != "", "a non-empty string", required=True)
-    pens = t.get("pens", lambda v: _is_int(v) and v >= 1, "an integer >= 1", 1)
+    pens = t.get("pens", _pen_count, f"an integer 1..{MAX_PENS}", 1)
     colours = t.get("pen_colours", lambda v: isinstance(v, list) and all(_is_colour(c) for c in v),
                     "an array of '#rrggbb' strings", [])
     if len(colours) > pens:
@@ -306,6 +340,8 @@ def _profile(data: dict, source: str) -> DeviceProfile:
     papers_t = t.sub("paper", None)
     papers = {}
     if papers_t is not None:
+        if len(papers_t.data) > MAX_PAPERS:
+            raise t.fail("paper", f"expected at most {MAX_PAPERS} papers")
         for paper_name in papers_t.data:
             papers[paper_name] = _paper(paper_name, papers_t.sub(paper_name, _PAPER_KEYS))
     default_paper = t.get("default_paper", text, "a string", None)
@@ -317,7 +353,8 @@ def _profile(data: dict, source: str) -> DeviceProfile:
         name=name,
         description=t.get("description", text, "a string", ""),
         protocol=t.get("protocol", _one_of(PROTOCOLS), "one of " + ", ".join(PROTOCOLS), "other"),
-        unit_mm=float(t.get("unit_mm", _positive, "a unit size in mm > 0", required=True)),
+        unit_mm=float(t.get("unit_mm", lambda v: _positive(v) and v >= MIN_UNIT_MM, f"a unit size in mm >= {MIN_UNIT_MM:g}",
+                            required=True)),
         origin=t.get("origin", _one_of(ORIGINS), "one of " + ", ".join(ORIGINS), "lower-left"),
         y_up=t.get("y_up", lambda v: isinstance(v, bool), "true or false", True),
         home=tuple(float(x) for x in t.get("home", _pair(_is_num), "an [x, y] pair of device units", [0, 0])),
@@ -338,10 +375,43 @@ def _profile(data: dict, source: str) -> DeviceProfile:
     )
 
 
+_TOML_TOKEN = re.compile(
+    r'"""[\s\S]*?"""'  # multi-line basic string
+    r"|'''[\s\S]*?'''"  # multi-line literal string
+    r'|"(?:[^"\\\n]|\\.)*"'  # basic string
+    r"|'[^'\n]*'"  # literal string
+    r"|#[^\n]*"  # comment
+    r"|[\[\]{}]"  # what nests
+)
+
+
+def _check_depth(text: str, source: str) -> None:
+    """ParseError at the first array or inline table nested more than MAX_DEPTH deep (strings and comments skipped)."""
+    depth = 0
+    for token in _TOML_TOKEN.finditer(text):
+        bracket = token[0]
+        if bracket in ("[", "{"):
+            depth += 1
+            if depth > MAX_DEPTH:
+                line = text.count("\n", 0, token.start()) + 1
+                column = token.start() - text.rfind("\n", 0, token.start())
+                raise ParseError(f"arrays or tables nested more than {MAX_DEPTH} deep", source=source, line=line,
+                                 column=column)
+        elif bracket in ("]", "}"):
+            depth = max(depth - 1, 0)
+
+
 def _read_toml(text: str, source: str) -> dict:
+    if len(text) > MAX_BYTES:
+        raise ParseError(f"file of {len(text)} characters is larger than the {MAX_BYTES} allowed", source=source)
+    _check_depth(text, source)
     try:
         return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
+    except (ValueError, RecursionError) as exc:
+        if not isinstance(exc, tomllib.TOMLDecodeError):  # int() past 4300 digits, or nesting the scan missed
+            long = re.search(r"[0-9_]{4300,}", text)
+            line = None if long is None else text.count("\n", 0, long.start()) + 1
+            raise ParseError(f"malformed TOML: {str(exc)[:200]}", source=source, line=line) from None
         msg = str(exc)
         where = re.search(r"\(at line (\d+), column (\d+)\)", msg)
         if where:
@@ -353,6 +423,9 @@ def _read_toml(text: str, source: str) -> dict:
 
 def _read_file(path: Path) -> dict:
     try:
+        size = path.stat().st_size
+        if size > MAX_BYTES:
+            raise ParseError(f"file of {size} bytes is larger than the {MAX_BYTES} allowed", source=str(path))
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
         raise ParseError("profile is not UTF-8 text", source=str(path), offset=exc.start) from None
@@ -379,16 +452,16 @@ def builtin_profiles() -> dict[str, DeviceProfile]:
 def load_profile(name_or_path: str | Path) -> DeviceProfile:
     """A built-in profile by name (``hp7475a``, ``axidraw_v3``, …) or a user profile from a TOML file path."""
     text = str(name_or_path)
-    path = Path(text).expanduser()
+    path = check_path(text, "profile file name").expanduser()
     if isinstance(name_or_path, Path) or text.endswith(".toml") or path.is_file():
         if not path.is_file():
-            raise ConfigError(f"profile file {text!r} does not exist")
+            raise ConfigError(f"profile file {quote_token(text)} does not exist")
         return _profile(_read_file(path), str(path))
     builtins = builtin_profiles()
     key = text.strip().lower().replace("-", "_")
     if key in builtins:
         return builtins[key]
-    raise ConfigError(f"unknown device profile {text!r}: not a file, nor one of {', '.join(sorted(builtins))}")
+    raise ConfigError(f"unknown device profile {quote_token(text)}: not a file, nor one of {', '.join(sorted(builtins))}")
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -396,7 +469,7 @@ def load_profile(name_or_path: str | Path) -> DeviceProfile:
 
 _LENGTH_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "inch": 25.4, "ft": 304.8, "yd": 914.4,
               "px": 25.4 / 96.0, "pt": 25.4 / 72.0, "pc": 25.4 / 6.0, "": 25.4 / 96.0}
-_XY = re.compile(r"\s*-?\d+\s*,\s*-?\d+\s*")
+_XY = re.compile(r"\s*-?\d{1,9}\s*,\s*-?\d{1,9}\s*")
 _LENGTH_RE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-zA-Z]*)\s*$")
 
 
@@ -404,11 +477,11 @@ def parse_length_mm(value: Any) -> float:
     """A vpype length in mm: a number (CSS pixels, 1/96 in) or a string with a unit (``"297mm"``, ``"11in"``)."""
     if _is_num(value):
         return float(value) * _LENGTH_MM["px"]
-    if isinstance(value, str):
+    if isinstance(value, str) and len(value) <= 100:
         m = _LENGTH_RE.match(value)
-        if m and m[2].lower() in _LENGTH_MM:
+        if m and m[2].lower() in _LENGTH_MM and abs(float(m[1])) <= MAX_VALUE:
             return float(m[1]) * _LENGTH_MM[m[2].lower()]
-    raise ValueError(f"not a length: {value!r}")
+    raise ValueError(f"not a length: {quote_token(value)}")
 
 
 def _is_length(v: Any) -> bool:
@@ -462,8 +535,8 @@ def load_vpype_config(path: str | Path, base: DeviceProfile | str = "hp7475a") -
     data = _read_file(path)
     devices = data.get("device", {})
     top = _Table(data, source, "", None)
-    if not isinstance(devices, dict):
-        raise top.fail("device", "expected a table of devices", devices)
+    if not isinstance(devices, dict) or len(devices) > MAX_PAPERS:
+        raise top.fail("device", f"expected a table of at most {MAX_PAPERS} devices", devices)
     out = {}
     for key, body in devices.items():
         t = _Table(body, source, f"device.{key}", _VPYPE_DEVICE_KEYS)
@@ -473,9 +546,10 @@ def load_vpype_config(path: str | Path, base: DeviceProfile | str = "hp7475a") -
         unit_mm = parse_length_mm(unit)
         if unit_mm <= 0:
             raise t.fail(unit_key, "expected a length > 0", unit)
-        pens = t.get("pen_count", lambda v: _is_int(v) and v >= 1, "an integer >= 1", 1)
+        pens = t.get("pen_count", _pen_count, f"an integer 1..{MAX_PENS}", 1)
         t.get("info", lambda v: isinstance(v, str), "a string", "")  # checked, not kept
-        papers_raw = t.get("paper", lambda v: isinstance(v, list), "an array of [[paper]] tables", [])
+        papers_raw = t.get("paper", lambda v: isinstance(v, list) and len(v) <= MAX_PAPERS,
+                           f"an array of at most {MAX_PAPERS} [[paper]] tables", [])
         papers = {}
         for i, entry in enumerate(papers_raw):
             paper = _vpype_paper(_Table(entry, source, f"device.{key}.paper[{i}]", _VPYPE_PAPER_KEYS))
