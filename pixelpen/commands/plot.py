@@ -1,18 +1,23 @@
-"""The ``plot`` command: an SVG or picture file onto a pen plotter, with progress, pause, pen changes, retries, resume.
+"""The ``plot`` command: an SVG or picture file onto a pen plotter, with layout, progress, pause, pen changes, retries, resume.
 
 ``pixelpen plot FILE --to URL``: FILE is an SVG (millimetres, y down, origin at the page's top left) or a
-pixelpen picture JSON (world coordinates, y up).  The drawing goes through the plotter display's viewing
-pipeline: an SVG page is laid on the paper the way the profile says the paper sits under the pen
-(``origin_mm``: where the device origin lies on the sheet), true size; ``--fit`` instead scales the drawing
-to fill the plottable area.  What falls outside the device limits is clipped with a warning saying how much;
-the rest is optimised for plotting (duplicates removed, ends merged, order) with the device profile's
-motion model, then plotted stroke by stroke with confirmed progress.
+pixelpen picture JSON (world coordinates, y up).  An SVG page is laid on the paper the way the profile says the
+paper sits under the pen (``origin_mm``: where the device origin lies on the sheet), true size.  The layout
+options then act in sheet millimetres, in vpype's order (:class:`Layout`): ``--rotate``, ``--scale`` (or
+``--fit``), ``--center`` in the box (the ``--page`` less ``--margin``, within the plotter's limits).  What falls
+outside the device limits is clipped with a warning saying how much; the rest is optimised for plotting
+(duplicates removed within each layer and pen unless ``--no-dedupe``, ends merged, order) with the device
+profile's motion model, then plotted stroke by stroke with confirmed progress.  ``--dry-run`` prints the
+placement, the length clipped and the time estimate without opening the device; ``--sheet FILE`` draws the
+planned sheet (page, limits, margin box, strokes) into an SVG or PNG.
 
-Interaction: a progress bar on stderr; on a terminal ``p`` or space pauses at the next pen-up and resumes;
-a single-pen plotter asks for each pen ("insert pen 2 (#ff0000) and press Enter").  Ctrl-C leaves the pen
-up and the device idle.  A plot stopped by a link fault is resumed in process up to ``--retries`` times;
-after that the command prints the state file to resume from and exits with status 3.  ``--resume`` continues
-from that state file, refusing a different drawing.  Other errors exit with status 2 and one line.
+Interaction: a progress bar on stderr; on a terminal ``p`` or space asks for a pause ("pause requested -
+waiting for the pen to lift") and the plotter's own word that it holds with the pen up is shown ("paused (pen
+up) - press p or space to continue").  A single-pen plotter asks for each pen ("insert pen 2 (#ff0000) and press
+Enter").  Ctrl-C leaves the pen up and the device idle.  A plot stopped by a link fault is resumed in process up
+to ``--retries`` times; after that the command prints the state file to resume from and exits with status 3.
+``--resume`` continues from that state file, refusing a missing state file and a different drawing (status 2).
+Other errors exit with status 2 and one line.
 
 The state file (default ``FILE.plot-state.json``) is written by the display after every confirmation; beside
 it ``STATE.drawing.npz`` keeps the optimised drawing, so that a resume plots exactly the strokes the first run
@@ -32,6 +37,7 @@ import threading
 import time
 import uuid
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import IO, TYPE_CHECKING
 
@@ -40,11 +46,12 @@ import numpy as np
 from .. import geometry as geo
 from ..display.registry import display_class, open_display
 from ..errors import ConfigError, LinkError, ParseError, PixelpenError
-from ..urls import format_url, parse_url
+from ..urls import PAPER_MM, format_url, parse_size, parse_url, to_mm
 from ..vector.displaylist import DisplayList
 
 if TYPE_CHECKING:  # the drivers, optimiser and file readers are imported when a plot runs, not at start-up
     from ..devices.plotter import PlotInterrupted, PlotProgress, PlotterDisplay
+    from ..vector.optimize import OptimizeReport
 
 log = logging.getLogger(__name__)
 
@@ -60,10 +67,12 @@ DEMO_MODELS = ("hp7475a", "grbl", "axidraw")
 """The simulated plotters ``plot_demo`` draws the reference scene on."""
 PAUSE_KEYS = b"p "
 ENTER_KEYS = b"\r\n"
+SHEET_COLOURS = ("#999999", "#6fa8dc", "#f6b26b")
+"""Colours of the page outline, the plotter's limits and the margin box on a ``--sheet`` drawing."""
 
 
 # ---------------------------------------------------------------------------------------------------------
-# the drawing: file -> display list in device units, clipped, optimised
+# the drawing: file -> display list in device units, laid out on the sheet, clipped, optimised
 
 
 def page_to_world(display: PlotterDisplay) -> np.ndarray:
@@ -92,27 +101,117 @@ def page_to_world(display: PlotterDisplay) -> np.ndarray:
     return np.array([[1.0, 0.0, -ox], [0.0, -1.0, ty], [0.0, 0.0, 1.0]])
 
 
-def _fit_window(display: PlotterDisplay, lo: np.ndarray, hi: np.ndarray) -> None:
-    """Point the display's window at the world box lo..hi (zero extents padded), so the drawing fills the paper."""
-    extent = hi - lo
-    pad = np.where(extent > 0, 0.0, max(float(extent.max()) / 2.0, 1.0))
-    display.window(*(lo - pad), *(hi + pad))
+def sheet_to_device(display: PlotterDisplay) -> np.ndarray:
+    """3x3 matrix from sheet millimetres (the sheet's top left, y down) to device units, through the default window."""
+    return geo.compose(display.pipeline.matrix, page_to_world(display))
 
 
-def _svg_drawing(path: str, display: PlotterDisplay, fit: bool, layers: Sequence[str] | None,
-                 tolerance: float) -> DisplayList:
-    """An SVG as a display list in the display's device units, unclipped."""
+@dataclass(frozen=True)
+class Layout:
+    """How a drawing is laid on the sheet, in this order (vpype's): rotate, scale (or fit), then centre in the box.
+
+    All in sheet millimetres (origin at the sheet's top left, y down the sheet).  ``rotate_deg`` turns the
+    drawing clockwise about the centre of its bounds; ``scale`` scales it about that centre; ``fit`` instead
+    scales it to fill the box; ``center`` (implied by ``fit``) moves the centre of its bounds to the box's
+    centre.  The box is the page less ``margin_mm`` on every side, within the plotter's limits.  The page is
+    ``page`` (a paper name or ``WxH[mm|cm|in]``; a paper name takes the orientation of the plotter's paper)
+    or the plotter's paper; ``orientation`` ``"landscape"`` or ``"portrait"`` turns the page that way.
+    Without ``center`` or ``fit`` the drawing stays where its file puts it (an SVG's page on the sheet).
+    """
+
+    rotate_deg: float = 0.0
+    scale: float = 1.0
+    fit: bool = False
+    center: bool = False
+    margin_mm: float = 0.0
+    page: str | None = None
+    orientation: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.fit and self.scale != 1.0:
+            raise ConfigError("give --scale or --fit, not both (--fit chooses the scale)")
+        if self.margin_mm and not (self.center or self.fit):
+            raise ConfigError("--margin places the drawing only with --center or --fit")
+        if self.orientation not in (None, "landscape", "portrait"):
+            raise ConfigError(f"orientation must be landscape or portrait, got {self.orientation!r}")
+
+    def page_size(self, display: PlotterDisplay) -> tuple[float, float]:
+        """The page in millimetres (width, height) as it lies under the pen."""
+        paper = display.paper.size_mm or display.capabilities.size_mm
+        if self.page is None:
+            w, h = paper
+        else:
+            try:
+                w, h, unit = parse_size(self.page, "mm")
+                w, h = to_mm(w, unit), to_mm(h, unit)
+            except (ValueError, KeyError) as exc:
+                raise ConfigError(f"--page {self.page}: {exc}") from None
+            if not (math.isfinite(w) and math.isfinite(h)):
+                raise ConfigError(f"--page {self.page}: the size must be finite")
+            if self.page.strip().lower() in PAPER_MM and (w > h) != (paper[0] > paper[1]):
+                w, h = h, w
+        if self.orientation is not None and (w > h) != (self.orientation == "landscape") and w != h:
+            w, h = h, w
+        return float(w), float(h)
+
+    def matrix(self, points: np.ndarray, box: tuple[float, float, float, float]) -> tuple[np.ndarray, float]:
+        """The 3x3 layout transform of sheet-millimetre ``points`` into ``box`` and its scale factor."""
+        if not len(points):
+            return np.eye(3), 1.0
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        rot = geo.rotate(math.radians(self.rotate_deg), about=(lo + hi) / 2)
+        turned = geo.apply(rot, points)
+        lo, hi = turned.min(axis=0), turned.max(axis=0)
+        centre = (lo + hi) / 2
+        factor = self.scale
+        if self.fit:
+            extent = hi - lo
+            room = np.array([box[2] - box[0], box[3] - box[1]])
+            ratios = room[extent > 0] / extent[extent > 0]
+            factor = float(ratios.min()) if len(ratios) else 1.0
+        moved = np.array([(box[0] + box[2]) / 2, (box[1] + box[3]) / 2]) if self.center or self.fit else centre
+        return geo.compose(geo.translate(*(moved - centre)), geo.scale(factor, factor, about=centre), rot), factor
+
+
+@dataclass
+class Placement:
+    """Where a drawing lands on the sheet (sheet millimetres) and what the plotter's limits cut off."""
+
+    page_mm: tuple[float, float]
+    limits: tuple[float, float, float, float]
+    box: tuple[float, float, float, float]
+    bounds: tuple[float, float, float, float] | None
+    scale: float
+    rotate_deg: float
+    total_mm: float
+    cut_mm: float
+
+    def lines(self) -> list[str]:
+        """The placement in words, for a dry run."""
+        w, h = self.page_mm
+        x0, y0, x1, y1 = self.limits
+        out = [f"page: {w:g} x {h:g} mm; the plotter reaches x {x0:.1f}..{x1:.1f}, y {y0:.1f}..{y1:.1f} mm "
+               "from the page's top left"]
+        if self.bounds is not None:
+            bx0, by0, bx1, by1 = self.bounds
+            how = [f"rotated {self.rotate_deg:g} deg"] if self.rotate_deg else []
+            how += [f"scaled {self.scale:.4g}x"] if self.scale != 1.0 else []
+            out.append(f"drawing: {bx1 - bx0:.1f} x {by1 - by0:.1f} mm at x {bx0:.1f}..{bx1:.1f}, "
+                       f"y {by0:.1f}..{by1:.1f} mm" + (f" ({', '.join(how)})" if how else ""))
+        share = 100.0 * self.cut_mm / self.total_mm if self.total_mm else 0.0
+        out.append(f"clipped: {self.cut_mm:.1f} mm of {self.total_mm:.1f} mm of lines ({share:.1f} %) "
+                   "lie outside the plotter's limits" if self.cut_mm > CUT_REPORT_MM else "clipped: nothing")
+        return out
+
+
+def _svg_drawing(path: str, display: PlotterDisplay, layers: Sequence[str] | None, tolerance: float) -> DisplayList:
+    """An SVG as a display list in the display's device units, unclipped and as its page lies on the sheet."""
     from ..display.picture import parse_colour
     from ..vector.build import nearest_pen
     from ..vector.svgimport import read_svg
 
     dl = _select_layers(read_svg(path, tolerance=tolerance), layers, path)
-    to_world = page_to_world(display)
-    if fit and len(dl.points):
-        world = geo.apply(to_world, dl.points)
-        _fit_window(display, world.min(axis=0), world.max(axis=0))
-    matrix = geo.compose(display.pipeline.matrix, to_world)
-    points = geo.apply(matrix, dl.points) if len(dl.points) else dl.points
+    points = geo.apply(sheet_to_device(display), dl.points) if len(dl.points) else dl.points
     caps = display.capabilities
     pens, colours = dl.pens, dict(dl.pen_colours)
     if len(caps.pens) > 1:  # a carousel: each SVG colour takes the loaded pen nearest to it
@@ -122,8 +221,8 @@ def _svg_drawing(path: str, display: PlotterDisplay, fit: bool, layers: Sequence
     return DisplayList(points, dl.offsets, pens, dl.layers, dict(dl.layer_names), caps.unit_mm, colours)
 
 
-def _picture_drawing(path: str, display: PlotterDisplay, fit: bool, layers: Sequence[str] | None) -> DisplayList:
-    """A picture file as a display list in the display's device units, unclipped."""
+def _picture_drawing(path: str, display: PlotterDisplay, layers: Sequence[str] | None, tolerance: float) -> DisplayList:
+    """A picture file as a display list in the display's device units, unclipped (its window fills the paper)."""
     from ..display.flatten import flatten_picture
     from ..display.pictfile import load_picture
     from ..vector.build import PenLayerMap, build_display_list
@@ -132,18 +231,10 @@ def _picture_drawing(path: str, display: PlotterDisplay, fit: bool, layers: Sequ
     if picture.window:
         display.window(*picture.window)
     caps = display.capabilities
-
-    def build() -> DisplayList:
-        shapes = flatten_picture(picture, display.pipeline, tolerance=caps.tolerance, unit_mm=caps.unit_mm, clip=False)
-        mapping = PenLayerMap(list(caps.pens) if len(caps.pens) > 1 else None)
-        return build_display_list(shapes, unit_mm=caps.unit_mm, pen_width_mm=display.pen_width_mm, mapping=mapping)
-
-    dl = _select_layers(build(), layers, path)
-    if fit and len(dl.points):
-        corners = display.pipeline.to_world(np.array([dl.points.min(axis=0), dl.points.max(axis=0)]))
-        _fit_window(display, corners.min(axis=0), corners.max(axis=0))
-        dl = _select_layers(build(), layers, path)
-    return dl
+    shapes = flatten_picture(picture, display.pipeline, tolerance=tolerance, unit_mm=caps.unit_mm, clip=False)
+    mapping = PenLayerMap(list(caps.pens) if len(caps.pens) > 1 else None)
+    dl = build_display_list(shapes, unit_mm=caps.unit_mm, pen_width_mm=display.pen_width_mm, mapping=mapping)
+    return _select_layers(dl, layers, path)
 
 
 def _select_layers(dl: DisplayList, wanted: Sequence[str] | None, source: str) -> DisplayList:
@@ -155,7 +246,7 @@ def _select_layers(dl: DisplayList, wanted: Sequence[str] | None, source: str) -
     chosen = set()
     for token in wanted:
         key = token.strip()
-        if key.isdigit() and int(key) in ids:
+        if key.isdecimal() and key.isascii() and int(key) in ids:
             chosen.add(int(key))
         elif key.lower() in by_name:
             chosen.add(by_name[key.lower()])
@@ -165,14 +256,17 @@ def _select_layers(dl: DisplayList, wanted: Sequence[str] | None, source: str) -
     return dl.select(np.isin(dl.layers, sorted(chosen)))
 
 
-def load_drawing(path: str, display: PlotterDisplay, *, fit: bool = False, layers: Sequence[str] | None = None,
-                 tolerance: float = 0.05) -> DisplayList:
-    """Read an SVG or picture JSON into the display's device units (unclipped), laid out true size or fitted."""
+def load_drawing(path: str, display: PlotterDisplay, *, layers: Sequence[str] | None = None,
+                 tolerance: float = 0.05, detail: float = 1.0) -> DisplayList:
+    """Read an SVG or picture JSON into the display's device units (unclipped, true size, as the file places it).
+
+    ``detail`` > 1 flattens curves that much finer (for a drawing that will be scaled up by that factor).
+    """
     suffix = Path(path).suffix.lower()
     if suffix == ".svg":
-        return _svg_drawing(path, display, fit, layers, tolerance)
+        return _svg_drawing(path, display, layers, tolerance / detail)
     if suffix == ".json":
-        return _picture_drawing(path, display, fit, layers)
+        return _picture_drawing(path, display, layers, display.capabilities.tolerance / detail)
     raise ParseError("expected an SVG (.svg) or a pixelpen picture (.json)", source=path, token=suffix or "no suffix")
 
 
@@ -195,30 +289,49 @@ def clip_to_device(dl: DisplayList, size: tuple[float, float]) -> tuple[DisplayL
     return clipped, max(0.0, dl.pen_down_length() - clipped.pen_down_length())
 
 
-def prepare_drawing(path: str, display: PlotterDisplay, *, fit: bool = False, layers: Sequence[str] | None = None,
-                    tolerance: float = 0.05) -> DisplayList:
-    """The drawing in device units, clipped to the device (with a warning naming how much was cut)."""
-    dl = load_drawing(path, display, fit=fit, layers=layers, tolerance=tolerance)
-    total_mm = dl.pen_down_length() * dl.unit_mm
+def _rect(points: np.ndarray) -> tuple[float, float, float, float]:
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    return float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1])
+
+
+def prepare_drawing(path: str, display: PlotterDisplay, *, layout: Layout = Layout(),
+                    layers: Sequence[str] | None = None, tolerance: float = 0.05) -> tuple[DisplayList, Placement]:
+    """The drawing in device units, laid out on the sheet and clipped to the device; where it landed."""
+    to_device = sheet_to_device(display)  # before a picture's window changes the display's pipeline
+    to_sheet = geo.invert(to_device)
+    limits = _rect(geo.apply(to_sheet, np.array([[0.0, 0.0], display.capabilities.size])))
+    page = layout.page_size(display)
+    m = layout.margin_mm
+    box = (max(m, limits[0]), max(m, limits[1]), min(page[0] - m, limits[2]), min(page[1] - m, limits[3]))
+    if box[0] >= box[2] or box[1] >= box[3]:
+        raise ConfigError(f"a {page[0]:g} x {page[1]:g} mm page less {m:g} mm margins leaves no room within the "
+                          f"{display.profile.name}'s limits")
+    dl = load_drawing(path, display, layers=layers, tolerance=tolerance)
+    matrix, factor = layout.matrix(geo.apply(to_sheet, dl.points) if len(dl.points) else dl.points, box)
+    if factor > 1.0 + 1e-9:  # scaled up: flatten the curves finer, so they stay within the tolerance on paper
+        dl = load_drawing(path, display, layers=layers, tolerance=tolerance, detail=factor)
+    if len(dl.points) and not np.allclose(matrix, np.eye(3)):
+        dl = replace(dl, points=geo.apply(geo.compose(to_device, matrix, to_sheet), dl.points))
+    total = dl.pen_down_length() * dl.unit_mm
+    bounds = _rect(geo.apply(to_sheet, dl.points)) if len(dl.points) else None
     dl, cut = clip_to_device(dl, display.capabilities.size)
-    cut_mm = cut * dl.unit_mm
-    if cut_mm > CUT_REPORT_MM:
-        log.warning("%s: %.1f mm of %.1f mm of lines (%.1f %%) lie outside the %s's limits and were cut "
-                    "(use --fit to scale the drawing into the paper)",
-                    path, cut_mm, total_mm, 100.0 * cut_mm / total_mm, display.profile.name)
+    placement = Placement(page, limits, box, bounds, factor, layout.rotate_deg, total, cut * dl.unit_mm)
     if not len(dl):
-        raise ConfigError(f"{path}: nothing to plot" + (" inside the plotter's limits" if total_mm else ""))
-    return dl
+        raise ConfigError(f"{path}: nothing to plot" + (" inside the plotter's limits" if total else ""))
+    return dl, placement
 
 
-def optimise_for(dl: DisplayList, display: PlotterDisplay, time_budget: float) -> DisplayList:
-    """Deduplicate, merge ends within MERGE_MM and order the strokes by pen-up time on the display's device."""
-    from ..vector.optimize import optimize
+def optimise_for(dl: DisplayList, display: PlotterDisplay, time_budget: float | None, *,
+                 dedupe: bool = True) -> tuple[DisplayList, OptimizeReport]:
+    """Deduplicate (within each layer and pen), merge ends within MERGE_MM and order the strokes by pen-up time."""
+    from ..vector.optimize import OptimizeReport, optimize
 
     profile = display.profile
     home = np.asarray(profile.home, float) - [display.paper.x_range[0], display.paper.y_range[0]]
-    return optimize(dl, merge=MERGE_MM / dl.unit_mm, home=(float(home[0]), float(home[1])),
-                    time_budget=time_budget, profile=profile)
+    report = OptimizeReport()
+    result = optimize(dl, merge=MERGE_MM / dl.unit_mm, home=(float(home[0]), float(home[1])),
+                      time_budget=time_budget, profile=profile, dedupe=dedupe, report=report)
+    return result, report
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -407,8 +520,8 @@ def plotter_for(url: str, **kwargs: object) -> PlotterDisplay:
     scheme = parsed.target.partition("?")[0] if parsed.scheme == "sim" else parsed.scheme
     cls = display_class(scheme)
     if not issubclass(cls, PlotterDisplay):
-        raise ConfigError(f"{url}: not a pen plotter; 'pixelpen plot' drives plotters (hp7475a:, grbl:, axidraw:, "
-                          "sim:MODEL) - use 'pixelpen draw' for other displays")
+        raise ConfigError(f"{url}: not a pen plotter (hp7475a:, grbl:, axidraw:, sim:MODEL ...); use 'pixelpen draw' "
+                          "for other displays")
     return cls.from_url(parsed, **kwargs)
 
 
@@ -430,20 +543,45 @@ def _save_drawing(path: Path, dl: DisplayList, source_fp: str) -> None:
                           "choose another place with --state FILE") from None
 
 
-def _load_drawing(path: Path, source_fp: str) -> DisplayList:
-    """The drawing a state file's plot planned; ConfigError if it was made from another source drawing."""
+def _load_drawing(path: Path) -> tuple[DisplayList, str]:
+    """The drawing a state file's plot planned and the fingerprint of the source drawing it was made from."""
     try:
         with np.load(path, allow_pickle=False) as data:
-            if str(data["source"]) != source_fp:
-                raise ConfigError(f"{path}: the plot state belongs to another drawing (another file, layers, "
-                                  "placement or plotter); refusing to resume")
             colours = dict(zip(data["pen_numbers"].tolist(), data["pen_colours"].tolist()))
-            return DisplayList(data["points"], data["offsets"], data["pens"], data["layers"],
-                               unit_mm=float(data["unit_mm"]), pen_colours=colours)
+            dl = DisplayList(data["points"], data["offsets"], data["pens"], data["layers"],
+                             unit_mm=float(data["unit_mm"]), pen_colours=colours)
+            return dl, str(data["source"])
     except OSError as exc:
         raise ConfigError(f"nothing to resume: cannot read {path} ({exc.strerror or exc})") from None
     except (KeyError, ValueError) as exc:
         raise ParseError(f"not a pixelpen plot drawing: {exc}", source=str(path)) from None
+
+
+def resumable_drawing(state: Path, source_fp: str) -> DisplayList:
+    """The planned drawing of the interrupted plot recorded in ``state``; ConfigError unless it can resume.
+
+    It refuses a missing state file (a mistyped ``--state``), a drawing missing beside it, and a state made
+    for another drawing (another file, layers, layout or plotter).
+    """
+    from ..devices.plotter import PlotState, fingerprint
+
+    if not state.is_file():
+        raise ConfigError(f"nothing to resume: there is no plot state file {state} (give the --state an "
+                          "interrupted plot printed)")
+    recorded = PlotState.load(state)
+    dl, made_from = _load_drawing(_drawing_file(state))
+    if made_from != source_fp:
+        raise ConfigError(f"{state}: the plot state belongs to another drawing (another file, layers, layout or "
+                          "plotter); refusing to resume")
+    if recorded.fingerprint != fingerprint(dl) or recorded.strokes != len(dl):
+        raise ConfigError(f"{state}: the plot state does not match the drawing saved beside it "
+                          f"({_drawing_file(state).name}); refusing to resume")
+    return dl
+
+
+def _fault_text(failure: PlotInterrupted) -> str:
+    """What went wrong, once: the link's own words when there is a cause."""
+    return str(failure.cause) if failure.cause is not None else str(failure)
 
 
 def _retry(display: PlotterDisplay, first: PlotInterrupted, retries: int, bar: ProgressBar) -> PlotInterrupted | None:
@@ -452,7 +590,7 @@ def _retry(display: PlotterDisplay, first: PlotInterrupted, retries: int, bar: P
 
     failure = first
     for attempt in range(1, retries + 1):
-        bar.message(f"plot interrupted: {failure}; retry {attempt}/{retries}: reconnecting")
+        bar.message(f"retry {attempt}/{retries}: reconnecting")
         try:
             display.resume_after_fault()
             return None
@@ -461,28 +599,120 @@ def _retry(display: PlotterDisplay, first: PlotInterrupted, retries: int, bar: P
         except LinkError as exc:
             failure = PlotInterrupted(f"reconnecting failed: {exc}", resume_from=display.confirmed,
                                       state_file=display.state_file, cause=exc)
+        same = _fault_text(failure) == _fault_text(first)
+        bar.message(f"retry {attempt}/{retries} stopped" + (" the same way" if same else f": {_fault_text(failure)}"))
     return failure
+
+
+class PauseMessages:
+    """The operator's view of a pause: the request at the key, the pause once the device holds with the pen up."""
+
+    def __init__(self, bar: ProgressBar) -> None:
+        self.bar = bar
+
+    def key(self, paused: bool) -> None:
+        """``p`` or space was pressed: a pause was requested or withdrawn."""
+        self.bar.message("pause requested - waiting for the pen to lift" if paused else "continuing")
+
+    def device(self, paused: bool) -> None:
+        """The plotter reports that it holds (pen up) or goes on."""
+        self.bar.message("paused (pen up) - press p or space to continue" if paused else "resumed")
+
+
+def _estimate(dl: DisplayList, display: PlotterDisplay) -> str:
+    from ..vector.motion import estimate_time
+
+    home = np.asarray(display.profile.home, float) - [display.paper.x_range[0], display.paper.y_range[0]]
+    try:
+        t = estimate_time(dl, display.profile, home=(float(home[0]), float(home[1])))
+    except ConfigError as exc:
+        return f"no time estimate ({exc})"
+    return (f"{t.pen_down_mm:.0f} mm pen down, {t.pen_up_mm:.0f} mm pen up, {t.lifts} lifts, "
+            f"{t.pen_changes} pen changes; estimated {_clock_text(t.total)}")
+
+
+def write_sheet(path: str, dl: DisplayList, display: PlotterDisplay, placement: Placement) -> None:
+    """Draw the sheet as it will come out (page, plotter limits, margin box, strokes) into an SVG or PNG."""
+    from ..vector.preview import render_preview
+
+    to_sheet = geo.invert(sheet_to_device(display))
+    strokes = [geo.apply(to_sheet, s) for s in dl.strokes()]
+    pens = dl.pens.tolist()
+    first = max(pens, default=0) + 1
+    w, h = placement.page_mm
+    frames = [((0, 0, w, h), SHEET_COLOURS[0]), (placement.limits, SHEET_COLOURS[1]), (placement.box, SHEET_COLOURS[2])]
+    colours = dict(dl.pen_colours)
+    for k, ((x0, y0, x1, y1), colour) in enumerate(frames):
+        strokes.insert(k, np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]], float))
+        colours[first + k] = colour
+    pens = [first + k for k in range(len(frames))] + pens
+    sheet = DisplayList.from_polylines(strokes, pens=pens, unit_mm=1.0, pen_colours=colours)
+    render_preview(sheet, path, show_travel=False, pen_width_mm=display.pen_width_mm)
+
+
+def _layout(args: argparse.Namespace) -> Layout:
+    orientation = "landscape" if args.landscape else "portrait" if args.portrait else None
+    return Layout(rotate_deg=args.rotate, scale=args.scale, fit=args.fit, center=args.center,
+                  margin_mm=args.margin, page=args.page, orientation=orientation)
+
+
+def _with_state(args: argparse.Namespace) -> tuple[str, Path]:
+    """The plotter URL with the plot's state file as its ``state=`` option, and that file."""
+    parsed = parse_url(args.to)
+    in_url = parsed.options.get("state")
+    if in_url is not None and args.state:
+        raise ConfigError(f"the state file is named twice (--state {args.state} and state={in_url} in the URL); "
+                          "give one")
+    if in_url is not None:
+        return args.to, Path(in_url)
+    state = args.state or args.file + ".plot-state.json"
+    return format_url(parsed.scheme, parsed.target, {**parsed.options, "state": state}), Path(state)
 
 
 def run_plot(args: argparse.Namespace) -> int:
     """Plot FILE on the plotter at --to (see the module docstring); the exit status."""
-    from ..devices.plotter import PlotInterrupted, fingerprint
+    from ..devices.plotter import PlotInterrupted, PositionUnknown, fingerprint
 
+    if args.confirm_position and not args.resume:
+        raise ConfigError("--confirm-position goes with --resume (after a plot stopped without knowing where)")
+    if args.sheet and Path(args.sheet).resolve() == Path(args.file).resolve():
+        raise ConfigError(f"--sheet {args.sheet} would overwrite the drawing; name another file")
     bar = ProgressBar()
-    display = plotter_for(args.to, on_progress=bar)
-    state = Path(args.state) if args.state else display.state_file or Path(args.file + ".plot-state.json")
-    display.state_file = state
-    source = prepare_drawing(args.file, display, fit=args.fit, layers=args.layers, tolerance=args.tolerance)
+    pauses = PauseMessages(bar)
+    url, state = _with_state(args)
+    display = plotter_for(url, on_progress=bar, on_pause=pauses.device)
+    source, placement = prepare_drawing(args.file, display, layout=_layout(args), layers=args.layers,
+                                        tolerance=args.tolerance)
     source_fp = fingerprint(source)
     if args.resume:
-        dl = _load_drawing(_drawing_file(state), source_fp)
+        dl = resumable_drawing(state, source_fp)
+    elif args.optimize:
+        dl, report = optimise_for(source, display, args.optimize_time, dedupe=args.dedupe)
+        for text in report.lines():
+            bar.message(text)
     else:
-        dl = optimise_for(source, display, args.optimize_time) if args.optimize else source
-    keys = _stdin_keys(lambda paused: bar.message(
-        "pause requested: the plotter stops at the next pen-up; press p or space to go on" if paused
-        else "resuming"))
+        dl = source
+    if args.sheet:
+        write_sheet(args.sheet, dl, display, placement)
+    if args.dry_run:
+        print(f"dry run: {args.file} on {args.to} ({display.profile.name}, paper {display.paper.name}); "
+              "nothing was sent")
+        for text in placement.lines():
+            print("  " + text)
+        print(f"  plot: {len(dl)} stroke{'s' * (len(dl) != 1)}; {_estimate(dl, display)}")
+        if args.sheet:
+            print(f"  sheet: {args.sheet}")
+        return 0
+    if placement.cut_mm > CUT_REPORT_MM:
+        log.warning("%s: %.1f mm of %.1f mm of lines (%.1f %%) lie outside the %s's limits and were cut "
+                    "(--fit scales the drawing into the paper; --dry-run shows the placement)",
+                    args.file, placement.cut_mm, placement.total_mm, 100.0 * placement.cut_mm / placement.total_mm,
+                    display.profile.name)
+    if not args.resume and state.is_file():
+        log.warning("%s holds an unfinished plot; plotting from the start (--resume continues it)", state)
+    keys = _stdin_keys(pauses.key)
     display.pause_requested = keys.pause_requested if keys is not None else None
-    hint = f"pixelpen plot {args.file} --to '{args.to}' --state {state} --resume"
+    hint = f"pixelpen plot {args.file} --to '{args.to}'" + (f" --state {args.state}" if args.state else "") + " --resume"
     try:
         with display:
             if not args.resume:
@@ -492,13 +722,21 @@ def run_plot(args: argparse.Namespace) -> int:
                 if not args.resume:  # the display asks from the second pen on: ask for the first one too
                     display.on_pen_change(int(dl.pens[0]))
             try:
-                display.plot(dl, resume=args.resume)
-            except PlotInterrupted as exc:
-                failure = _retry(display, exc, args.retries, bar)
-                if failure is not None:
-                    bar.message(f"pixelpen plot: {failure}")
-                    bar.message(f"resume with: {hint}")
-                    return EXIT_INTERRUPTED
+                try:
+                    display.plot(dl, resume=args.resume, position_confirmed=args.confirm_position)
+                except PlotInterrupted as exc:
+                    bar.message(f"plot interrupted after {exc.resume_from} of {len(dl)} strokes: {_fault_text(exc)}")
+                    failure = _retry(display, exc, args.retries, bar)
+                    if failure is not None:
+                        tries = f" after {args.retries} retries" if args.retries else ""
+                        bar.message(f"pixelpen plot: stopped{tries}; {failure.resume_from} of {len(dl)} strokes "
+                                    f"confirmed on paper; the plot state is in {state}")
+                        bar.message(f"resume with: {hint}")
+                        return EXIT_INTERRUPTED
+            except PositionUnknown as exc:
+                bar.message(f"pixelpen plot: stopped: {exc}")
+                bar.message(f"after checking: {hint} --confirm-position")
+                return EXIT_INTERRUPTED
             bar.end()
             p = display.progress()
     except KeyboardInterrupt:
@@ -549,25 +787,73 @@ def _number(minimum: float, inclusive: bool) -> Callable[[str], float]:
     return convert
 
 
+def _angle(text: str) -> float:
+    return _number(-math.inf, False)(text)
+
+
+PLOT_EPILOG = """\
+layout, in this order (as vpype's rotate, scale, layout):
+  --rotate DEG      turn the drawing DEG degrees clockwise about the centre of its bounds
+  --scale S         scale it by S about that centre (or --fit: fill the box)
+  --center          move it to the centre of the box: the page less --margin, within the plotter's limits
+  --page SIZE       the page (default the plotter's paper); --landscape/--portrait turn it
+Without --center or --fit a drawing stays where its file puts it (an SVG's page top left at the sheet's).
+
+simulated plotters: --to 'sim:MODEL?speed=fast' plots in simulated time; add out=PAPER.png to save the
+paper when the plot ends (--to 'sim:hp7475a?speed=fast&out=paper.png'), id=NAME to reach the device again,
+drop_after=N and the other fault options to rehearse a recovery (docs/testing-with-simulators.md).
+
+defaults for every option, --to included, can be set in the configuration file
+($PIXELPEN_CONFIG, else $XDG_CONFIG_HOME/pixelpen/config.toml or ~/.config/pixelpen/config.toml), e.g.
+  [plot]
+  to = "axidraw:auto"
+  margin = 10
+"""
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``pixelpen plot`` to the ``pixelpen`` parser."""
     p = subparsers.add_parser(
-        "plot", help="plot an SVG or picture file on a pen plotter (progress, pause, pen changes, resume)",
+        "plot", help="plot an SVG or picture file on a pen plotter (layout, progress, pause, pen changes, resume)",
         description="Plot FILE on the plotter at URL. Keys while plotting (on a terminal): p or space pauses at the "
                     "next pen-up and resumes; Ctrl-C stops with the pen up. Exit status: 0 done, 2 error, 3 stopped by "
-                    "a fault (resume with --resume).")
+                    "a fault (resume with --resume).",
+        epilog=PLOT_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", metavar="FILE", help="SVG (millimetres) or pixelpen picture JSON")
     p.add_argument("--to", required=True, metavar="URL", help="plotter URL: hp7475a:/dev/ttyUSB0, grbl:auto, "
-                   "sim:axidraw?speed=fast ...")
+                   "sim:axidraw?speed=fast&out=paper.png ... (default: the configuration file's)")
+    g = p.add_argument_group("layout")
+    g.add_argument("--rotate", type=_angle, default=0.0, metavar="DEG",
+                   help="turn the drawing clockwise by DEG degrees about its centre (first)")
+    g.add_argument("--scale", type=_number(0.0, False), default=1.0, metavar="S",
+                   help="scale the drawing by S about its centre (after --rotate)")
+    g.add_argument("--fit", action=argparse.BooleanOptionalAction, default=False,
+                   help="scale the drawing to fill the box (page less margins, within the limits), centred")
+    g.add_argument("--center", "--centre", action="store_true", help="centre the drawing in the box (last)")
+    g.add_argument("--margin", type=_number(0.0, True), default=0.0, metavar="MM",
+                   help="keep MM millimetres free on every side of the page (with --center or --fit)")
+    g.add_argument("--page", metavar="SIZE", help="page size: a4, a3, letter ... or WxH[mm|cm|in] "
+                   "(default the plotter's paper; a name takes the paper's orientation)")
+    turn = g.add_mutually_exclusive_group()
+    turn.add_argument("--landscape", action="store_true", help="lay the page landscape (wider than high)")
+    turn.add_argument("--portrait", action="store_true", help="lay the page portrait (higher than wide)")
+    p.add_argument("--dry-run", action="store_true",
+                   help="print the placement, what the limits cut and the time estimate; send nothing")
+    p.add_argument("--sheet", metavar="SHEET.svg", help="draw the sheet as planned (page, limits, strokes) into an "
+                   "SVG or PNG file")
     p.add_argument("--optimize", action=argparse.BooleanOptionalAction, default=True,
                    help="remove duplicates, merge ends and order strokes for least pen-up time (default on)")
-    p.add_argument("--optimize-time", type=_number(0.0, True), default=1.0, metavar="S",
-                   help="seconds the optimiser may spend improving the order (default 1)")
-    p.add_argument("--fit", action=argparse.BooleanOptionalAction, default=False,
-                   help="scale the drawing to fill the paper (default: true size, placed as on the page)")
+    p.add_argument("--dedupe", action=argparse.BooleanOptionalAction, default=True,
+                   help="drop a stroke that repeats another of its layer and pen (default on; --no-dedupe keeps "
+                        "repeats, e.g. a line drawn twice to darken it)")
+    p.add_argument("--optimize-time", type=_number(0.0, True), default=None, metavar="S",
+                   help="seconds the optimiser may spend improving the order (default: by the drawing's size)")
     p.add_argument("--layers", nargs="+", metavar="LAYER", help="plot only these layers (numbers or names)")
     p.add_argument("--state", metavar="STATE", help="plot state file for resuming (default FILE.plot-state.json)")
     p.add_argument("--resume", action="store_true", help="continue the plot recorded in the state file")
+    p.add_argument("--confirm-position", action="store_true",
+                   help="with --resume: the plotter was re-homed or the sheet checked; continue from the last "
+                        "confirmed stroke even though the plotter cannot tell where it stopped (may redraw)")
     p.add_argument("--retries", type=_non_negative_int, default=2, metavar="N",
                    help="reconnect and resume up to N times after a link fault (default 2)")
     p.add_argument("--tolerance", type=_number(0.0, False), default=0.05, metavar="MM",

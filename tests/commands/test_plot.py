@@ -222,55 +222,131 @@ def test_errors_are_one_line_and_exit_2(tmp_path, sim, capsys):
     for argv, needle in cases:
         assert run(*argv) == 2, argv
         err = capsys.readouterr().err
-        assert needle in err and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+        errors = [text for text in err.splitlines() if not text.startswith("warning: ")]
+        assert needle in err and "Traceback" not in err and len(errors) == 1, err
 
 
 # ---------------------------------------------------------------------------------------------------------
 # faults, retries, resume, Ctrl-C
 
 
-def ladder(tmp_path, n=12):
-    return svg(tmp_path, "".join(line(10 + 10 * i, 20, 10 + 10 * i, 60) for i in range(n)), name="ladder.svg")
+def ladder(tmp_path, n=12, pitch=10.0):
+    """n vertical 40 mm rungs at x = 10, 10 + pitch, ... mm."""
+    return svg(tmp_path, "".join(line(10 + pitch * i, 20, 10 + pitch * i, 60) for i in range(n)), name="ladder.svg")
 
 
-def test_a_fault_beyond_the_retries_exits_3_and_resume_plots_the_rest(tmp_path, sim, capsys):
+def ink_per_rung(seg, n, pitch):
+    """Pen-down length (mm) on each of the n ladder rungs, from HP-GL segments; and the length drawn elsewhere."""
+    x_mm = seg[:, 0] * HP_UNIT + HP_ORIGIN[0]
+    y_mm = HP_ORIGIN[1] - seg[:, 1::2] * HP_UNIT
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) * HP_UNIT
+    rung = np.rint((x_mm - 10) / pitch).astype(int)
+    on = (np.isclose(seg[:, 0], seg[:, 2]) & np.isclose(x_mm, 10 + pitch * rung, atol=0.05) & (rung >= 0)
+          & (rung < n) & (y_mm >= 20 - 0.05).all(axis=1) & (y_mm <= 60 + 0.05).all(axis=1))
+    return np.bincount(rung[on], weights=length[on], minlength=n), float(length[~on].sum())
+
+
+def test_a_fault_beyond_the_retries_exits_3_and_resume_draws_every_line_exactly_once(tmp_path, sim, capsys):
+    path = ladder(tmp_path, 40, pitch=5)
+    state = tmp_path / "job.json"
+    broken, ident = sim("hp7475a", drop_after=900, buffer=256)
+    assert run(path, "--to", broken, "--retries", "0", "--no-optimize", "--state", str(state)) == 3
+    err = capsys.readouterr().err
+    assert f"--state {state} --resume" in err
+    saved = json.loads(state.read_text())
+    assert saved["strokes"] == 40 and saved["confirmed"] < 40
+    # the same plotter, reached again by its id over a healthy link, is asked where it stopped
+    healthy = f"sim:hp7475a?speed=fast&id={ident}&buffer=256"
+    assert run(path, "--to", healthy, "--no-optimize", "--state", str(state), "--resume") == 0
+    seg, _, _ = named_simulator(ident).segments()
+    rungs, stray = ink_per_rung(seg, 40, 5)
+    # 40 rungs of 40 mm: each drawn once (not twice, not missing), nothing drawn anywhere else
+    np.testing.assert_allclose(rungs, 40.0, atol=0.05)
+    assert stray < 0.05
+    assert not state.exists() and not os.path.exists(f"{state}.drawing.npz")
+
+
+def test_resume_on_a_plotter_that_cannot_say_where_it_stopped_needs_confirmation(tmp_path, sim, capsys):
     path = ladder(tmp_path)
     state = tmp_path / "job.json"
     broken, _ = sim("grbl", drop_after=700)
     assert run(path, "--to", broken, "--retries", "0", "--no-optimize", "--state", str(state)) == 3
-    err = capsys.readouterr().err
-    assert f"--state {state} --resume" in err
     done = json.loads(state.read_text())["confirmed"]
     assert 0 < done < 12
-    url, ident = sim("grbl")
-    assert run(path, "--to", url, "--no-optimize", "--state", str(state), "--resume") == 0
+    url, ident = sim("grbl")  # another (re-homed) plotter: it knows nothing of the job
+    capsys.readouterr()
+    assert run(path, "--to", url, "--no-optimize", "--state", str(state), "--resume") == 3
+    err = capsys.readouterr().err
+    assert "--resume --confirm-position" in err and grbl_strokes(ident) == []
+    assert run(path, "--to", url, "--no-optimize", "--state", str(state), "--resume", "--confirm-position") == 0
     xs = [pts[0, 0] for pts in grbl_strokes(ident)]
-    # the second plotter draws exactly the strokes the first did not confirm, in the drawing's order
+    # confirmed: the plot continues from the first stroke the first plotter did not confirm
     np.testing.assert_allclose(xs, [10 + 10 * i for i in range(done, 12)], atol=0.002)
-    assert not state.exists() and not os.path.exists(f"{state}.drawing.npz")
+    assert not state.exists()
 
 
-def test_resume_refuses_another_drawing(tmp_path, sim, capsys):
+def test_resume_refuses_a_missing_state_file_naming_it(tmp_path, sim, capsys):
+    path = ladder(tmp_path)
+    state = tmp_path / "job.json"
+    broken, _ = sim("grbl", drop_after=700)
+    assert run(path, "--to", broken, "--retries", "0", "--state", str(state)) == 3
+    url, ident = sim("grbl")
+    capsys.readouterr()
+    typo = tmp_path / "jbo.json"
+    assert run(path, "--to", url, "--state", str(typo), "--resume") == 2
+    err = capsys.readouterr().err
+    assert f"no plot state file {typo}" in err and len(err.strip().splitlines()) == 1
+    state.unlink()  # the drawing beside it is still there: still nothing to resume
+    assert run(path, "--to", url, "--state", str(state), "--resume") == 2
+    assert f"no plot state file {state}" in capsys.readouterr().err
+    assert run(path, "--to", url, "--resume") == 2  # the default state file FILE.plot-state.json
+    assert f"no plot state file {path}.plot-state.json" in capsys.readouterr().err
+    with pytest.raises(KeyError):  # the plotter was never even opened
+        named_simulator(ident)
+    assert run(path, "--to", url, "--confirm-position") == 2
+    assert "--confirm-position goes with --resume" in capsys.readouterr().err
+
+
+def test_resume_refuses_another_drawing_in_one_clean_line(tmp_path, sim, capsys):
     state = tmp_path / "job.json"
     broken, _ = sim("grbl", drop_after=700)
     assert run(ladder(tmp_path), "--to", broken, "--retries", "0", "--state", str(state)) == 3
     other = svg(tmp_path, line(10, 20, 50, 20), name="other.svg")
-    url, _ = sim("grbl")
+    url, ident = sim("grbl")
     capsys.readouterr()
     assert run(other, "--to", url, "--state", str(state), "--resume") == 2
-    assert "another drawing" in capsys.readouterr().err
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert err == (f"pixelpen plot: error: {state}: the plot state belongs to another drawing (another file, layers, "
+                   "layout or plotter); refusing to resume")
+    assert run(ladder(tmp_path), "--to", url, "--state", str(state), "--resume", "--rotate", "1") == 2
+    assert "another drawing" in capsys.readouterr().err  # the same file laid out otherwise is another drawing
+    with pytest.raises(KeyError):  # refused before the plotter was opened
+        named_simulator(ident)
+
+
+def test_fault_lines_name_the_fault_once(tmp_path, sim, capsys):
+    path = ladder(tmp_path, 40, pitch=5)
+    broken, _ = sim("hp7475a", drop_after=250, buffer=256)
+    assert run(path, "--to", broken, "--retries", "2", "--no-optimize", "--state", str(tmp_path / "s.json")) == 3
+    err = capsys.readouterr().err
+    ours = "\n".join(text for text in err.splitlines() if not text.startswith("warning: "))
+    # the port URL is in the fault's own words once; the resume line repeats the user's URL, nothing else does
+    assert ours.count("sim://hp7475a?") == 1 and ours.count(broken) == 1, err
+    assert "retry 1/2: reconnecting" in err and "resume with: pixelpen plot" in err
 
 
 def test_retries_reconnect_and_finish_the_plot(tmp_path, sim, capsys):
-    path = ladder(tmp_path, 6)
-    # every reconnection reaches the same plotter (id=) over a link that drops again after 450 bytes,
-    # so the job takes several connections
-    broken, ident = sim("grbl", drop_after=450)
+    path = ladder(tmp_path, 30, pitch=5)
+    # every reconnection reaches the same plotter (id=) over a link that drops again after 700 bytes,
+    # so the job takes several connections; the plotter says where it stopped each time
+    broken, ident = sim("hp7475a", drop_after=700, buffer=256)
     assert run(path, "--to", broken, "--retries", "8", "--no-optimize", "--state", str(tmp_path / "s.json")) == 0
     err = capsys.readouterr().err
-    assert "retry 1/8" in err and "plotted" in err and "6 strokes" in err
-    starts = sorted({round(float(pts[0, 0]), 3) for pts in grbl_strokes(ident) if len(pts) > 1})
-    assert starts == [10.0 + 10 * i for i in range(6)]  # every stroke is on the one sheet
+    assert "retry 1/8" in err and "plotted" in err and "30 strokes" in err
+    seg, _, _ = named_simulator(ident).segments()
+    rungs, stray = ink_per_rung(seg, 30, 5)
+    np.testing.assert_allclose(rungs, 40.0, atol=0.05)  # every stroke once, on the one sheet
+    assert stray < 0.05
 
 
 def test_ctrl_c_leaves_the_pen_up_and_the_device_idle(tmp_path, sim, monkeypatch):
