@@ -55,15 +55,46 @@ def test_return_home_adds_the_last_hop():
     assert s["total"]["pen_up_mm"] == pytest.approx(math.sqrt(65) + 3 + math.hypot(12, 9))
 
 
-def test_per_layer_figures_are_each_layer_plotted_alone():
-    s = plot_stats(drawing(), profile=False, home=(1, 1), return_home=False)
+def test_per_layer_figures_are_each_layers_share_of_the_plot():
+    four = DisplayList.concat([drawing(), DisplayList.from_polylines([np.array([[20, 9], [20, 0]])], pens=1, layers=1)])
+    s = plot_stats(four, profile=False, home=(1, 1), return_home=True)
     ink, red = s["layers"]
+    between, total = s["between_layers"], s["total"]
     assert (ink["id"], ink["name"], red["id"], red["name"]) == (1, "ink", 2, "red")
-    assert ink["strokes"] == 2 and ink["pen_down_mm"] == pytest.approx(9)
-    # from (1,1) to (0,0), then (3,4) to (12,5)
-    assert ink["pen_up_mm"] == pytest.approx(math.sqrt(2) + math.sqrt(82))
-    assert ink["pen_changes"] == 1 and ink["pens"] == [1, 2]
-    assert red["strokes"] == 1 and red["pen_up_mm"] == pytest.approx(math.hypot(9, 1)) and red["pen_changes"] == 0
+    assert ink["strokes"] == 3 and ink["pen_down_mm"] == pytest.approx(18) and ink["pens"] == [1, 2]
+    # inside "ink": only the hop (12,9) -> (20,9) and its pen change 2 -> 1 follow a stroke of the same layer
+    assert ink["pen_up_mm"] == pytest.approx(8) and ink["pen_changes"] == 1
+    assert red["strokes"] == 1 and red["pen_up_mm"] == 0 and red["pen_changes"] == 0
+    # between: home -> (0,0), (3,4) -> (10,0) with the change 1 -> 2, (12,2) -> (12,5), back home from (20,0)
+    assert between["pen_up_mm"] == pytest.approx(math.sqrt(2) + math.sqrt(65) + 3 + math.hypot(19, 1))
+    assert between["pen_changes"] == 1 and between["hops"] == 4
+    for key in ("strokes", "points", "pen_down_mm", "pen_lifts"):
+        assert total[key] == pytest.approx(ink[key] + red[key])
+    for key in ("pen_up_mm", "pen_changes"):
+        assert total[key] == pytest.approx(ink[key] + red[key] + between[key])
+    assert total["pen_up_mm"] == pytest.approx(four.pen_up_length((1, 1), return_home=True))
+    text = format_stats(s)
+    assert "between layers: 1 pen change," in text and f"{between['pen_up_mm']:.1f} mm travel" in text
+
+
+def test_layer_times_add_up_to_the_motion_model_total():
+    profiles = pytest.importorskip("pixelpen.vector.profiles")
+    from pixelpen.vector.motion import estimate_time
+
+    prof = profiles.load_profile("axidraw_v3")
+    dl = DisplayList.concat([drawing(unit_mm=2.0),
+                             DisplayList.from_polylines([np.array([[20, 9], [20, 0]])], pens=1, layers=1)])
+    s = plot_stats(dl, prof, home=(1, 1))
+    whole = estimate_time(dl, prof, home=(1, 1), return_home=True)
+    parts = s["layers"] + [s["between_layers"]]
+    assert sum(p["time"]["total_s"] for p in parts) == pytest.approx(whole.total, rel=1e-9)
+    assert s["total"]["time"]["total_s"] == pytest.approx(whole.total, rel=1e-9)
+    assert s["total"]["time"]["pen_changes_s"] == pytest.approx(whole.pen_swaps)
+    assert s["total"]["pen_up_mm"] == pytest.approx(whole.pen_up_mm)
+    # the one-stroke layer "red": its pen-down time is its own stroke's, and no hop of its own
+    red = s["layers"][1]["time"]
+    alone = estimate_time(dl.select(dl.layers == 2), prof)
+    assert red["pen_down_s"] == pytest.approx(alone.pen_down) and red["pen_up_s"] == 0
 
 
 def test_time_from_a_profile_matches_trapezoid_motion():
