@@ -91,15 +91,20 @@ def test_optimize_passes_options_and_reports_before_after(drawing, tmp_path, cap
 
     fake = types.ModuleType("pixelpen.vector.optimize")
     fake.optimize = fake_optimize
+    fake.OptimizeReport = lambda: types.SimpleNamespace(lines=lambda: ["report line"])
     monkeypatch.setitem(sys.modules, "pixelpen.vector.optimize", fake)
     out = tmp_path / "out.svg"
     argv = ["optimize", str(drawing), "-o", str(out), "--no-reverse", "--merge", "0.1", "--simplify", "0.02",
             "--time-budget", "2.5", "--across-layers"]
     assert run(argv) == 0
+    report = calls.pop("report")
     assert calls == {"merge": 0.1, "reverse": False, "simplify": 0.02, "time_budget": 2.5, "across_layers": True,
-                     "profile": None}
+                     "profile": None, "dedupe": True}
     err = capsys.readouterr().err
-    assert "before" in err and "after" in err and err.count("total") == 2
+    assert "before" in err and "after" in err and err.count("\ntotal ") == 2
+    assert err.rstrip().endswith("report line") and report.lines() == ["report line"]
+    assert run(["optimize", str(drawing), "-o", str(out), "--no-dedupe"]) == 0
+    assert calls["dedupe"] is False and calls["time_budget"] is None  # None: the adaptive budget
     back = read_svg(out)
     assert len(back) == 3
     np.testing.assert_allclose(back.stroke(0), [[30, 40], [0, 0]], rtol=1e-5, atol=1e-9)
@@ -112,6 +117,69 @@ def test_optimize_end_to_end_with_the_real_optimizer(drawing, tmp_path, capsys):
     before, after = read_svg(drawing), read_svg(out)
     assert after.pen_down_length() == pytest.approx(before.pen_down_length(), rel=1e-5)
     assert after.pen_up_length() <= before.pen_up_length() + 1e-6
+
+
+TWICE = """<svg xmlns="http://www.w3.org/2000/svg" xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape"
+ width="100mm" height="50mm" viewBox="0 0 100 50">
+<g inkscape:groupmode="layer" inkscape:label="black" id="a">
+<path d="M 10 10 L 40 10" stroke="black" fill="none"/>
+<path d="M 40 10 L 10 10" stroke="black" fill="none"/>
+<path d="M 10 30 L 20 30" stroke="black" fill="none"/>
+</g>
+<g inkscape:groupmode="layer" inkscape:label="red" id="b">
+<path d="M 10 10 L 40 10" stroke="red" fill="none"/>
+</g>
+</svg>"""
+
+
+def segment_set(dl):
+    """Pen-down segments rounded to 1e-6 mm, each written from its smaller end, as a sorted multiset."""
+    out = []
+    for x0, y0, x1, y1 in np.round(dl.segments() * dl.unit_mm, 6).tolist():
+        out.append((x0, y0, x1, y1) if (x0, y0) <= (x1, y1) else (x1, y1, x0, y0))
+    return sorted(out)
+
+
+def test_optimize_dedupes_within_a_layer_only_and_says_so(tmp_path, capsys):
+    src, out = tmp_path / "twice.svg", tmp_path / "out.svg"
+    src.write_text(TWICE)
+    assert run(["optimize", str(src), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    # the 30 mm line drawn twice in layer "black" goes once; its pass in layer "red" stays
+    assert segment_set(read_svg(out)) == sorted([(10, 10, 40, 10), (10, 10, 40, 10), (10, 30, 20, 30)])
+    line = [ln for ln in err.splitlines() if ln.startswith("removed")]
+    assert len(line) == 1 and "1 duplicate stroke (30.0 mm)" in line[0] and "'black'" in line[0]
+    assert run(["optimize", str(src), "-o", str(out), "--no-dedupe"]) == 0
+    assert segment_set(read_svg(out)) == segment_set(read_svg(src))
+    assert "duplicate removal off" in capsys.readouterr().err
+
+
+def test_preview_on_a_device_shows_what_is_cut(tmp_path, capsys):
+    # a line from the sheet's left edge inward: the part left of the plotter's limits is cut
+    src, out = tmp_path / "edge.svg", tmp_path / "sheet.svg"
+    src.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="297mm" height="210mm" viewBox="0 0 297 210">'
+                   '<path d="M 0 100 L 50 100" stroke="black" fill="none"/></svg>')
+    assert run(["preview", str(src), "-o", str(out), "--device", "hp7475a", "--no-travel"]) == 0
+    err = capsys.readouterr().err
+    first = err.splitlines()[0]
+    x0 = float(first.split("reaches x ")[1].split("..")[0])
+    assert first.startswith("sheet: 297 x 210 mm (paper a4 of hp7475a") and 0 < x0 < 50
+    assert f"cut: {x0:.1f} mm of 50.0 mm" in err
+    import xml.etree.ElementTree as ET
+
+    paths = ET.parse(out).getroot().findall(".//{http://www.w3.org/2000/svg}path")
+    cut = [p for p in paths if p.get("class") == "cut"]
+    frames = [p for p in paths if p.get("class") == "frame"]
+    drawn = [p for p in paths if p.get("class") is None]
+    assert len(cut) == 1 and len(frames) == 2 and len(drawn) == 1
+    pts = lambda p: np.array([[float(v) for v in xy.split(",")] for xy in p.get("d")[1:].split()])  # noqa: E731
+    np.testing.assert_allclose(pts(cut[0]), [[0, 100], [x0, 100]], atol=0.05)
+    np.testing.assert_allclose(sorted(pts(drawn[0]).tolist()), [[x0, 100], [50, 100]], atol=0.05)
+    np.testing.assert_allclose(pts(frames[0])[[0, 2]], [[0, 0], [297, 210]])
+    assert run(["preview", str(src), "-o", str(out), "--device", "axidraw_v3"]) == 0
+    assert "cut: nothing" in capsys.readouterr().err
+    assert run(["preview", str(src), "-o", str(out), "--paper", "a4"]) == 2
+    assert "--paper needs --device" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("argv_tail, message", [

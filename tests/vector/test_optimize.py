@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -9,7 +11,9 @@ from hypothesis import strategies as st
 
 from pixelpen.vector.displaylist import DisplayList
 from pixelpen.vector.motion import estimate_time
-from pixelpen.vector.optimize import optimize
+from pixelpen.vector.dedupe import DuplicateRemoval, remove_duplicates
+from pixelpen.vector.optimize import OptimizeReport, optimize
+from pixelpen.vector.order import auto_budget
 from pixelpen.vector.profiles import load_profile
 
 
@@ -57,6 +61,55 @@ def test_ordering_pipeline_keeps_geometry_and_never_adds_travel(dl, reverse, hom
     out = optimize(dl, dedupe=False, reverse=reverse, home=home, time_budget=0.05)
     assert canonical_segments(out) == canonical_segments(dl) and dots(out) == dots(dl)
     assert out.pen_up_length(home) <= grouped(dl).pen_up_length(home) + 1e-9
+
+
+@settings(max_examples=40, deadline=None)
+@given(display_lists(max_strokes=10, pens=(1, 2), layers=(0, 1)))
+def test_dedupe_works_within_each_layer_and_pen_only(dl):
+    doubled = DisplayList.concat([dl, dl])  # every stroke twice, in the same layer and pen
+    swapped = dataclasses.replace(dl, pens=3 - dl.pens)  # and once more in the other pen
+    both = DisplayList.concat([doubled, swapped])
+    report = OptimizeReport()
+    out = optimize(both, time_budget=0.02, report=report)
+    for layer in (0, 1):
+        for pen in (1, 2):
+            mine = (both.layers == layer) & (both.pens == pen)
+            got = out.select((out.layers == layer) & (out.pens == pen))
+            assert canonical_segments(got) == canonical_segments(remove_duplicates(both.select(mine)))
+    assert out.pen_down_length() == pytest.approx(both.pen_down_length() - sum(r.length for r in report.duplicates))
+    # a copy of one pen's strokes in another pen survives whole: both pens draw the same ink
+    one = dataclasses.replace(dl, pens=np.ones(len(dl), np.int32))
+    out = optimize(DisplayList.concat([one, one, dataclasses.replace(one, pens=one.pens + 1)]), time_budget=0.02)
+    pen1, pen2 = out.select(out.pens == 1), out.select(out.pens == 2)
+    assert canonical_segments(pen1) == canonical_segments(pen2) == canonical_segments(remove_duplicates(one))
+    assert dots(pen1) == dots(pen2)
+
+
+def test_report_counts_and_lines():
+    dl = DisplayList.from_polylines(
+        [[(0, 0), (10, 0)], [(10, 0), (0, 0)], [(0, 5), (10, 5)], [(50, 50), (50.5, 50)], [(0, 5), (10, 5)]],
+        pens=[2, 2, 2, 2, 1], layers=[1, 1, 1, 1, 1], layer_names={1: "red"})
+    report = OptimizeReport()
+    out = optimize(dl, min_length=1.0, time_budget=0.01, report=report)
+    assert report.duplicates == [DuplicateRemoval(1, 2, 1, 0, pytest.approx(10.0))]
+    assert (report.strokes_in, report.short_strokes_dropped, report.strokes_out) == (5, 1, 3) == (5, 1, len(out))
+    assert report.short_length_dropped == pytest.approx(0.5)
+    assert report.pen_up_after == pytest.approx(out.pen_up_length()) and report.order_budget_s == 0.01
+    lines = report.lines()
+    assert lines[0] == "removed 1 duplicate stroke (10.0 mm) in layer 1 'red', pen 2"
+    assert "dropped 1 strokes shorter than the minimum length (0.5 mm of ink)" in lines
+    cut = OptimizeReport(unit_mm=0.5, duplicates=[DuplicateRemoval(0, 1, 3, 2, 25.0)])
+    assert cut.lines()[0] == "removed 3 duplicate strokes and the retraced part of 2 strokes (12.5 mm) in layer 0, pen 1"
+    assert "duplicate removal off" in OptimizeReport(dedupe=False).lines()[0]
+
+
+def test_adaptive_budget_scales_with_the_input():
+    assert auto_budget(0) > 0
+    assert auto_budget(1_000) < auto_budget(10_000) < auto_budget(100_000) <= 60.0
+    assert auto_budget(100_000) / auto_budget(10_000) > 10  # a little faster than linear beyond 10k strokes
+    report = OptimizeReport()
+    optimize(DisplayList.from_polylines([[(0, 0), (1, 1)], [(5, 5), (6, 6)]]), report=report)
+    assert report.order_budget_s == auto_budget(2)
 
 
 def test_pipeline_steps_in_order():
