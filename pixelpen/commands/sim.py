@@ -2,7 +2,8 @@
 
 ``pixelpen sim MODEL --pty`` starts the simulator behind a pseudo-terminal and prints its path (the first
 line on stdout), so any plotting program can open it like a serial port; Ctrl-C stops it and the paper is
-written.  ``pixelpen sim MODEL --replay FILE`` feeds a raw byte file (an HP-GL file, a G-code file, EBB
+written (SIGTERM stops it the same way).  The line runs at the device's own speed unless ``baud`` says
+otherwise: an EBB is USB CDC (no baud pacing), GRBL 115200, HP plotters 9600.  ``pixelpen sim MODEL --replay FILE`` feeds a raw byte file (an HP-GL file, a G-code file, EBB
 commands) to the simulator through a :class:`~pixelpen.sim.transport.SimPort` at the line's speed, in
 simulated time by default, then writes what the paper shows and prints the device's errors and counters.
 
@@ -20,15 +21,16 @@ from __future__ import annotations
 
 import argparse
 import logging
+import signal
 import sys
 import threading
-from dataclasses import asdict, dataclass, field, is_dataclass
+from dataclasses import asdict, dataclass, field, is_dataclass, replace
 from pathlib import Path
 
 from ..clock import REAL_CLOCK, SimulatedClock
 from ..errors import ConfigError, PixelpenError, URLError
 from ..sim.base import WireDevice, create_simulator, simulator_models
-from ..sim.transport import LinkStats, SimPort, TransportOptions, split_options
+from ..sim.transport import LinkStats, SimPort, TransportOptions, line_baud, split_options
 
 log = logging.getLogger(__name__)
 
@@ -116,7 +118,8 @@ def open_simulator(model: str, options: dict[str, str], speed: str) -> tuple[Wir
         raise URLError("give the speed with --speed real|fast, not as an option")
     transport, device_options = split_options(options, f"sim {model}")
     clock = SimulatedClock() if speed == "fast" else REAL_CLOCK
-    return create_simulator(model, clock=clock, **device_options), transport
+    device = create_simulator(model, clock=clock, **device_options)
+    return device, replace(transport, baud=line_baud(device, transport.baud))
 
 
 def device_errors(device: WireDevice, replies: bytes) -> list[str]:
@@ -153,22 +156,31 @@ def replay(device: WireDevice, data: bytes, transport: TransportOptions) -> Repl
     return ReplayResult(len(data), clock.now() - start, stats, bytes(replies), device_errors(device, bytes(replies)))
 
 
+def _stop_on_sigterm(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
+
+
 def run_pty(device: WireDevice, transport: TransportOptions, stop: threading.Event | None = None) -> None:
-    """Serve ``device`` on a pty (path printed on stdout) until Ctrl-C or ``stop`` is set."""
+    """Serve ``device`` on a pty (path printed on stdout) until Ctrl-C, SIGTERM or ``stop`` is set."""
     from ..sim.pty import PtyBridge
 
     with PtyBridge(device, flow=transport.flow, baud=transport.baud, faults=transport.faults,
-                   tx_buffer=transport.tx_buffer, clock=device.clock) as bridge:
+                   tx_buffer=transport.tx_buffer, clock=device.clock, out=transport.out) as bridge:
         print(bridge.path, flush=True)
-        print(f"pixelpen sim: {device.model} on {bridge.path} ({transport.baud} baud, flow {transport.flow}); "
+        print(f"pixelpen sim: {device.model} on {bridge.path} ({bridge.port.baud} baud, flow {transport.flow}); "
               "press Ctrl-C to stop", file=sys.stderr, flush=True)
         waiter = stop if stop is not None else threading.Event()
+        main = threading.current_thread() is threading.main_thread()
+        previous = signal.signal(signal.SIGTERM, _stop_on_sigterm) if main else None
         try:
             while not waiter.wait(0.2):
                 if not bridge.running:
                     raise PixelpenError(f"the pty bridge stopped: {bridge.error}")
         except KeyboardInterrupt:
             print("pixelpen sim: stopped", file=sys.stderr)
+        finally:
+            if main:
+                signal.signal(signal.SIGTERM, previous)
 
 
 def _counters(device: WireDevice) -> str:
@@ -228,7 +240,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--pty", action="store_true", help="serve the device on a pty until Ctrl-C; prints the path")
     p.add_argument("--replay", metavar="FILE", help="feed this raw byte file (HP-GL, G-code, EBB commands)")
     p.add_argument("-o", "--output", default="paper.png", metavar="PAPER.png",
-                   help="image of the paper to write at the end (default paper.png)")
+                   help="paper to write at the end: PNG, or SVG by the extension (default paper.png)")
     p.add_argument("--speed", choices=("real", "fast"), default=None,
                    help="real time, or simulated time (default: fast for --replay, real for --pty)")
     p.add_argument("--option", action="append", metavar="KEY=VALUE",

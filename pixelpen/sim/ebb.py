@@ -160,6 +160,9 @@ class _Ports:
 class EbbSimulator:
     """An EiBotBoard (AxiDraw) seen from its USB serial port (WireDevice)."""
 
+    default_baud = 12_000_000
+    """USB CDC ignores the line coding: bytes move at USB full speed (12 Mbit/s), not at a baud rate."""
+
     def __init__(
         self,
         clock: Clock | None = None,

@@ -5,19 +5,26 @@ Written from gnea/grbl's documentation (``doc/markdown/interface.md``, ``command
 ``plotters.md`` §3.  Model "grbl"; URL options:
 
 =====================  ==========================================================================
-``size=WxH``           travel in mm (default 300x200): sets $130/$131 and the paper
+``size=WxH``           travel in mm: sets $130/$131 and the paper
 ``pen=servo``          pen on a servo spindle: down while M3/M4 is on with an output S >= ``pen_threshold``
 ``pen=servo-inverted`` servo mounted the other way: down while M3/M4 outputs less than ``pen_threshold``
                        (plotters.md: "S50 down / S500 up").  In both servo modes M5 (no pulses) is up
 ``pen=z``              pen on the Z axis: down wherever the work Z is <= 0, once a move has driven Z
                        (GRBL boots assuming Z = 0, but the pen of a parked plotter is up: until the
                        first Z motion after power-up or a reboot it stays up, so nothing inks at home)
-``pen_threshold=N``    servo output dividing up from down, default 500 (half of $30=1000)
+``pen_threshold=N``    servo output dividing up from down
 ``rx_buffer=N``        serial RX ring buffer in bytes, default 128 (GRBL's RX_BUFFER_SIZE)
 ``planner=N``          BLOCK_BUFFER_SIZE, default 16 (15 usable blocks, as ``Bf:15,128`` shows)
 ``pen_colour=C``       ink colour for the rendered paper (name or #rrggbb), default black
-``pen_width=MM``       line width for the rendered paper, default 0.3
+``pen_width=MM``       line width for the rendered paper
 =====================  ==========================================================================
+
+Defaults are the machine of the built-in ``grbl`` profile, the one the GRBL driver plots for
+(:func:`machine_defaults`): 297x210 mm (its A4 paper), ``servo-inverted`` with threshold 275 (its
+``M3 S500`` up / ``M3 S50`` down), RX buffer 128, 115200 baud for a pty or replay.  A bare
+``GrblSimulator()`` keeps the firmware-neutral 300x200 mm, ``servo``, threshold 500 (half of $30=1000).
+An Arduino reboots when a host opens its port (DTR auto-reset): the pty bridge reboots the
+simulator then, so the program sees the banner (``resets_on_dtr``).
 
 The firmware modelled is a default 1.1h build with HOMING_FORCE_SET_ORIGIN (``[OPT:VZ,15,128]``):
 $23=3 homes X and Y to their minimum, so machine space is X∈[0,$130], Y∈[0,$131] (y up on the paper)
@@ -31,6 +38,7 @@ from __future__ import annotations
 
 import logging
 import math
+import re
 from collections import deque
 from collections.abc import Generator, Iterator
 from dataclasses import dataclass
@@ -67,6 +75,8 @@ __all__ = ["DEFAULT_SETTINGS", "WELCOME", "GrblSimulator"]
 
 log = logging.getLogger(__name__)
 
+PROFILE = "grbl"
+"""The built-in profile whose machine ``sim:grbl`` simulates by default (pixelpen/data/profiles/grbl.toml)."""
 VERSION = "1.1h"
 BUILD = "20190830"
 WELCOME = b"\r\nGrbl " + VERSION.encode() + b" ['$' for help]\r\n"
@@ -121,6 +131,10 @@ class GrblSimulator:
     """A GRBL 1.1h controller driving a pen plotter, seen from its serial port (WireDevice)."""
 
     model = "grbl"
+    default_baud = 115200
+    """GRBL 1.1's BAUD_RATE (the line speed a pty or replay uses unless told otherwise)."""
+    resets_on_dtr = True
+    """An Arduino reboots when the host opens its port (DTR through the auto-reset capacitor): a banner."""
 
     def __init__(
         self,
@@ -1253,23 +1267,66 @@ def _colour(text: str) -> str:
     return text
 
 
+_S_WORD = re.compile(r"S\s*([0-9]+(?:\.[0-9]*)?)", re.IGNORECASE)
+
+
+def _servo_output(command: str | None) -> float | None:
+    """The spindle output a pen command sets: its S word under M3/M4, 0 for M5 (None: no servo command)."""
+    if not command:
+        return None
+    if re.search(r"M0*5(?![0-9])", command, re.IGNORECASE):
+        return 0.0
+    match = _S_WORD.search(command)
+    return float(match.group(1)) if match else None
+
+
+def machine_defaults(profile: str = PROFILE) -> dict[str, object]:
+    """The simulated machine a GRBL profile describes: travel (its default paper), pen, RX buffer, line speed.
+
+    The pen: the profile's ``[servo]`` up/down commands give the S outputs; the pen is ``servo`` when down
+    is the larger, ``servo-inverted`` when it is the smaller, with the threshold half-way between.
+    """
+    from ..vector.profiles import load_profile
+
+    prof = load_profile(profile)
+    paper = prof.paper(None)
+    size = ((paper.x_range[1] - paper.x_range[0]) * prof.unit_mm, (paper.y_range[1] - paper.y_range[0]) * prof.unit_mm)
+    up = _servo_output(prof.servo.up_command if prof.servo else None)
+    down = _servo_output(prof.servo.down_command if prof.servo else None)
+    out: dict[str, object] = {"size": size, "pen": "servo", "pen_threshold": 500.0}
+    if up is not None and down is not None and up != down:
+        out["pen"] = "servo" if down > up else "servo-inverted"
+        out["pen_threshold"] = (up + down) / 2.0
+    if prof.link is not None:
+        out["baud"] = prof.link.baudrate
+        if prof.link.buffer_bytes:
+            out["rx_buffer"] = prof.link.buffer_bytes
+    if prof.pen_colours:
+        out["pen_colour"] = prof.pen_colours[min(prof.pen_colours)]
+    out["pen_width"] = prof.pen_width_mm
+    return out
+
+
 def create(clock: Clock | None = None, **options: str) -> GrblSimulator:
-    """Simulator factory for ``sim:grbl?...`` URLs: validates the options (see the module docstring)."""
+    """Simulator factory for ``sim:grbl?...`` URLs: the grbl profile's machine unless options say otherwise."""
+    machine = machine_defaults()
     values = read_options("grbl", options, {
-        "size": (_size, (300.0, 200.0)),
-        "pen": (_pen_kind, "servo"),
-        "pen_threshold": (_non_negative, 500.0),
-        "rx_buffer": (_positive_int, 128),
+        "size": (_size, machine["size"]),
+        "pen": (_pen_kind, machine["pen"]),
+        "pen_threshold": (_non_negative, machine["pen_threshold"]),
+        "rx_buffer": (_positive_int, machine.get("rx_buffer", 128)),
         "planner": (_positive_int, 16),
-        "pen_colour": (_colour, "black"),
-        "pen_width": (_non_negative, 0.3),
+        "pen_colour": (_colour, machine.get("pen_colour", "black")),
+        "pen_width": (_non_negative, machine["pen_width"]),
     })
     try:
-        return GrblSimulator(clock, **values)  # type: ignore[arg-type]
+        device = GrblSimulator(clock, **values)  # type: ignore[arg-type]
     except ConfigError as exc:
         from ..errors import URLError
 
         raise URLError(f"sim:grbl: {exc}") from None
+    device.default_baud = int(machine.get("baud", GrblSimulator.default_baud))  # type: ignore[arg-type]
+    return device
 
 
 register_simulator("grbl", create)

@@ -52,6 +52,7 @@ from ..vector.displaylist import DisplayList
 from ..vector.font import text_extent, text_strokes
 from ..vector.hatch import hatch
 from .base import register_simulator
+from .plotter import paper_format, write_paper_svg
 from .hpgl_parse import (
     ETX,
     DeviceControl,
@@ -742,8 +743,22 @@ class HPGLPlotter:
         return canvas
 
     def save_paper(self, path: str | Path, dpi: float = 100.0) -> None:
-        """Render the sheet (``paper_image``) and save it to ``path`` as PNG."""
-        self.paper_image(dpi).save(path)
+        """Write the sheet to ``path``: a PNG (``paper_image`` at ``dpi``) or a true-size SVG, by the extension."""
+        if paper_format(path) == "png":
+            self.paper_image(dpi).save(path)
+            return
+        dl = self.display_list()
+        u = self.spec.unit_mm
+        ox, oy = self._sheet_origin_mm()
+        page_w, page_h = self.paper.page_mm
+        strokes = [
+            (int(pen), np.column_stack([ox + pts[:, 0] * u, page_h - (oy + pts[:, 1] * u)]))
+            for pen, pts in ((dl.pens[i], dl.stroke(i)) for i in range(len(dl)))
+            if int(pen) in self.pen_colours  # an empty stall plots dry
+        ]
+        widths = self.segments()[2]
+        write_paper_svg(path, strokes, (page_w, page_h), self.pen_colours,
+                        float(np.median(widths)) if len(widths) else 0.3)
 
     def _sheet_origin_mm(self) -> tuple[float, float]:
         if self.paper.origin_mm is not None:

@@ -7,18 +7,18 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Final, TypeVar
 
 import numpy as np
 
-from ..display.picture import parse_colour
+from ..display.picture import colour_hex, parse_colour
 from ..errors import ConfigError, URLError
 from ..vector.displaylist import DisplayList
 
 if TYPE_CHECKING:
     from ..raster.canvas import Canvas
 
-__all__ = ["Paper", "WireStats", "clamp_path", "read_options"]
+__all__ = ["PAPER_FORMATS", "Paper", "WireStats", "clamp_path", "paper_format", "read_options", "write_paper_svg"]
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
@@ -58,6 +58,35 @@ def clamp_path(p0: np.ndarray, p1: np.ndarray, lo: np.ndarray, hi: np.ndarray) -
     keep[1:] = np.any(np.abs(np.diff(pts, axis=0)) > 1e-12, axis=1)
     keep[-1] = True
     return pts[keep] if keep.sum() >= 2 else np.vstack([pts[0], pts[-1]])
+
+
+PAPER_FORMATS: Final = {".png": "png", ".svg": "svg"}
+"""File extensions a simulator's paper is saved in (case-insensitive)."""
+
+
+def paper_format(path: str | Path) -> str:
+    """``png`` or ``svg`` from the extension of ``path``; ConfigError naming the path otherwise."""
+    fmt = PAPER_FORMATS.get(Path(path).suffix.lower())
+    if fmt is None:
+        raise ConfigError(f"paper file {str(path)!r}: the name must end in .png or .svg")
+    return fmt
+
+
+def write_paper_svg(
+    path: str | Path,
+    strokes: list[tuple[int, np.ndarray]],
+    page_mm: tuple[float, float],
+    pen_colours: Mapping[int, str],
+    pen_width_mm: float,
+) -> None:
+    """Write ``strokes`` ((pen, (N, 2) mm, y down from the top-left page corner)) as a true-size SVG page."""
+    from ..vector.svgimport import write_svg
+
+    dl = DisplayList.from_polylines(
+        [pts for _, pts in strokes], pens=[pen for pen, _ in strokes] or 1, unit_mm=1.0,
+        pen_colours={k: colour_hex(parse_colour(v)) for k, v in pen_colours.items()},
+    )
+    write_svg(dl, str(path), size_mm=page_mm, pen_width_mm=pen_width_mm)
 
 
 class Paper:
@@ -165,8 +194,14 @@ class Paper:
         return canvas
 
     def save_paper(self, path: str | Path, dpi: float = 96.0) -> None:
-        """Render the sheet and write it to ``path`` (the format follows the file extension)."""
-        self.paper_image(dpi).save(path)
+        """Write the sheet to ``path``: a PNG rendered at ``dpi``, or a true-size SVG (by the extension)."""
+        if paper_format(path) == "png":
+            self.paper_image(dpi).save(path)
+            return
+        flip = np.array([1.0, -1.0]) if not self.y_down else np.ones(2)
+        shift = np.array([0.0, self.height_mm]) if not self.y_down else np.zeros(2)
+        strokes = [(pen, pts * flip + shift) for pen, pts in self.strokes()]
+        write_paper_svg(path, strokes, (self.width_mm, self.height_mm), self.pen_colours, self.pen_width_mm)
 
     def clear(self) -> None:
         """Put in a fresh sheet."""

@@ -12,6 +12,12 @@ a port with handshake; the program needs no flow-control setting of its own.  Wi
 SimulatedClock the bridge lets simulated time jump to the device's next event whenever the program
 is quiet, so a simulated plot finishes as fast as the CPU allows.  ``drop_after`` closes the
 master side: the program sees the hang-up (EIO) an unplugged USB adapter causes.
+
+The bridge keeps no slave descriptor of its own, so it sees the program open and close the port (the
+master reports a hang-up while no slave is open).  While nobody has the port open the device's output
+goes nowhere, as on a cable with nothing at its end.  Each open raises DTR: a device with
+``resets_on_dtr`` (GRBL on an Arduino) reboots and greets the program with its banner.  Each close
+saves the paper to ``out`` when one was given.
 """
 
 from __future__ import annotations
@@ -40,12 +46,13 @@ class PtyBridge:
         device: WireDevice,
         *,
         flow: str = "none",
-        baud: int = 9600,
+        baud: int | None = None,
         faults: Faults | None = None,
         tx_buffer: int = 4096,
         clock: Clock | None = None,
+        out: str | None = None,
     ) -> None:
-        self.port = SimPort(device, baud=baud, flow=flow, faults=faults, tx_buffer=tx_buffer, clock=clock)
+        self.port = SimPort(device, baud=baud, flow=flow, faults=faults, tx_buffer=tx_buffer, clock=clock, out=out)
         self.device = device
         self.error: BaseException | None = None
         """The exception that stopped the bridge thread, if any (Disconnected after ``drop_after``)."""
@@ -60,12 +67,23 @@ class PtyBridge:
         os.set_blocking(self._master, False)
         self.path = os.ttyname(self._slave)
         """Path of the slave side, for the program to open."""
+        os.close(self._slave)  # the program's open and close show as the master's hang-up clearing and returning
+        self._slave = -1
+        self.opens = 0
+        """How many times a program opened the port."""
+        self._host_open = False
         self._wake_r, self._wake_w = os.pipe()
         self._stop = threading.Event()
         self._fd_lock = threading.Lock()
         self._closed = False
         self._thread = threading.Thread(target=self._run, name=f"PtyBridge {self.path}", daemon=True)
         self._thread.start()
+
+    @property
+    def program_connected(self) -> bool:
+        """True while the bridge sees a program holding the port open (a close and reopen within one pass,
+        about 50 ms, count as one session)."""
+        return self._host_open
 
     @property
     def running(self) -> bool:
@@ -113,13 +131,31 @@ class PtyBridge:
             _log.error("%s: bridge stopped: %s: %s; hanging up the pty", self.path, type(exc).__name__, exc)
             self._close_pty()
 
+    def _program_present(self) -> bool:
+        """Whether a program has the slave open now; notes opens (DTR reset) and closes (paper saved)."""
+        hangup = select.poll()
+        hangup.register(self._master, select.POLLHUP)
+        present = not hangup.poll(0)
+        if present and not self._host_open:
+            self.opens += 1
+            self.port.dtr_reset()
+        elif self._host_open and not present:
+            self.port.save_out()
+        self._host_open = present
+        return present
+
     def _pump(self) -> None:
         port, clock = self.port, self.port.clock
         simulated = isinstance(clock, SimulatedClock)
         to_program = bytearray()
         fast_forward = False  # simulated clock: the program has been quiet, so jump from event to event
         while not self._stop.is_set():
+            present = self._program_present()
             incoming = port.read(65536, 0.0)
+            if not present:  # nobody at the end of the cable: what the device says is lost
+                to_program.clear()
+                self._stop.wait(_MAX_IDLE)
+                continue
             if incoming:
                 to_program += incoming
                 fast_forward = False  # give the program real time to react to what it gets
@@ -141,7 +177,7 @@ class PtyBridge:
             if self._master in readable:
                 try:
                     data = os.read(self._master, space)
-                except BlockingIOError:
+                except (BlockingIOError, OSError):  # EIO: the program closed the port meanwhile
                     data = b""
                 if data:
                     port.write(data, 0.0)

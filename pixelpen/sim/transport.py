@@ -37,7 +37,12 @@ option goes to the simulator factory):
 ``power_loss_after=N``    ``device.inject("power-loss")`` once N host bytes were delivered
 ``paper_lever_after=N``   ``device.inject("paper-lever")`` once N host bytes were delivered
 ``pause_after=N``         ``device.inject("pause-button")`` once N host bytes were delivered
+``out=FILE``              save the device's paper to FILE (``.png`` or ``.svg``) when the host closes
+                          the port (as it stands then: a plot still in the device's buffer is not waited for)
 ========================  =====================================================================
+
+The default ``baud`` is the device's own line: its ``default_baud`` attribute when it has one (an EBB is
+USB CDC and ignores the line coding: 12 Mbit/s, USB full speed; GRBL 115200), else 9600.
 
 Counters (:meth:`SimPort.stats`): bytes each way, seconds each line was busy, seconds the
 transmitter had data but was held off, and the elapsed time, from which a benchmark computes link
@@ -52,8 +57,9 @@ from dataclasses import dataclass, field
 from typing import Callable, Final, Mapping
 
 from ..clock import REAL_CLOCK, Clock, SimulatedClock
-from ..errors import Disconnected, LinkError, LinkTimeout, URLError
+from ..errors import ConfigError, Disconnected, LinkError, LinkTimeout, URLError
 from .base import WireDevice, create_simulator
+from .plotter import paper_format
 
 XON: Final = 0x11
 XOFF: Final = 0x13
@@ -94,18 +100,28 @@ class Faults:
 class TransportOptions:
     """The transport half of a ``sim://`` URL's options."""
 
-    baud: int = 9600
+    baud: int | None = None
+    """None: the device's ``default_baud`` (see :func:`line_baud`)."""
     flow: str = "none"
     speed: str = "real"
     tx_buffer: int = 4096
     faults: Faults = field(default_factory=Faults)
+    out: str | None = None
+    """File the paper is saved to when the host closes the port (``.png`` or ``.svg``)."""
 
     def make_clock(self) -> Clock:
         """The clock a device behind these options runs on: real time, or a fresh SimulatedClock."""
         return SimulatedClock() if self.speed == "fast" else REAL_CLOCK
 
 
-TRANSPORT_OPTIONS: Final = ("baud", "flow", "speed", "tx_buffer", *Faults.__dataclass_fields__)
+TRANSPORT_OPTIONS: Final = ("baud", "flow", "speed", "tx_buffer", "out", *Faults.__dataclass_fields__)
+DEFAULT_BAUD: Final = 9600
+"""Line speed of a device that names none (an RS-232 plotter's factory setting)."""
+
+
+def line_baud(device: object, baud: int | None = None) -> int:
+    """``baud`` if given, else the device's own ``default_baud``, else DEFAULT_BAUD."""
+    return baud if baud is not None else int(getattr(device, "default_baud", DEFAULT_BAUD))
 
 
 def split_options(options: Mapping[str, str], source: str = "sim") -> tuple[TransportOptions, dict[str, str]]:
@@ -131,13 +147,20 @@ def split_options(options: Mapping[str, str], source: str = "sim") -> tuple[Tran
             )
         return value
 
+    out = options.get("out")
+    if out is not None:
+        try:
+            paper_format(out)
+        except ConfigError as exc:
+            raise URLError(f"{source}: option out={out!r} is not valid: {exc}") from None
     faults = Faults(**{key: count(key, 0) for key in Faults.__dataclass_fields__})
     transport = TransportOptions(
-        baud=count("baud", 1) or 9600,
+        baud=count("baud", 1),
         flow=choice("flow", FLOWS, "none"),
         speed=choice("speed", SPEEDS, "real"),
         tx_buffer=count("tx_buffer", 1) or 4096,
         faults=faults,
+        out=out,
     )
     rest = {k: v for k, v in options.items() if k not in TRANSPORT_OPTIONS}
     return transport, rest
@@ -173,17 +196,23 @@ class SimPort:
         self,
         device: WireDevice,
         *,
-        baud: int = 9600,
+        baud: int | None = None,
         flow: str = "none",
         faults: Faults | None = None,
         tx_buffer: int = 4096,
         clock: Clock | None = None,
+        out: str | None = None,
     ) -> None:
+        baud = line_baud(device, baud)
         if flow not in FLOWS:
             raise LinkError(f"SimPort: flow must be one of {', '.join(FLOWS)}, got {flow!r}")
         if baud <= 0 or tx_buffer <= 0:
             raise LinkError(f"SimPort: baud and tx_buffer must be positive, got {baud} and {tx_buffer}")
+        if out is not None and not callable(getattr(device, "save_paper", None)):
+            raise LinkError(f"SimPort: out={out!r}, but {getattr(device, 'model', 'the device')} has no paper to save")
         self.device = device
+        self.out = out
+        """File the device's paper is written to when the port closes (None: not saved)."""
         self.clock: Clock = clock if clock is not None else getattr(device, "clock", REAL_CLOCK)
         self.faults = faults or Faults()
         self.tx_buffer = tx_buffer
@@ -373,13 +402,27 @@ class SimPort:
             return self._next_event()
 
     def close(self, close_device: bool = True) -> None:
-        """Stop the port (and the device, whose results stay readable); idempotent."""
+        """Stop the port (and the device, whose results stay readable), saving the paper to ``out``; idempotent."""
         with self._lock:
             if self._closed:
                 return
             self._closed = True
+            self.save_out()
             if close_device:
                 self.device.close()
+
+    def save_out(self) -> None:
+        """Write the device's paper to ``out`` as it stands now (nothing when no ``out`` was given)."""
+        if self.out is not None:
+            with self._lock:
+                self.device.save_paper(self.out)  # type: ignore[attr-defined]
+
+    def dtr_reset(self) -> None:
+        """The host opened the port and raised DTR: a device with ``resets_on_dtr`` (an Arduino) reboots."""
+        with self._lock:
+            self._run_until(self.clock.now())
+            if getattr(self.device, "resets_on_dtr", False):
+                self.device.inject("reset")
 
     # -- waiting ----------------------------------------------------------------------------
 
@@ -574,4 +617,5 @@ def open_sim_port(
         faults=transport.faults,
         tx_buffer=transport.tx_buffer,
         clock=clock or getattr(device, "clock", None),
+        out=transport.out,
     )

@@ -149,3 +149,67 @@ def test_pty_command_writes_the_paper_on_ctrl_c(tmp_path):
             os.kill(proc.pid, signal.SIGKILL)
     img = np.asarray(Image.open(out).convert("L"))
     assert (img < 128).any()
+
+
+_SIM_MAIN = (
+    "import argparse, sys\n"
+    "from pixelpen.commands import sim\n"
+    "parser = argparse.ArgumentParser()\n"
+    "sim.register(parser.add_subparsers())\n"
+    "args = parser.parse_args(sys.argv[1:])\n"
+    "sys.exit(args.func(args))\n"
+)
+"""``pixelpen sim`` on its own (the command module's parser, not the whole CLI)."""
+
+
+def test_pty_command_writes_the_paper_on_sigterm(tmp_path):
+    # a service manager stops the simulator with SIGTERM: the sheet must be written as on Ctrl-C
+    import xml.etree.ElementTree as ET
+
+    out = tmp_path / "pty.svg"
+    proc = subprocess.Popen([sys.executable, "-c", _SIM_MAIN, "sim", "grbl", "--pty", "--speed", "fast", "-o", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        path = proc.stdout.readline().strip()
+        with serial.Serial(path, timeout=20) as port:
+            assert port.read_until(b"]\r\n").endswith(b"Grbl 1.1h ['$' for help]\r\n")  # the Arduino reset on open
+            # the grbl profile's pen: M3 S50 down, M3 S500 up
+            port.write(b"G21\nG90\nG0 X10 Y10\nM3 S50\nG1 X60 Y10 F3000\nM3 S500\nG4 P0.1\n")
+            replies = b""
+            while replies.count(b"ok") < 7:
+                chunk = port.read(max(1, port.in_waiting))
+                assert chunk, f"no reply from the simulator; got {replies!r}"
+                replies += chunk
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(30) == 0
+    finally:
+        if proc.poll() is None:
+            os.kill(proc.pid, signal.SIGKILL)
+    paths = [p.get("d") for p in ET.parse(out).getroot().iter("{http://www.w3.org/2000/svg}path")]
+    assert paths == ["M10,200 60,200"]  # 297 x 210 sheet, y up: the line 10 mm above the bottom edge
+
+
+def test_grbl_simulator_defaults_are_the_machine_the_driver_plots_for():
+    # one machine description: what the GRBL driver asks a sim:grbl for equals what pixelpen sim grbl builds
+    from pixelpen.devices.grbl import GrblPlotter
+    from pixelpen.urls import parse_url
+    from pixelpen.vector.profiles import load_profile
+
+    profile = load_profile("grbl")
+    wanted = GrblPlotter.simulator_options({}, GrblPlotter.options_of(parse_url("grbl:x")), profile)
+    device, transport = simcmd.open_simulator("grbl", {}, "fast")
+    width, height = (float(v) for v in wanted["size"].split("x"))
+    assert (device.paper.width_mm, device.paper.height_mm) == (width, height) == (297.0, 210.0)
+    assert device.pen_mode == wanted["pen"] == "servo-inverted"
+    assert device.pen_threshold == float(wanted["pen_threshold"])
+    assert transport.baud == profile.link.baudrate == 115200
+
+
+@pytest.mark.parametrize("model, options, baud", [
+    ("axidraw", {}, 12_000_000),  # USB CDC: no baud pacing
+    ("hp7475a", {}, 9600),
+    ("grbl", {"baud": "57600"}, 57600),
+])
+def test_the_line_runs_at_the_devices_own_speed(model, options, baud):
+    _, transport = simcmd.open_simulator(model, options, "fast")
+    assert transport.baud == baud

@@ -25,6 +25,16 @@ def read_exactly(port: serial.Serial, n: int) -> bytes:
     return bytes(got)
 
 
+def wait_for(condition, seconds: float = 10.0) -> None:
+    """Poll ``condition`` (the bridge thread acts on its own time) until it holds."""
+    import time
+
+    deadline = time.monotonic() + seconds
+    while not condition():
+        assert time.monotonic() < deadline, "the bridge never got there"
+        time.sleep(0.005)
+
+
 def test_pyserial_opens_the_path_and_talks_to_the_device():
     device = EchoDevice(REAL_CLOCK)
     with PtyBridge(device, baud=115200) as bridge:
@@ -95,3 +105,46 @@ def test_a_failing_simulator_hangs_up_instead_of_leaving_the_program_waiting():
             for _ in range(50):
                 port.read(1)
         assert isinstance(bridge.error, ValueError)
+
+
+def test_grbl_greets_each_program_that_opens_the_port_and_forgets_its_position():
+    # an Arduino resets when the port opens (DTR): the banner comes then, not at power-up into the void
+    from pixelpen.sim.grbl import WELCOME, GrblSimulator
+
+    device = GrblSimulator(SimulatedClock())
+    with PtyBridge(device) as bridge:
+        with serial.Serial(bridge.path, timeout=5) as port:
+            assert read_exactly(port, len(WELCOME)) == WELCOME
+            port.write(b"G0 X5 Y5\n")
+            assert port.read_until(b"ok\r\n").endswith(b"ok\r\n")
+        wait_for(lambda: not bridge.program_connected)
+        with serial.Serial(bridge.path, timeout=5) as port:
+            assert read_exactly(port, len(WELCOME)) == WELCOME  # once, not a stale one first
+            port.write(b"?")
+            assert b"MPos:0.000,0.000" in port.read_until(b">")
+        assert bridge.opens == 2
+
+
+def test_a_usb_device_is_not_reset_by_opening_and_not_paced():
+    from pixelpen.sim.ebb import EbbSimulator
+
+    device = EbbSimulator(SimulatedClock())
+    with PtyBridge(device) as bridge:
+        assert bridge.port.baud == 12_000_000
+        with serial.Serial(bridge.path, timeout=5) as port:
+            port.write(b"QS\r")
+            assert read_exactly(port, 10) == b"0,0\n\rOK\r\n"
+            assert port.read(1) == b""  # nothing said on open
+
+
+def test_out_is_saved_each_time_the_program_closes_the_port(tmp_path):
+    from pixelpen.sim.grbl import GrblSimulator
+
+    out = tmp_path / "paper.png"
+    device = GrblSimulator(SimulatedClock())
+    with PtyBridge(device, out=str(out)) as bridge:
+        with serial.Serial(bridge.path, timeout=5) as port:
+            port.write(b"M3 S900\nG1 X20 Y20 F6000\nM5\nG4 P0\n")
+            for _ in range(4):
+                assert port.read_until(b"ok\r\n").endswith(b"ok\r\n")
+        wait_for(out.exists)

@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pixelpen.clock import REAL_CLOCK, SimulatedClock
-from pixelpen.errors import Disconnected, LinkTimeout, URLError
+from pixelpen.errors import Disconnected, LinkError, LinkTimeout, URLError
 from pixelpen.sim.transport import Faults, SimPort, open_sim_port, split_options
 from tests.sim.fakes import XOFF, XON, EchoDevice
 
@@ -279,3 +279,46 @@ def test_bad_transport_options_name_the_option(options, word):
 def test_open_sim_port_refuses_device_options_for_a_ready_device():
     with pytest.raises(URLError, match="paper"):
         open_sim_port("echo", {"paper": "a4"}, device=EchoDevice(SimulatedClock()))
+
+
+def test_the_default_line_speed_is_the_devices_own():
+    from pixelpen.sim.base import create_simulator
+
+    clock = SimulatedClock()
+    assert port_for(EchoDevice(clock)).baud == 9600  # no default_baud: an RS-232 plotter's 9600
+    for model, baud in (("axidraw", 12_000_000), ("grbl", 115200), ("hp7475a", 9600)):
+        device = create_simulator(model, clock=clock)
+        assert SimPort(device, clock=clock).baud == baud, model
+        assert SimPort(device, clock=clock, baud=4800).baud == 4800
+    assert split_options({})[0].baud is None
+
+
+def test_out_saves_the_paper_when_the_port_closes(tmp_path):
+    import xml.etree.ElementTree as ET
+
+    from pixelpen.sim.base import create_simulator
+
+    clock = SimulatedClock()
+    out = tmp_path / "sheet.svg"
+    transport, _ = split_options({"out": str(out)})
+    device = create_simulator("grbl", clock=clock)
+    port = SimPort(device, clock=clock, out=transport.out)
+    port.write(b"G0 X10 Y20\nM3 S50\nG1 X50 Y20 F6000\nM5\n")  # the grbl profile: S50 lowers the pen
+    port.drain()
+    clock.advance(5.0)
+    port.poll()
+    assert not out.exists()
+    port.close()
+    paths = [p.get("d") for p in ET.parse(out).getroot().iter("{http://www.w3.org/2000/svg}path")]
+    assert paths == ["M10,190 50,190"]  # machine y up -> SVG y down on the 210 mm sheet
+
+
+@pytest.mark.parametrize("name", ["sheet.jpg", "sheet", "sheet.png.txt"])
+def test_out_must_name_a_png_or_svg_file(name):
+    with pytest.raises(URLError, match="out="):
+        split_options({"out": name}, "sim://grbl")
+
+
+def test_out_needs_a_device_with_paper():
+    with pytest.raises(LinkError, match="no paper"):
+        SimPort(EchoDevice(SimulatedClock()), out="x.png")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 import serial
 
@@ -186,3 +187,32 @@ def test_unknown_model_lists_known_ones(monkeypatch):
 def test_bad_transport_option_is_a_url_error():
     with pytest.raises(URLError, match="flow"):
         open_echo("sim://echo?flow=sideways")
+
+
+def test_out_option_saves_the_sheet_when_the_program_closes_the_port(tmp_path):
+    from PIL import Image
+
+    out = tmp_path / "sheet.png"
+    with serial.serial_for_url(f"sim://hp7475a?speed=fast&out={out}", timeout=30) as port:
+        port.write(b"IN;SP1;PU1000,1000;PD5000,1000;PU;OA;")
+        assert port.read_until(b"\r") == b"5000,1000,0\r"
+        assert not out.exists()
+    img = np.asarray(Image.open(out).convert("L"))
+    rows = np.flatnonzero((img < 128).any(axis=1))
+    # the line is y = 1000 units above the 7475A A4 origin (206 mm from the top): 206 - 24.88 mm at 100 dpi
+    assert len(rows) and abs(rows.mean() - (206 - 1000 * 0.02488) * 100 / 25.4) < 2
+
+
+def test_pixelpen_open_passes_out_through_to_the_simulator(tmp_path):
+    import xml.etree.ElementTree as ET
+
+    import pixelpen
+    from pixelpen.vector.displaylist import DisplayList
+
+    out = tmp_path / "grbl.svg"
+    plotter = pixelpen.open(f"sim:grbl?speed=fast&out={out}")
+    u = plotter.profile.unit_mm
+    plotter.plot(DisplayList.from_polylines([np.array([[10.0, 10.0], [60.0, 10.0]]) / u], unit_mm=u))
+    plotter.close()
+    paths = [p.get("d") for p in ET.parse(out).getroot().iter("{http://www.w3.org/2000/svg}path")]
+    assert paths == ["M10,200 60,200"]
