@@ -25,8 +25,10 @@ __all__ = [
     "SlicedMove",
     "move_commands",
     "parse_error",
+    "parse_qc",
     "parse_qg",
     "parse_qm",
+    "parse_qs",
     "parse_version_reply",
     "reply_shape",
     "servo_positions",
@@ -34,6 +36,7 @@ __all__ = [
     "step_deltas",
     "strip_name",
     "supports",
+    "vplus_volts",
 ]
 
 EBB_USB_ID = (0x04D8, 0xFD92)
@@ -54,8 +57,14 @@ LM_RATE_UNIT = 2**31 / 25000.0
 SERVO_DEFAULT_UP, SERVO_DEFAULT_DOWN = 12000, 16000
 """SC,4 / SC,5 reset values (ebb.html SC), used when a profile states no servo range."""
 
-_VERSION = re.compile(r"^(?:V,)?(EBB.*?Version\s+(\d+)\.(\d+)\.(\d+).*)$", re.IGNORECASE)
-_ERROR = re.compile(r"^(?:([A-Z0-9]{1,2}),)?!(\d+)\s*Err:\s*(.*?)(?:OK)?$", re.IGNORECASE)
+VPLUS_MIN_RAW = 250
+"""Least ``QC`` V+ reading (10-bit) of a powered board: plotink's queryVoltage ("typical reading is about 300,
+for 9 V input"; below 250 pyaxidraw warns that the power supply appears to be off)."""
+
+_VERSION = re.compile(r"^(?:V,)?(EBB.*?Version\s+([0-9]{1,3})\.([0-9]{1,3})\.([0-9]{1,3}).*)$", re.IGNORECASE | re.ASCII)
+_ERROR = re.compile(r"^(?:([A-Z0-9]{1,2}),)?!([0-9]{1,3})\s*Err:\s*(.*?)(?:OK)?$", re.IGNORECASE | re.ASCII)
+_UINT = re.compile(r"[0-9]{1,10}", re.ASCII)
+_INT = re.compile(r"[+-]?[0-9]{1,10}", re.ASCII)
 _DATA_SHAPES = {"QM": "data", "QG": "data", "V": "data", "QB": "data_ok", "QS": "data_ok", "ES": "data_ok",
                 "QE": "data_ok", "QP": "data_ok", "QC": "data_ok"}
 
@@ -238,17 +247,40 @@ def strip_name(name: str, data: str) -> str:
     return data[len(prefix):] if data.upper().startswith(prefix) else data
 
 
+def _fields(name: str, data: str, count: int, pattern: re.Pattern[str], what: str) -> tuple[int, ...]:
+    """``count`` comma-separated ASCII integers of a ``name`` reply (with or without ``NAME,``)."""
+    fields = [f.strip() for f in strip_name(name, data.strip()).split(",")]
+    if len(fields) != count or not all(pattern.fullmatch(f) for f in fields):
+        raise ParseError(f"{name} reply must be {what}", source=f"ebb {name}", token=data)
+    return tuple(int(f) for f in fields)
+
+
 def parse_qm(data: str) -> tuple[int, int, int, int]:
     """``QM`` data ``CommandStatus,Motor1,Motor2,FIFO`` (with or without ``QM,``) -> four integers."""
-    fields = strip_name("QM", data.strip()).split(",")
-    if len(fields) != 4 or not all(f.strip().isdigit() for f in fields):
-        raise ParseError("QM reply must be four numbers", source="ebb QM", token=data)
-    return tuple(int(f) for f in fields)  # type: ignore[return-value]
+    return _fields("QM", data, 4, _UINT, "four numbers")  # type: ignore[return-value]
+
+
+def parse_qs(data: str) -> tuple[int, int]:
+    """``QS`` data ``steps1,steps2`` (signed global step counters) -> two integers."""
+    return _fields("QS", data, 2, _INT, "two step counts")  # type: ignore[return-value]
+
+
+def parse_qc(data: str) -> tuple[int, int]:
+    """``QC`` data ``RA0,V+`` (10-bit readings: pen current sense, motor supply) -> two integers 0..1023."""
+    values = _fields("QC", data, 2, _UINT, "two 10-bit readings")
+    if not all(v <= 1023 for v in values):
+        raise ParseError("QC readings are 10-bit (0..1023)", source="ebb QC", token=data)
+    return values  # type: ignore[return-value]
+
+
+def vplus_volts(raw: int) -> float:
+    """Motor supply voltage of a ``QC`` V+ reading: raw/1023 x 3.3 V x 9.2 + 0.3 V (saxi's ebb.ts divider)."""
+    return raw / 1023.0 * 3.3 * 9.2 + 0.3
 
 
 def parse_qg(data: str) -> int:
     """``QG`` status byte (two hex digits, with or without ``QG,``) -> int."""
     text = strip_name("QG", data.strip())
-    if not re.fullmatch(r"[0-9A-Fa-f]{1,2}", text):
+    if not re.fullmatch(r"[0-9A-Fa-f]{1,2}", text, re.ASCII):
         raise ParseError("QG reply must be a hexadecimal byte", source="ebb QG", token=data)
     return int(text, 16)

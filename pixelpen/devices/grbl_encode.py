@@ -27,8 +27,11 @@ __all__ = [
     "CharacterCounter",
     "CoordinateFormat",
     "GrblStatus",
+    "PathTrack",
     "PenMotion",
     "number",
+    "parse_code",
+    "parse_modes",
     "parse_status",
     "parse_welcome",
     "stroke_lines",
@@ -95,7 +98,12 @@ ALARM_CODES: dict[int, str] = {
 """``ALARM:N`` meanings (gnea/grbl doc/csv/alarm_codes_en_US.csv; 10 from interface.md, 1.1g+)."""
 
 STATES = ("Idle", "Run", "Hold", "Jog", "Alarm", "Door", "Check", "Home", "Sleep")
-_WELCOME = re.compile(r"^Grbl (\d+)\.(\d+)([a-z]?)\s*\[.*\]$")
+MAX_DIGITS = 12
+"""Digits a number in a GRBL reply may have at most (GRBL prints at most 10 for a uint32, 3-4 decimals)."""
+_WELCOME = re.compile(r"^Grbl ([0-9]{1,3})\.([0-9]{1,3})([a-z]?)\s*\[.*\]$", re.ASCII)
+_UINT = re.compile(rf"[0-9]{{1,{MAX_DIGITS}}}", re.ASCII)
+_DECIMAL = re.compile(rf"-?(?:[0-9]{{1,{MAX_DIGITS}}}(?:\.[0-9]{{0,{MAX_DIGITS}}})?|\.[0-9]{{1,{MAX_DIGITS}}})", re.ASCII)
+_MODE_WORD = re.compile(rf"([GMTFS])({_DECIMAL.pattern})", re.ASCII)
 
 
 @dataclass(frozen=True)
@@ -130,13 +138,12 @@ class GrblStatus:
 
 
 def _numbers(text: str, field: str, kind: type = float) -> tuple:
-    try:
-        values = tuple(kind(v) for v in text.split(","))
-    except ValueError:
-        raise ParseError(f"status field {field} is not a list of numbers", source="grbl status report", token=text) from None
-    if any(isinstance(v, float) and not math.isfinite(v) for v in values):
-        raise ParseError(f"status field {field} has a non-finite number", source="grbl status report", token=text)
-    return values
+    """Comma-separated ASCII numbers of a status field (ints for ``kind=int``); ParseError naming the field."""
+    pattern = _UINT if kind is int else _DECIMAL
+    parts = text.split(",")
+    if not all(pattern.fullmatch(v) for v in parts):
+        raise ParseError(f"status field {field} is not a list of numbers", source="grbl status report", token=text)
+    return tuple(kind(v) for v in parts)
 
 
 def parse_status(line: str) -> GrblStatus:
@@ -148,7 +155,7 @@ def parse_status(line: str) -> GrblStatus:
     name, _, sub = parts[0].partition(":")
     if name not in STATES:
         raise ParseError(f"unknown machine state (known: {', '.join(STATES)})", source="grbl status report", token=parts[0])
-    if sub and not sub.isdigit():
+    if sub and not _UINT.fullmatch(sub):
         raise ParseError("state substate must be a number", source="grbl status report", token=parts[0])
     fields: dict[str, object] = {"state": name, "substate": int(sub) if sub else None}
     for part in parts[1:]:
@@ -181,6 +188,40 @@ def parse_status(line: str) -> GrblStatus:
             fields["accessories"] = value
         # other fields (build options of forks) are skipped: the report stays usable
     return GrblStatus(**fields)  # type: ignore[arg-type]
+
+
+def parse_code(line: str) -> int:
+    """The number of an ``error:N`` / ``ALARM:N`` line (ASCII digits only); ParseError otherwise."""
+    text = line.strip().partition(":")[2].strip()
+    if not _UINT.fullmatch(text):
+        raise ParseError("expected a number after ':'", source="grbl", token=line)
+    return int(text)
+
+
+def parse_modes(line: str) -> dict[str, float]:
+    """``$G``'s ``[GC:G1 G54 G17 G21 G90 G94 M3 M9 T0 F3000 S50]`` -> the last G/M word of each letter, T, F, S.
+
+    Keys: ``G`` the motion mode (first G word), ``M`` the spindle state (3, 4 or 5), ``T``, ``F``, ``S``.
+    """
+    text = line.strip()
+    if not (text.startswith("[GC:") and text.endswith("]")):
+        raise ParseError("a parser state report is '[GC:...]'", source="grbl $G", token=text)
+    modes: dict[str, float] = {}
+    for word in text[4:-1].split():
+        m = _MODE_WORD.fullmatch(word)
+        if not m:
+            raise ParseError("parser state word is not a letter and a number", source="grbl $G", token=word)
+        letter, value = m[1], float(m[2])
+        if letter == "G":
+            modes.setdefault("G", value)  # the motion mode comes first (interface.md)
+        elif letter == "M":
+            if value in (3, 4, 5):
+                modes["M"] = value
+        else:
+            modes[letter] = value
+    if not {"G", "M", "F", "S"} <= modes.keys():
+        raise ParseError("parser state lacks the motion mode, spindle, F or S", source="grbl $G", token=text)
+    return modes
 
 
 def parse_welcome(line: str) -> tuple[int, int, str] | None:
@@ -351,3 +392,64 @@ class CharacterCounter:
         """Forget every pending line (after a soft reset flushed GRBL's buffers)."""
         self._lines.clear()
         self.in_flight = 0
+
+
+class PathTrack:
+    """The path the host sent and the device has not finished: legs (target, pen down while moving to it).
+
+    GRBL runs lines in order along straight legs, so every status report's position must lie on this
+    path and, strictly inside a leg, show that leg's pen state.  A byte dropped on the wire (GRBL takes any
+    byte >= 0x80 for a real-time command) can leave a shorter but valid line (``X12.3`` -> ``X1.3``,
+    ``M3 S500`` -> ``M3 S50``) that GRBL runs without an error; :meth:`check` is how the driver notices.
+    """
+
+    def __init__(self) -> None:
+        self._points: list[tuple[float, float]] = []
+        self._down: list[bool] = []
+        self._first = 0
+        """Number (since :meth:`start`) of the oldest point kept."""
+
+    def __len__(self) -> int:
+        return len(self._points)
+
+    def start(self, point: tuple[float, float]) -> None:
+        """Forget the path: the device rests at ``point`` (device units), point number 0."""
+        self._points, self._down, self._first = [point], [False], 0
+
+    def append(self, point: tuple[float, float], pen_down: bool) -> int:
+        """Add a leg to ``point``, drawn (``pen_down``) or travelled; returns the point's number."""
+        self._points.append(point)
+        self._down.append(pen_down)
+        return self._first + len(self._points) - 1
+
+    def done_until(self, number: int) -> None:
+        """The device has reached point ``number``: forget the legs before it."""
+        drop = min(number - self._first, len(self._points) - 1)
+        if drop > 0:
+            del self._points[:drop], self._down[:drop]
+            self._first += drop
+
+    def check(self, position: tuple[float, float], pen_down: bool | None, tolerance: float) -> str | None:
+        """None when ``position`` lies on the path with a fitting pen state; otherwise why it does not."""
+        if not self._points:
+            return None
+        q = np.asarray(position, dtype=np.float64)
+        pts = np.asarray(self._points, dtype=np.float64)
+        if len(pts) == 1:
+            d = float(np.hypot(*(pts[0] - q)))
+            return None if d <= tolerance else f"it is {d:.0f} units from where it rests"
+        a, b = pts[:-1], pts[1:]
+        ab = b - a
+        length2 = np.einsum("ij,ij->i", ab, ab)
+        t = np.clip(np.einsum("ij,ij->i", q - a, ab) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
+        dist = np.hypot(*(a + t[:, None] * ab - q).T)
+        near = dist <= tolerance
+        if not near.any():
+            return f"it is {float(dist.min()):.0f} units off the path sent"
+        if pen_down is None:
+            return None
+        at_vertex = near & ((np.hypot(*(q - a).T) <= tolerance) | (np.hypot(*(q - b).T) <= tolerance))
+        down = np.asarray(self._down[1:], dtype=bool)
+        if not at_vertex.any() and not (down[near] == pen_down).any():  # the pen changes only at vertices
+            return f"the pen is {'down' if pen_down else 'up'} along a leg the host sent with the pen {'up' if pen_down else 'down'}"
+        return None

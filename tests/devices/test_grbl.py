@@ -29,6 +29,8 @@ SIM_OPTIONS = {"size": "297x210", "pen": "servo-inverted", "pen_threshold": "275
 class FakeGrbl(Link):
     """A scripted GRBL 1.1 (interface.md): a 128-byte RX buffer, one line parsed per ``line_time``, ``ok`` each.
 
+    A line "runs" when parsed: status reports show the last X/Y target and the last ``M3 S`` value.
+
     Records every byte written, the fullest the RX buffer got and any overflow; ``error_for(line)`` may
     return an error code for a line, ``alarm_at`` names a line number at which ``ALARM:1`` is sent.
     """
@@ -46,6 +48,8 @@ class FakeGrbl(Link):
         self.out = bytearray(welcome)
         self.written = bytearray()
         self.lines: list[str] = []
+        self.position = [0.0, 0.0]
+        self.spindle = 0.0
         self.max_fill = 0
         self.overflowed = 0
         self._busy_until: float | None = None
@@ -64,6 +68,10 @@ class FakeGrbl(Link):
                 self._busy_until = self._busy_until + self.line_time if b"\n" in self.rx else None
                 continue
             self.lines.append(text)
+            for axis, value in re.findall(r"([XY])(-?[0-9.]+)", text):
+                self.position["XY".index(axis)] = float(value)
+            if m := re.match(r"M3 S([0-9.]+)$", text):
+                self.spindle = float(m[1])
             code = self.error_for(text)
             if self.alarm_at is not None and len(self.lines) == self.alarm_at:
                 self.out += b"ALARM:1\r\n"
@@ -76,7 +84,8 @@ class FakeGrbl(Link):
             self.written.append(b)
             if b == ord("?"):
                 state = "Run" if self.rx else "Idle"
-                self.out += f"<{state}|MPos:0.000,0.000,0.000|FS:0,0>\r\n".encode()
+                x, y = self.position
+                self.out += f"<{state}|MPos:{x:.3f},{y:.3f},0.000|FS:0,{self.spindle:g}>\r\n".encode()
             elif b in (0x18, ord("!"), ord("~")):
                 if b == 0x18:
                     self.rx.clear()
