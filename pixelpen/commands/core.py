@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 from dataclasses import asdict
 from pathlib import Path
@@ -14,6 +15,16 @@ from ..drivers.discovery import DiscoveredDevice, discover
 from ..scene import draw_reference
 from ..urls import format_url
 from .plot import plot_demo
+
+_ROLE = re.compile(r":[a-z]+(?::[a-z]+)?:`(?:([^`<]*?)\s*<[^`>]*>|~(?:[\w.]*\.)?([^`]*)|([^`]*))`")
+_LITERAL = re.compile(r"``(.+?)``|`([^`]+)`|\*\*(.+?)\*\*")
+
+
+def plain_text(text: str) -> str:
+    """reStructuredText inline markup as plain words: ``code``, :func:`~a.b` (b), `title <target>` (title)."""
+    text = _ROLE.sub(lambda m: next(g for g in m.groups() if g is not None), text)
+    text = _LITERAL.sub(lambda m: next(g for g in m.groups() if g is not None), text)
+    return re.sub(r"::$", ":", text)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -36,8 +47,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 def cmd_devices(args: argparse.Namespace) -> int:
     """Print the schemes with their options, then the serial, USB and HID devices present."""
     schemes = {
-        name: {"class": cls.__name__, "description": (cls.__doc__ or "").strip().splitlines()[0],
-               "options": dict(cls.url_options), "simulated": cls.simulated}
+        name: {"class": cls.__name__, "description": plain_text((cls.__doc__ or "").strip().partition("\n")[0]),
+               "options": {opt: plain_text(text) for opt, text in cls.url_options.items()},
+               "simulated": cls.simulated}
         for name, cls in known_schemes().items()
     }
     present: list[dict] = []

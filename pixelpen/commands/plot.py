@@ -747,7 +747,8 @@ def run_plot(args: argparse.Namespace) -> int:
             keys.close()
     for done in (state, _drawing_file(state)):
         done.unlink(missing_ok=True)
-    print(f"plotted {args.file} on {args.to}: {p.strokes_total} strokes, {p.pen_down_mm_total:.0f} mm of lines in "
+    print(f"plotted {args.file} on {args.to}: {p.strokes_total} stroke{'s' * (p.strokes_total != 1)}, "
+          f"{p.pen_down_mm_total:.0f} mm of lines in "
           f"{_clock_text(p.elapsed_s)}", file=sys.stderr)
     return 0
 

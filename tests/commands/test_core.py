@@ -1,8 +1,10 @@
 """Tests of the core commands: demo, draw and devices, run in-process through the CLI entry point."""
 
 import json
+import re
 
 import numpy as np
+import pytest
 from PIL import Image as PILImage
 
 from pixelpen.cli import main
@@ -10,9 +12,20 @@ from pixelpen.display.pictfile import save_picture
 from pixelpen.display.picture import Picture, Polyline, Rectangle, Style, Fill
 
 
+@pytest.fixture(autouse=True)
+def no_user_config(monkeypatch):
+    monkeypatch.setenv("PIXELPEN_CONFIG", "")
+
+
 def test_demo_writes_the_scene_as_png_svg_and_simulated_plotter_papers(tmp_path, capsys):
     assert main(["demo", "-o", str(tmp_path)]) == 0
-    out = capsys.readouterr().out
+    captured = capsys.readouterr()
+    out = captured.out
+    # the scene's image cannot be plotted: 4 vector displays x 3 draws say so once, and count the repeats
+    warning = "warning: 1 image shape(s) skipped: a vector device cannot draw raster images"
+    assert captured.err.splitlines().count(warning) == 1
+    assert "(11 more of: 1 image shape(s) skipped" in captured.err
+    assert not re.search(r"^(WARNING|INFO) pixelpen\.", captured.err, re.M)  # no logger names for the user
     png, svg = tmp_path / "scene.png", tmp_path / "scene.svg"
     assert str(tmp_path.resolve()) in out and png.exists() and svg.exists()
     img = np.asarray(PILImage.open(png).convert("RGB"))
@@ -72,3 +85,26 @@ def test_devices_reports_what_discovery_finds(capsys, monkeypatch):
                    "usb_id": "0403:6001"}
     assert main(["devices"]) == 0
     assert "usb_id=0403:6001" in capsys.readouterr().out
+
+
+def test_devices_prints_plain_text_without_rest_markup(capsys):
+    assert main(["devices", "--no-probe"]) == 0
+    out = capsys.readouterr().out
+    assert "`" not in out and not re.search(r":(func|class|meth|mod|attr):", out)
+    assert "Draws into a framebuffer and writes it to PATH (png:PATH?size=800x600&dpi=96)." in out
+    assert main(["devices", "--no-probe", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert "`" not in json.dumps(data["schemes"])
+
+
+@pytest.mark.parametrize("rst, plain", [
+    ("writes ``PATH`` (``png:PATH``).", "writes PATH (png:PATH)."),
+    ("see :func:`~pixelpen.vector.optimize.optimize`", "see optimize"),
+    ("see :mod:`pixelpen.urls` and :py:class:`the map <pixelpen.urls.Options>`", "see pixelpen.urls and the map"),
+    ("a `title` and **bold**", "a title and bold"),
+    ("Example::", "Example:"),
+])
+def test_plain_text_of_rest(rst, plain):
+    from pixelpen.commands.core import plain_text
+
+    assert plain_text(rst) == plain

@@ -28,6 +28,11 @@ HP_ORIGIN = (10.0, 206.0)  # hp7475a.toml [paper.a4] origin_mm: device origin 10
 GRBL_ORIGIN_Y = 210.0  # grbl.toml [paper.a4] origin_mm = [0, 210]: the origin is the sheet's lower-left corner
 
 
+@pytest.fixture(autouse=True)
+def no_user_config(monkeypatch):
+    monkeypatch.setenv("PIXELPEN_CONFIG", "")
+
+
 @pytest.fixture
 def sim():
     """Unique simulator ids for one test, forgotten afterwards; ``sim(model, **opts)`` gives the URL."""
@@ -134,6 +139,142 @@ def test_page_to_world_puts_the_profile_origin_at_the_device_origin():
         origin = display.paper.origin_mm
         device = display.pipeline.to_device(matrix[:2, :2] @ np.asarray(origin) + matrix[:2, 2])
         np.testing.assert_allclose(device, [0.0, 0.0], atol=1e-6)
+
+
+def ends_on_sheet(ident):
+    """The GRBL paper's strokes as sets of end points in sheet millimetres (x right, y down from the top left)."""
+    return {frozenset((round(float(x), 2), round(float(GRBL_ORIGIN_Y - y), 2)) for x, y in pts[[0, -1]])
+            for pts in grbl_strokes(ident)}
+
+
+def test_layout_rotates_then_scales_about_the_centre_of_the_drawing(tmp_path, sim):
+    path = svg(tmp_path, line(10, 20, 50, 20) + line(10, 40, 50, 40))  # bounds 40 x 20 mm, centre (30, 30)
+    url, ident = sim("grbl")
+    assert run(path, "--to", url, "--rotate", "90", "--no-optimize") == 0
+    # a quarter turn clockwise on the sheet about (30, 30): (x, y) -> (30 - (y - 30), 30 + (x - 30))
+    assert ends_on_sheet(ident) == {frozenset({(40.0, 10.0), (40.0, 50.0)}), frozenset({(20.0, 10.0), (20.0, 50.0)})}
+    url, ident = sim("grbl")
+    assert run(path, "--to", url, "--rotate", "90", "--scale", "0.5", "--no-optimize") == 0
+    # then half the size about the same centre
+    assert ends_on_sheet(ident) == {frozenset({(35.0, 20.0), (35.0, 40.0)}), frozenset({(25.0, 20.0), (25.0, 40.0)})}
+
+
+def test_center_puts_the_drawing_in_the_middle_of_the_page_less_the_margins(tmp_path, sim):
+    path = svg(tmp_path, line(10, 20, 50, 20) + line(10, 40, 50, 40))
+    url, ident = sim("grbl")
+    assert run(path, "--to", url, "--center", "--margin", "20", "--no-optimize") == 0
+    # the GRBL area is the whole 297 x 210 page: the box is 20..277 x 20..190, centre (148.5, 105)
+    assert ends_on_sheet(ident) == {frozenset({(128.5, 95.0), (168.5, 95.0)}), frozenset({(128.5, 115.0), (168.5, 115.0)})}
+    url, ident = sim("grbl")
+    assert run(path, "--to", url, "--center", "--page", "a5", "--no-optimize") == 0
+    # a5 on a landscape bed is laid landscape, 210 x 148 mm from the sheet's top left: centre (105, 74)
+    assert ends_on_sheet(ident) == {frozenset({(85.0, 64.0), (125.0, 64.0)}), frozenset({(85.0, 84.0), (125.0, 84.0)})}
+    url, ident = sim("grbl")
+    assert run(path, "--to", url, "--center", "--page", "200x100mm", "--portrait", "--no-optimize") == 0
+    # turned portrait: 100 x 200 mm, centre (50, 100)
+    assert ends_on_sheet(ident) == {frozenset({(30.0, 90.0), (70.0, 90.0)}), frozenset({(30.0, 110.0), (70.0, 110.0)})}
+
+
+def test_fit_fills_the_box_within_the_margins(tmp_path, sim):
+    url, ident = sim("grbl")
+    square = '<path d="M0,0 H10 V10 H0 Z" stroke="black" fill="none"/>'
+    assert run(svg(tmp_path, square, size=(10, 10)), "--to", url, "--fit", "--margin", "10") == 0
+    pts = np.vstack(grbl_strokes(ident))
+    # 190 mm high (210 less two margins), centred on the page: x 53.5..243.5, machine y 10..200
+    np.testing.assert_allclose([pts[:, 0].min(), pts[:, 0].max()], [53.5, 243.5], atol=0.01)
+    np.testing.assert_allclose([pts[:, 1].min(), pts[:, 1].max()], [10.0, 200.0], atol=0.01)
+
+
+def test_on_hp7475a_the_box_stays_inside_the_hard_clip_limits(tmp_path, sim):
+    url, ident = sim("hp7475a")
+    square = '<path d="M0,0 H10 V10 H0 Z" stroke="black" fill="none"/>'
+    assert run(svg(tmp_path, square, size=(10, 10)), "--to", url, "--fit") == 0
+    seg, _, _ = named_simulator(ident).segments()
+    # the A4 hard-clip area is 0..7721 plotter units high (192.1 mm): the fitted square is that tall, not 210 mm
+    assert seg[:, 1::2].min() == pytest.approx(0, abs=1) and seg[:, 1::2].max() == pytest.approx(7721, abs=1)
+
+
+def test_scaling_up_flattens_curves_finer(tmp_path, sim):
+    url, ident = sim("grbl")
+    circle = '<circle cx="148.5" cy="105" r="1" stroke="black" fill="none"/>'
+    assert run(svg(tmp_path, circle), "--to", url, "--scale", "50", "--tolerance", "0.05") == 0
+    (stroke,) = grbl_strokes(ident)
+    centre = np.array([148.5, GRBL_ORIGIN_Y - 105.0])
+    radius = np.hypot(*(stroke - centre).T)
+    mids = (stroke[1:] + stroke[:-1]) / 2
+    # a 50 mm circle within 0.05 mm on paper: vertices on it, chords' midpoints no further in than the tolerance
+    np.testing.assert_allclose(radius, 50.0, atol=0.002)
+    assert (50.0 - np.hypot(*(mids - centre).T)).max() <= 0.05 + 0.002
+
+
+def test_picture_files_take_the_layout_too(tmp_path, sim):
+    pic = Picture()
+    pic.add(Polyline([[10, 10], [60, 10]]))  # world mm, y up: 10 mm above the sheet's lower edge
+    path = tmp_path / "p.json"
+    save_picture(pic, path)
+    url, ident = sim("grbl")
+    assert run(str(path), "--to", url, "--rotate", "-90") == 0
+    (stroke,) = grbl_strokes(ident)
+    # a quarter turn anticlockwise on the sheet about (35, 10) up: the line now runs up from y = -15 to 35 mm,
+    # clipped at the machine's y = 0
+    assert sorted(np.round(stroke[[0, -1], 1], 2).tolist()) == [0.0, 35.0]
+    np.testing.assert_allclose(stroke[:, 0], 35.0, atol=0.002)
+
+
+def test_layout_options_that_contradict_are_errors(tmp_path, sim, capsys):
+    path = svg(tmp_path, line(10, 20, 50, 20))
+    url, _ = sim("grbl")
+    for argv, needle in [(["--margin", "5"], "--margin places the drawing only with --center or --fit"),
+                         (["--fit", "--scale", "2"], "give --scale or --fit, not both"),
+                         (["--center", "--margin", "150"], "leaves no room"),
+                         (["--page", "a9"], "--page a9"),
+                         (["--page", "infx3mm"], "--page infx3mm")]:
+        assert run(path, "--to", url, *argv) == 2, argv
+        assert needle in capsys.readouterr().err
+    assert run(path, "--to", url, "--landscape", "--portrait") == 2
+    assert "not allowed with argument" in capsys.readouterr().err
+
+
+def test_dry_run_prints_the_placement_and_sends_nothing(tmp_path, sim, capsys):
+    path = svg(tmp_path, line(-10, 20, 50, 20) + line(10, 40, 50, 40))
+    url, ident = sim("hp7475a")
+    sheet = tmp_path / "sheet.svg"
+    assert run(path, "--to", url, "--dry-run", "--sheet", str(sheet)) == 0
+    out = capsys.readouterr().out
+    with pytest.raises(KeyError):
+        named_simulator(ident)  # the plotter was never opened
+    # hp7475a A4: the plotter reaches x 10 .. 10 + 11040 units, y 206 - 7721 units .. 206 mm from the top left
+    assert f"x 10.0..{10 + 11040 * HP_UNIT:.1f}, y {206 - 7721 * HP_UNIT:.1f}..206.0 mm" in out
+    assert "drawing: 60.0 x 20.0 mm at x -10.0..50.0, y 20.0..40.0 mm" in out
+    assert "clipped: 20.0 mm of 100.0 mm of lines (20.0 %)" in out  # x -10..10 of the first line
+    assert "plot: 2 strokes; 80 mm pen down" in out and "estimated 0:" in out
+    text = sheet.read_text()
+    for colour in plotcmd.SHEET_COLOURS:
+        assert colour in text
+    assert not os.path.exists(f"{path}.plot-state.json")
+    assert run(path, "--to", url, "--sheet", path) == 2
+    assert "would overwrite the drawing" in capsys.readouterr().err
+
+
+def test_no_dedupe_keeps_a_line_drawn_twice_and_the_report_says_what_went(tmp_path, sim, capsys):
+    path = svg(tmp_path, line(10, 20, 50, 20) * 2 + line(10, 40, 50, 40))
+    url, ident = sim("grbl")
+    assert run(path, "--to", url) == 0
+    err = capsys.readouterr().err
+    assert len(grbl_strokes(ident)) == 2 and "removed 1 duplicate stroke (40.0 mm)" in err
+    url, ident = sim("grbl")
+    assert run(path, "--to", url, "--no-dedupe") == 0
+    err = capsys.readouterr().err
+    ink = sum(float(np.hypot(*np.diff(s, axis=0).T).sum()) for s in grbl_strokes(ident))
+    assert ink == pytest.approx(120.0, abs=0.01) and "duplicate removal off" in err  # 40 mm twice, and 40 mm
+
+
+def test_a_second_pass_in_another_layer_is_plotted(tmp_path, sim, capsys):
+    body = ('<g inkscape:groupmode="layer" inkscape:label="first">' + line(10, 20, 50, 20) + "</g>"
+            '<g inkscape:groupmode="layer" inkscape:label="darken">' + line(10, 20, 50, 20) + "</g>")
+    url, ident = sim("grbl")
+    assert run(svg(tmp_path, body), "--to", url) == 0
+    assert len(grbl_strokes(ident)) == 2 and "duplicate" not in capsys.readouterr().err
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -459,6 +600,63 @@ def test_keys_toggle_the_pause_and_answer_prompts():
         for fd in (r, w):
             if fd is not None:
                 os.close(fd)
+
+
+def test_a_simulated_plotter_saves_its_paper_with_out(tmp_path, sim):
+    from PIL import Image
+
+    paper = tmp_path / "paper.png"
+    url, ident = sim("hp7475a", out=str(paper))
+    assert run(svg(tmp_path, line(30, 50, 130, 50)), "--to", url) == 0
+    img = np.asarray(Image.open(paper).convert("L"))
+    ink_rows = np.flatnonzero((img < 128).any(axis=1))
+    # one horizontal 100 mm line: dark pixels in a thin band, across about 100/297 of the sheet's width
+    assert len(ink_rows) and np.ptp(ink_rows) < img.shape[0] * 0.02
+    dark_cols = np.flatnonzero((img < 128).any(axis=0))
+    assert np.ptp(dark_cols) / img.shape[1] == pytest.approx(100 / 297, abs=0.02)
+
+
+class ScriptedKeys:
+    """The operator presses p before the third stroke and again a few polls later (a KeyControl stand-in)."""
+
+    def __init__(self, on_toggle, hold_polls=5):
+        self.on_toggle = on_toggle
+        self.polls = 0
+        self.hold = hold_polls
+
+    def pause_requested(self):
+        self.polls += 1
+        if self.polls in (3, 3 + self.hold):
+            self.on_toggle(self.polls == 3)
+        return 3 <= self.polls < 3 + self.hold
+
+    def wait_enter(self):
+        return True
+
+    def close(self):
+        pass
+
+
+def test_the_pause_is_confirmed_only_once_the_plotter_holds_with_the_pen_up(tmp_path, sim, monkeypatch, capsys):
+    url, ident = sim("grbl")
+    seen = []
+    device_said = plotcmd.PauseMessages.device
+
+    def device(self, paused):  # what the simulated plotter is doing when the paused line is printed
+        sim_device = named_simulator(ident)
+        seen.append((paused, sim_device.paper.pen_is_down, sim_device.state, len(sim_device.paper.strokes())))
+        device_said(self, paused)
+
+    monkeypatch.setattr(plotcmd.PauseMessages, "device", device)
+    monkeypatch.setattr(plotcmd, "_stdin_keys", lambda on_toggle: ScriptedKeys(on_toggle))
+    assert run(ladder(tmp_path, 5), "--to", url, "--no-optimize") == 0
+    err = capsys.readouterr().err.splitlines()
+    asked = err.index("pause requested - waiting for the pen to lift")
+    held = err.index("paused (pen up) - press p or space to continue")
+    assert asked < held < err.index("continuing") < err.index("resumed")
+    # when it said "paused", the plotter had finished the first two strokes, stood idle, pen up
+    assert seen[0] == (True, False, "Idle", 2) and seen[1][0] is False
+    assert len(grbl_strokes(ident)) == 5
 
 
 # ---------------------------------------------------------------------------------------------------------
