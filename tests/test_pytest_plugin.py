@@ -1,6 +1,9 @@
 """Tests of the pytest plugin: a user's test file using sim_plotter, sim_port and make_sim_plotter, run by pytester."""
 
+import re
+import shlex
 from importlib import metadata
+from pathlib import Path
 
 import numpy  # noqa: F401 - imported before pytester's in-process runs, which restore sys.modules after each
 import pytest
@@ -125,3 +128,47 @@ def test_bad_parameters_are_usage_errors(param):
     with pytest.raises(pytest.UsageError):
         model, options = _parse_param(param)
         SimPlotter(model, options)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# every example of docs/testing-with-simulators.md runs
+
+GUIDE = Path(__file__).resolve().parents[1] / "docs" / "testing-with-simulators.md"
+
+
+def _blocks(language):
+    return re.findall(rf"^```{language}\n(.*?)^```", GUIDE.read_text(encoding="utf-8"), re.M | re.S)
+
+
+def test_every_python_example_of_the_testing_guide_passes(pytester):
+    blocks = _blocks("python")
+    assert len(blocks) >= 4
+    for k, code in enumerate(blocks):
+        pytester.makepyfile(**{f"test_guide_{k}": code})
+    result = pytester.runpytest(*_plugin_args())
+    # each example is a test file of its own (so each states its own imports); every test in them passes
+    tests = sum(len(re.findall(r"^def test_", code, re.M)) for code in blocks)
+    outcomes = result.parseoutcomes()
+    assert outcomes["passed"] >= tests and set(outcomes) == {"passed"}, outcomes
+
+
+def test_every_command_of_the_testing_guide_runs(tmp_path, monkeypatch, capsys):
+    from pixelpen.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("PIXELPEN_CONFIG", "")
+    rungs = "".join(f'<path d="M{10 + 10 * i},20 V60" stroke="black" fill="none"/>' for i in range(12))
+    (tmp_path / "drawing.svg").write_text('<svg xmlns="http://www.w3.org/2000/svg" width="297mm" height="210mm" '
+                                          f'viewBox="0 0 297 210">{rungs}</svg>')
+    (tmp_path / "drawing.hpgl").write_bytes(b"IN;SP1;PU100,100;PD2100,100,2100,2100;PU;")
+    (tmp_path / "drawing.nc").write_bytes(b"G21 G90\nM3 S500\nG0 X10 Y10\nM3 S50\nG1 X60 Y10 F3000\nM3 S500\n")
+    commands = [line for block in _blocks("sh") for line in block.splitlines()
+                if line.startswith("pixelpen ") and "--pty" not in line]
+    assert len(commands) >= 6
+    for command in commands:
+        text, _, comment = command.partition("#")
+        expected = int(comment.split("exit status")[1]) if "exit status" in comment else 0
+        assert main(shlex.split(text)[1:]) == expected, (command, capsys.readouterr().err)
+    assert (tmp_path / "paper.png").stat().st_size and "<svg" in (tmp_path / "paper.svg").read_text()
+    assert (tmp_path / "sheet.png").stat().st_size
+    assert not (tmp_path / "drawing.svg.plot-state.json").exists()  # the resume finished the job
