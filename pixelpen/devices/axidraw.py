@@ -21,6 +21,7 @@ between strokes, pauses the plot with the pen up; a second press resumes it.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from collections import deque
@@ -33,24 +34,28 @@ import numpy as np
 from ..display.registry import register_display
 from ..drivers.discovery import list_serial_ports
 from ..drivers.link import Link
-from ..errors import ConfigError, LinkError, LinkTimeout, ParseError, ProtocolError
+from ..errors import ConfigError, Disconnected, LinkError, LinkTimeout, ParseError, ProtocolError
 from ..urls import Options
 from ..vector.profiles import DeviceProfile, load_profile
 from .ebb_encode import (
     EBB_USB_ID,
     FEATURES,
+    VPLUS_MIN_RAW,
     move_commands,
     parse_error,
+    parse_qc,
     parse_qg,
     parse_qm,
+    parse_qs,
     parse_version_reply,
     reply_shape,
     servo_positions,
     slice_polyline,
     strip_name,
     supports,
+    vplus_volts,
 )
-from .plotter import PlotterDisplay
+from .plotter import DeviceWhere, PlotterDisplay
 
 log = logging.getLogger(__name__)
 
@@ -72,6 +77,10 @@ USB_BAUD = 12_000_000
 """Line speed of a ``sim:axidraw`` link without ``baud=`` (USB full speed, not a serial port's 9600)."""
 FLUSH = "#"
 """Sent alone before the first command: ends any half-received command as a syntax error, so it cannot run."""
+MICROSTEPS = 16
+"""``EM,1,1``: 1/16 stepping, what QE reports for an enabled motor."""
+QG_POWER_LOST, QG_BUTTON, QG_PEN_UP = 0x40, 0x20, 0x10
+"""QG status bits (ebb.html QG; bit 6 latches a V+ drop below the CU,60 threshold, fw >= 3.0)."""
 
 
 @dataclass
@@ -82,6 +91,8 @@ class _Sent:
     queued: bool
     duration_s: float
     on_reply: Callable[[str], None] | None = None
+    reached: tuple[int, int] | None = None
+    """(stroke, vertex) the pen is down at once this queued command has run."""
 
 
 def _model(text: str) -> str:
@@ -148,6 +159,11 @@ class AxiDrawPlotter(PlotterDisplay):
         self._paused = False
         self._button_asked = -math.inf
         self._zeroed = False
+        self._adopt: np.ndarray | None = None
+        self._lost: str | None = None
+        self._reached: tuple[int, int] | None = None
+        self._power_good = 0
+        """Queued commands (counted like ``_queued_sent``) known to have finished with the motor supply on."""
 
     # -- URL hooks -------------------------------------------------------------------------------
     @classmethod
@@ -185,9 +201,7 @@ class AxiDrawPlotter(PlotterDisplay):
     def _connect(self) -> None:
         """Flush a half command, read ``V``, wait out leftover motion, set 16× stepping and the pen servo."""
         link = self._link()
-        self._unanswered.clear()
-        self._marks.clear()
-        self._queued_acked = self._queued_sent = 0
+        self._reset_counts()
         self._paused = False
         link.reset_input()
         link.write(f"{FLUSH}\rV\r".encode("ascii"))
@@ -204,9 +218,12 @@ class AxiDrawPlotter(PlotterDisplay):
                 f"{_v(self.version)} (use moves=sm)"
             )
         self._wait_idle(60.0)
-        if self._zeroed and supports(self.version, "QS"):
-            s1, s2 = self._query_steps()
-            self.position = np.array([(s1 + s2) // 2, (s1 - s2) // 2], dtype=np.int64)
+        adopt, self._adopt = self._adopt, None
+        if adopt is not None:  # _where found the board as the fault left it, motors on: keep its counters
+            self.position = adopt
+            log.info("axidraw: reconnected; carriage at %s steps", self.position.tolist())
+        elif self._zeroed and supports(self.version, "QS"):
+            self.position = self._query_steps()
             log.info("axidraw: reconnected; carriage at %s steps", self.position.tolist())
         else:
             self._command("EM,1,1", queued=supports(self.version, "queued_EM"))
@@ -214,17 +231,23 @@ class AxiDrawPlotter(PlotterDisplay):
             self._zeroed = True
         self._command(f"SC,4,{self.servo_up}")
         self._command(f"SC,5,{self.servo_down}")
+        if supports(self.version, "queued_EM"):
+            self._command(f"CU,60,{VPLUS_MIN_RAW}")  # latch a supply drop in QG bit 6 between checks
         self._pen(up=True)
         self._flush_replies()
+        self._check_power()  # as pyaxidraw does before plotting: refuse a board without motor power
+        self._power_good = self._queued_sent
 
     def _send_stroke(self, index: int, points: np.ndarray, pen: int) -> None:
+        """Travel, pen down, the stroke, pen up; then a supply check that certifies what ran before it."""
         pts = np.asarray(points, dtype=np.int64).reshape(-1, 2)
         self._travel(pts[0])
-        self._pen(up=False)
+        self._pen(up=False, reached=(index, 0))
         if len(pts) > 1:
-            self._move(pts, self.profile.pen_down)
-        self._pen(up=True)
+            self._move(pts, self.profile.pen_down, stroke=index)
+        self._pen(up=True, reached=(index, len(pts) - 1))
         self._marks.append((self._queued_sent, index))
+        self._power_checkpoint()
 
     def _poll(self) -> None:
         link = self._link()
@@ -234,6 +257,8 @@ class AxiDrawPlotter(PlotterDisplay):
     def _drain(self) -> None:
         self._flush_replies()
         self._wait_idle(max(self.timeout, 5.0))
+        self._check_power()
+        self._power_good = self._queued_sent
         while self._marks:
             _, index = self._marks.popleft()
             self._confirm(index + 1)
@@ -247,7 +272,7 @@ class AxiDrawPlotter(PlotterDisplay):
         if now - self._button_asked >= BUTTON_POLL_S:
             self._button_asked = now
             if supports(self.version or (0, 0, 0), "QG"):
-                self._command("QG", on_reply=lambda data: self._button(bool(parse_qg(data) & 0x20)))
+                self._command("QG", on_reply=lambda data: self._status_byte(parse_qg(data)))
             else:
                 self._command("QB", on_reply=lambda data: self._button(strip_name("QB", data).strip() == "1"))
         self._poll()
@@ -259,23 +284,84 @@ class AxiDrawPlotter(PlotterDisplay):
             link = self.link
             if link is None or link.closed:
                 return
-            interrupted = bool(self._unanswered or self._marks)
+            interrupted = bool(self._unanswered or self._marks) or self._interrupted
             self._flush_replies()
             self._pen(up=True)
-            if interrupted:
-                log.warning("axidraw: stopped away from home at %s steps: move the carriage home before the next "
-                            "plot", self.position.tolist())
-            elif self.position.any():
-                self._travel(np.zeros(2, dtype=np.int64))
             self._flush_replies()
             self._wait_idle(max(self.timeout, 5.0))
-            self._command("EM,0,0", queued=supports(self.version or (0, 0, 0), "queued_EM"))
-            self._flush_replies()
-            self._marks.clear()
-            self.position = np.zeros(2, dtype=np.int64)
-            self._zeroed = False
+            if interrupted:  # motors stay on: the step counters keep the position for an exact resume
+                log.warning("axidraw: stopped with the pen up at %s steps; motors left on so the plot can resume",
+                            self.position.tolist())
+                return
+            if self.position.any():
+                self._travel(np.zeros(2, dtype=np.int64))
+                self._flush_replies()
+                self._wait_idle(max(self.timeout, 5.0))
+            self._motors_off()
         except (LinkError, ProtocolError, ParseError) as exc:
             log.warning("axidraw: could not leave the plotter safe: %s", exc)
+
+    def _where(self) -> DeviceWhere:
+        """After a fault, on a fresh link: wait until the board has run its FIFO, then report its step counters.
+
+        The counters mean the carriage's position only while the motors stayed energised at 1/16 (``QE``) with
+        motor power (``QC`` V+, and the ``QG`` bit 6 latch on fw >= 3): a board that rebooted, lost V+ or had its
+        motors switched off keeps counting (or restarts at 0) while the carriage did not move with them.
+        """
+        link = self._link()
+        self._reset_counts()
+        lost, self._lost = self._lost, None
+        reached, self._reached = self._reached, None
+        link.reset_input()
+        link.write(f"{FLUSH}\rV\r".encode("ascii"))
+        self.version, self.future_syntax = self._await_version()
+        if not supports(self.version, "QS"):
+            return DeviceWhere(None, None, position_lost=True, detail=f"EBB firmware {_v(self.version)} has no QS")
+        self._wait_idle(60.0)
+        steps = self._query_steps()
+        pen_up = self._query_pen_up()
+        raw = self._query_vplus()
+        if supports(self.version, "QE"):
+            enabled = self._query_enabled()
+            if enabled != (MICROSTEPS, MICROSTEPS):
+                lost = lost or f"the motors are not energised at 1/{MICROSTEPS} (QE {enabled[0]},{enabled[1]}): the board restarted or they were switched off"
+        elif not self._zeroed:
+            lost = lost or f"EBB firmware {_v(self.version)} has no QE to tell whether the motors stayed on"
+        if raw < VPLUS_MIN_RAW:
+            lost = lost or f"no motor power: QC reads V+ {vplus_volts(raw):.1f} V"
+        if supports(self.version, "queued_EM") and self._query_status_byte() & QG_POWER_LOST:
+            lost = lost or "the motor supply dropped (QG power-lost flag)"
+        if lost:
+            return DeviceWhere(None, None, position_lost=True, detail=lost)
+        self._adopt = steps
+        return _device_where((float(steps[0]), float(steps[1])), not pen_up, tolerance=1.0, reached=reached,
+                             detail=f"EBB at {steps.tolist()} steps, pen {'up' if pen_up else 'down'}")
+
+    def _pen_position(self) -> tuple[float, float] | None:
+        """Where the carriage will be once everything sent has run (steps = device units), the next travel's start."""
+        return (float(self.position[0]), float(self.position[1]))
+
+    def _manual_pen(self, down: bool) -> None:
+        self._pen(up=not down)
+        self._flush_replies()
+        self._wait_idle(max(self.timeout, 5.0))
+
+    def _manual_pen_state(self) -> bool | None:
+        return not self._query_pen_up()
+
+    def _manual_home(self) -> None:
+        """Pen up and travel to where the step counters are zero (where the motors were enabled), like pyaxidraw's walk_home."""
+        self._manual_pen(False)
+        if supports(self.version or (0, 0, 0), "QS"):
+            self.position = self._query_steps()
+        self._travel(np.zeros(2, dtype=np.int64))
+        self._flush_replies()
+        self._wait_idle(max(self.timeout, 5.0) + 60.0)
+
+    def _manual_motors_off(self) -> None:
+        self._flush_replies()
+        self._wait_idle(max(self.timeout, 5.0))
+        self._motors_off()
 
     @property
     def paused(self) -> bool:
@@ -290,27 +376,69 @@ class AxiDrawPlotter(PlotterDisplay):
             return
         self._move(np.vstack([self.position, target]), self.profile.pen_up)
 
-    def _move(self, pts: np.ndarray, limits: Any) -> None:
-        """Plan ``pts`` (steps, starting at the carriage) with ``limits`` and send it as slices."""
+    def _move(self, pts: np.ndarray, limits: Any, stroke: int | None = None) -> None:
+        """Plan ``pts`` (steps, starting at the carriage) with ``limits`` and send it as slices (of ``stroke``, pen down)."""
         mm = pts.astype(np.float64) / self.steps_per_mm
         sliced = slice_polyline(mm, limits, self.steps_per_mm, SLICE_S)
         signed_steps = supports(self.version or (0, 0, 0), "LM_signed_steps")
-        for cmd, ms in zip(move_commands(sliced, self.moves, signed_steps), sliced.ms.tolist()):
-            self._command(cmd, queued=True, duration_s=ms / 1000.0)
+        commands = move_commands(sliced, self.moves, signed_steps)
+        for cmd, ms, vertex in zip(commands, sliced.ms.tolist(), sliced.vertex.tolist()):
+            self._command(cmd, queued=True, duration_s=ms / 1000.0,
+                          reached=None if stroke is None else (stroke, vertex))
         self.position = self.position + sliced.steps.sum(axis=0)
 
-    def _pen(self, up: bool) -> None:
+    def _pen(self, up: bool, reached: tuple[int, int] | None = None) -> None:
         ms = round(1000 * (self.profile.pen_lift_s if up else self.profile.pen_drop_s))
-        self._command(f"SP,{1 if up else 0},{ms}", queued=True, duration_s=ms / 1000.0)
+        self._command(f"SP,{1 if up else 0},{ms}", queued=True, duration_s=ms / 1000.0, reached=reached)
+
+    def _motors_off(self) -> None:
+        """``EM,0,0``: the carriage moves freely, so the step counters no longer tell where it is."""
+        self._command("EM,0,0", queued=supports(self.version or (0, 0, 0), "queued_EM"))
+        self._flush_replies()
+        self._marks.clear()
+        self.position = np.zeros(2, dtype=np.int64)
+        self._zeroed = False
+
+    # -- motor power -----------------------------------------------------------------------------
+    def _power_checkpoint(self) -> None:
+        """Queue a V+ check (``QC``; plus ``QG`` on fw >= 3): its good answer certifies the commands finished before it."""
+        certified = self._queued_sent - (FIFO_DEPTH + 1)  # what has run by the time the parser reaches the check
+        self._command("QC", on_reply=lambda data: self._supply(parse_qc(data)[1], certified))
+        if supports(self.version or (0, 0, 0), "queued_EM"):
+            self._command("QG", on_reply=lambda data: self._status_byte(parse_qg(data)))
+
+    def _check_power(self) -> None:
+        """Ask ``QC`` now and raise when the motor supply is off."""
+        self._supply(self._query_vplus(), self._power_good)
+
+    def _supply(self, raw: int, certified: int) -> None:
+        """Act on a V+ reading: below VPLUS_MIN_RAW the motors stood still, so the plot stops with the position lost."""
+        if raw < VPLUS_MIN_RAW:
+            self._lost = f"the motor supply failed during the plot (QC V+ {vplus_volts(raw):.1f} V)"
+            raise Disconnected(
+                f"axidraw: motor power lost: QC reads V+ {vplus_volts(raw):.1f} V (a powered board reads "
+                f"{vplus_volts(VPLUS_MIN_RAW):.1f} V or more); the carriage stopped while the steps were counted, so "
+                "where the pen is is unknown: switch the power on, move the carriage home and resume with the "
+                "position confirmed"
+            )
+        self._power_good = max(self._power_good, certified)
+
+    def _status_byte(self, bits: int) -> None:
+        """A ``QG`` byte: PRG button presses toggle the pause; the power-lost latch stops the plot."""
+        if bits & QG_POWER_LOST:
+            self._lost = "the motor supply dropped during the plot (QG power-lost flag)"
+            raise Disconnected("axidraw: motor power dropped (QG power-lost flag): the position is unknown; "
+                               "move the carriage home and resume with the position confirmed")
+        self._button(bool(bits & QG_BUTTON))
 
     # -- commands and replies --------------------------------------------------------------------
     def _command(self, text: str, *, queued: bool = False, duration_s: float = 0.0,
-                 on_reply: Callable[[str], None] | None = None) -> None:
+                 on_reply: Callable[[str], None] | None = None, reached: tuple[int, int] | None = None) -> None:
         """Write one command (keeping at most WINDOW unanswered); ``queued`` ones enter the motion FIFO."""
         while len(self._unanswered) >= WINDOW:
             self._read_reply()
         self._link().write(text.encode("ascii") + b"\r")
-        self._unanswered.append(_Sent(text, queued, duration_s, on_reply))
+        self._unanswered.append(_Sent(text, queued, duration_s, on_reply, reached))
         if queued:
             self._queued_sent += 1
 
@@ -348,7 +476,9 @@ class AxiDrawPlotter(PlotterDisplay):
                                 command=sent.text, device="axidraw")
         if sent.queued:
             self._queued_acked += 1
-            done = self._queued_acked - (FIFO_DEPTH + 1)
+            if sent.reached is not None:
+                self._reached = sent.reached
+            done = min(self._queued_acked - (FIFO_DEPTH + 1), self._power_good)
             while self._marks and self._marks[0][0] <= done:
                 _, index = self._marks.popleft()
                 self._confirm(index + 1)
@@ -391,18 +521,41 @@ class AxiDrawPlotter(PlotterDisplay):
                 raise LinkTimeout(f"axidraw: motion still running after {limit_s}s (QM {state[-1]})")
             self.clock.sleep(IDLE_POLL_S)
 
-    def _query_steps(self) -> tuple[int, int]:
-        found: list[tuple[int, int]] = []
-
-        def read(data: str) -> None:
-            parts = strip_name("QS", data).split(",")
-            if len(parts) != 2:
-                raise ParseError("QS reply must be two step counts", source="ebb QS", token=data)
-            found.append((int(parts[0]), int(parts[1])))
-
-        self._command("QS", on_reply=read)
+    def _query(self, command: str, parse: Callable[[str], Any]) -> Any:
+        """Send an immediate query and return its parsed reply (after every reply before it)."""
+        found: list[Any] = []
+        self._command(command, on_reply=lambda data: found.append(parse(data)))
         self._flush_replies()
         return found[0]
+
+    def _query_steps(self) -> np.ndarray:
+        """The carriage position in steps (x, y) from the motor step counters (``QS``: motor1 = x + y, motor2 = x − y)."""
+        s1, s2 = self._query("QS", parse_qs)
+        return np.array([(s1 + s2) // 2, (s1 - s2) // 2], dtype=np.int64)
+
+    def _query_pen_up(self) -> bool:
+        if supports(self.version or (0, 0, 0), "QG"):
+            bits = self._query("QG", parse_qg)
+            self._button(bool(bits & QG_BUTTON))
+            return bool(bits & QG_PEN_UP)
+        return self._query("QP", lambda data: strip_name("QP", data).strip()) != "0"
+
+    def _query_vplus(self) -> int:
+        return self._query("QC", lambda data: parse_qc(data)[1])
+
+    def _query_enabled(self) -> tuple[int, int]:
+        return self._query("QE", lambda data: _fields_pair(data))
+
+    def _query_status_byte(self) -> int:
+        bits = self._query("QG", parse_qg)
+        self._button(bool(bits & QG_BUTTON))
+        return bits
+
+    def _reset_counts(self) -> None:
+        """Forget what the previous link had in flight (a new link starts counting afresh)."""
+        self._unanswered.clear()
+        self._marks.clear()
+        self._queued_acked = self._queued_sent = self._power_good = 0
 
     def _button(self, pressed: bool) -> None:
         if pressed:
@@ -413,6 +566,20 @@ class AxiDrawPlotter(PlotterDisplay):
         if self.link is None:
             raise LinkError("axidraw: the plotter is not connected")
         return self.link
+
+
+def _fields_pair(data: str) -> tuple[int, int]:
+    """``QE`` data ``m1,m2`` (microstep divisor of each enabled motor, 0 when off)."""
+    fields = strip_name("QE", data.strip()).split(",")
+    if len(fields) != 2 or not all(f.strip().isascii() and f.strip().isdecimal() and len(f.strip()) <= 3 for f in fields):
+        raise ParseError("QE reply must be two numbers", source="ebb QE", token=data)
+    return int(fields[0]), int(fields[1])
+
+
+def _device_where(position: tuple[float, float] | None, pen_down: bool | None, **fields: Any) -> DeviceWhere:
+    """A DeviceWhere with the optional fields the base knows (``reached`` is proposed, see the notes)."""
+    known = {f.name for f in dataclasses.fields(DeviceWhere)}
+    return DeviceWhere(position, pen_down, **{k: v for k, v in fields.items() if k in known})
 
 
 def _name(command: str) -> str:

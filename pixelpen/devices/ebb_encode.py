@@ -117,6 +117,8 @@ class SlicedMove:
     """(K, 2) integer x/y steps of each slice; they sum to the exact step difference end − start."""
     v0: np.ndarray
     v1: np.ndarray
+    vertex: np.ndarray
+    """Index of the last polyline vertex each slice has reached or passed by its end."""
 
     def __len__(self) -> int:
         return len(self.ms)
@@ -156,7 +158,7 @@ def slice_polyline(points_mm: np.ndarray, limits: MotionLimits, steps_per_mm: fl
     pts = np.asarray(points_mm, dtype=np.float64).reshape(-1, 2)
     blocks = plan(pts, limits)
     if len(blocks) == 0:
-        return SlicedMove(np.zeros(0, np.int64), np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(0))
+        return SlicedMove(np.zeros(0, np.int64), np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(0), np.zeros(0, np.int64))
     count = np.maximum(1, np.ceil(blocks.duration / slice_s - 1e-9).astype(np.int64))
     k = np.repeat(np.arange(len(blocks)), count)
     first = np.repeat(np.cumsum(count) - count, count)
@@ -174,7 +176,9 @@ def slice_polyline(points_mm: np.ndarray, limits: MotionLimits, steps_per_mm: fl
     ms = np.diff(np.rint(np.concatenate([[0.0], t_end]) * 1000.0).astype(np.int64))
     motor = np.abs(np.column_stack([steps[:, 0] + steps[:, 1], steps[:, 0] - steps[:, 1]])).max(axis=1)
     ms = np.maximum(np.maximum(ms, 1), np.ceil(motor * 1000.0 / MAX_STEP_RATE).astype(np.int64))
-    return SlicedMove(ms, steps, v0, v1)
+    block_end = np.flatnonzero(np.hypot(*np.diff(pts, axis=0).T) > 0) + 1  # blocks are the non-zero segments
+    vertex = np.where(last, block_end[k], block_end[k] - 1)
+    return SlicedMove(ms, steps, v0, v1, vertex)
 
 
 def _lm_axis(steps: int, ticks: int, v0: float, v1: float) -> tuple[int, int]:

@@ -392,6 +392,10 @@ class GrblPlotter(PlotterDisplay):
                              tolerance=max(0.5, tolerance_mm / self.profile.unit_mm), drawing=drawing, reached=reached,
                              detail=f"GRBL {status.state} at {self._work_units(status)} units")
 
+    def _pen_position(self) -> tuple[float, float] | None:
+        """Where the pen will be once everything sent has run (device units), the start of the next travel."""
+        return self.track.end
+
     def _manual_pen(self, down: bool) -> None:
         for line in self.pen_motion.down_lines() if down else self.pen_motion.up_lines():
             self._send_line(line, wait=True)

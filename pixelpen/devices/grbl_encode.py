@@ -412,6 +412,11 @@ class PathTrack:
     def __len__(self) -> int:
         return len(self._points)
 
+    @property
+    def end(self) -> tuple[float, float] | None:
+        """Where the device will rest once it has run everything sent (None before :meth:`start`)."""
+        return self._points[-1] if self._points else None
+
     def start(self, point: tuple[float, float]) -> None:
         """Forget the path: the device rests at ``point`` (device units), point number 0."""
         self._points, self._down, self._first = [point], [False], 0
