@@ -13,14 +13,17 @@ from pixelpen.devices.ebb_encode import (
     SlicedMove,
     move_commands,
     parse_error,
+    parse_qc,
     parse_qg,
     parse_qm,
+    parse_qs,
     parse_version_reply,
     reply_shape,
     servo_positions,
     slice_polyline,
     step_deltas,
     supports,
+    vplus_volts,
 )
 from pixelpen.errors import ConfigError, ParseError
 from pixelpen.vector.motion import MotionLimits
@@ -121,7 +124,8 @@ def test_zero_length_polyline_makes_no_slices():
 
 
 # -- command text -----------------------------------------------------------------------------------------
-ONE = SlicedMove(np.array([100, 50]), np.array([[800, 0], [0, -400]]), np.array([0.0, 80.0]), np.array([80.0, 0.0]))
+ONE = SlicedMove(np.array([100, 50]), np.array([[800, 0], [0, -400]]), np.array([0.0, 80.0]), np.array([80.0, 0.0]),
+                 np.array([1, 2]))
 
 
 def test_sm_mixes_axes_xm_does_not():
@@ -133,12 +137,12 @@ def test_sm_mixes_axes_xm_does_not():
 
 
 def test_lm_pause_slice_is_an_sm_delay():
-    pause = SlicedMove(np.array([20]), np.array([[0, 0]]), np.zeros(1), np.zeros(1))
+    pause = SlicedMove(np.array([20]), np.array([[0, 0]]), np.zeros(1), np.zeros(1), np.zeros(1, int))
     assert move_commands(pause, "lm") == ["SM,20,0,0"]
 
 
 def test_lm_direction_before_firmware_3_is_the_sign_of_rate():
-    back = SlicedMove(np.array([25]), np.array([[-20, 0]]), np.array([10.0]), np.array([10.0]))
+    back = SlicedMove(np.array([25]), np.array([[-20, 0]]), np.array([10.0]), np.array([10.0]), np.ones(1, int))
     (new,) = move_commands(back, "lm")
     (old,) = move_commands(back, "lm", lm_signed_steps=False)
     r1, s1, a1, r2, s2, a2 = (int(v) for v in new.split(",")[1:])
@@ -173,7 +177,8 @@ def test_lm_slices_finish_their_steps_within_the_slice(path):
 
 def test_lm_reproduces_the_documented_example():
     """ebb.html LM example 6: 500 -> 800 steps/s over 50 steps takes 77 ms; our slice of 77 ms, 50 steps agrees."""
-    move = SlicedMove(np.array([77]), np.array([[25, 25]]), np.array([500 / 80 * 1.0]), np.array([800 / 80 * 1.0]))
+    move = SlicedMove(np.array([77]), np.array([[25, 25]]), np.array([500 / 80 * 1.0]), np.array([800 / 80 * 1.0]),
+                      np.ones(1, int))
     (cmd,) = move_commands(move, "lm")
     r1, s1, a1, r2, s2, a2 = (int(v) for v in cmd.split(",")[1:])
     assert (s1, s2) == (50, 0) and (r2, a2) == (0, 0)
@@ -205,3 +210,38 @@ def test_qm_and_qg_data():
     for bad in ("", "XYZ", "100", "QG"):
         with pytest.raises(ParseError):
             parse_qg(bad)
+
+
+def test_slices_know_the_vertex_they_have_reached():
+    # a zero-length segment (vertex 2 repeats vertex 1) is no block: the third block starts at vertex 2
+    path = np.array([[0, 0], [10, 0], [10, 0], [10, 10]], float)
+    move = slice_polyline(path, DOWN, STEPS_PER_MM, 0.025)
+    ends = np.cumsum(move.steps, axis=0)
+    at_corner = np.flatnonzero((ends == [800, 0]).all(axis=1))[0]
+    assert (move.vertex[:at_corner] == 0).all() and move.vertex[at_corner] == 1
+    assert (move.vertex[at_corner + 1:-1] == 2).all() and move.vertex[-1] == 3
+    assert np.all(np.diff(move.vertex) >= 0)
+
+
+def test_qs_and_qc_data():
+    assert parse_qs("QS,-120,35") == (-120, 35) and parse_qs("5,0") == (5, 0)
+    assert parse_qc("0394,0293") == (394, 293) and parse_qc("QC,0001,1023") == (1, 1023)
+    # saxi's divider: 293 counts -> 293/1023 x 3.3 x 9.2 + 0.3 = 8.9955 V (a 9 V supply)
+    assert vplus_volts(293) == pytest.approx(8.9955, abs=1e-4)
+    assert vplus_volts(0) == pytest.approx(0.3)
+    for bad in ("QS,1", "QS,1,2,3", "QS,a,1", "QS,\u00b2,1", "QS,\u0661,1", "QS," + "9" * 40 + ",1"):
+        with pytest.raises(ParseError):
+            parse_qs(bad)
+    for bad in ("0394", "0394,1024", "0394,-1", "0394,\u00b2", "\u0663\u0662,1"):
+        with pytest.raises(ParseError):
+            parse_qc(bad)
+
+
+def test_reply_numbers_are_ascii_digits_only():
+    # str.isdigit() accepts superscripts; int() accepts Arabic-Indic digits: neither is an EBB reply
+    for bad in ("QM,\u00b2,0,0,0", "QM,\u0661,0,0,0", "QM,1,0,0,\uff10"):
+        with pytest.raises(ParseError):
+            parse_qm(bad)
+    assert parse_error("!\u0668 Err: x") is None
+    with pytest.raises(ParseError):
+        parse_version_reply("EBBv13_and_above EB Firmware Version \u0662.8.1")

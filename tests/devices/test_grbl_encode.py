@@ -15,6 +15,9 @@ from pixelpen.devices.grbl_encode import (
     CharacterCounter,
     CoordinateFormat,
     PenMotion,
+    PathTrack,
+    parse_code,
+    parse_modes,
     parse_status,
     parse_welcome,
     stroke_lines,
@@ -196,3 +199,41 @@ def test_code_tables_follow_the_grbl_csv():
     assert set(ERROR_CODES) == set(range(1, 18)) | set(range(20, 39))
     assert ALARM_CODES[3].startswith("Reset while in motion")
     assert set(ALARM_CODES) == set(range(1, 11))
+
+
+def test_reply_numbers_are_ascii_digits_only():
+    assert parse_code("error:22") == 22 and parse_code("ALARM:1") == 1
+    for bad in ("error:\u00b2", "error:\u0662", "ALARM:", "error:1x", "error:" + "9" * 30):
+        with pytest.raises(ParseError):
+            parse_code(bad)
+    for bad in ("<Hold:\u00b2|MPos:0,0,0>", "<Idle|MPos:\u0661,0,0>", "<Idle|Bf:15,\uff11>", "<Idle|MPos:1e3,0,0>",
+                "<Idle|MPos:inf,0,0>", "<Idle|MPos:nan,0,0>", "<Idle|MPos:" + "9" * 40 + ",0,0>"):
+        with pytest.raises(ParseError):
+            parse_status(bad)
+    assert parse_welcome("Grbl \u0661.1h ['$' for help]") is None
+
+
+def test_parser_state_report():
+    # commands.md $G example: [GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]
+    modes = parse_modes("[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]")
+    assert modes == {"G": 0.0, "M": 5.0, "T": 0.0, "F": 0.0, "S": 0.0}
+    assert parse_modes("[GC:G1 G54 G17 G21 G90 G94 M3 M9 T0 F3000 S50]")["G"] == 1.0
+    assert parse_modes("[GC:G38.2 G54 G17 G21 G90 G94 M4 M8 T2 F10.5 S1000]")["M"] == 4.0
+    for bad in ("GC:G0 M5 F0 S0", "[GC:G0 M5 F0]", "[GC:G0 M5 F0 S\u00b2]", "[GC:G0 M5 F0 S0 X]", "[GC:]"):
+        with pytest.raises(ParseError):
+            parse_modes(bad)
+
+
+def test_path_track_accepts_the_path_and_refuses_excursions():
+    track = PathTrack()
+    track.start((0.0, 0.0))
+    track.append((1000.0, 0.0), False)   # travel
+    n = track.append((1000.0, 1000.0), True)  # draw
+    assert track.check((500.0, 0.0), False, 5) is None and track.check((1000.0, 400.0), True, 5) is None
+    assert track.check((1000.0, 0.0), True, 5) is None  # at a vertex the pen may be either way
+    assert "off the path" in track.check((300.0, 300.0), None, 5)
+    assert "pen is down" in track.check((500.0, 0.0), True, 5)  # a pen-up line turned into a pen-down one
+    assert "pen is up" in track.check((1000.0, 500.0), False, 5)
+    track.done_until(n)
+    assert len(track) == 1 and track.end == (1000.0, 1000.0)
+    assert track.check((1000.0, 500.0), True, 5) is not None  # the legs before the confirmed point are gone
