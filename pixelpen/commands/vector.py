@@ -192,7 +192,7 @@ def add_optimize(subparsers: argparse._SubParsersAction) -> argparse.ArgumentPar
                    help="drop points that deviate less than TOL_MM")
     p.add_argument("--time-budget", type=_positive, default=None, metavar="S",
                    help="most seconds to spend improving the order (default: adaptive, stopping when the gains stall;"
-                        " about 50 us per path)")
+                        " about 30 us per path)")
     p.add_argument("--no-dedupe", action="store_true",
                    help="keep lines drawn twice within one layer and pen (other layers and pens are never deduplicated)")
     p.add_argument("--across-layers", action="store_true", help="order paths across layers, not layer by layer")

@@ -1,4 +1,10 @@
-"""Pen-up path ordering: nearest neighbour from the pen's home, greedy end matching, 2-opt and Or-opt local search."""
+"""Pen-up path ordering: nearest neighbour from the pen's home, greedy end matching, 2-opt and Or-opt local search.
+
+Limits (override with ``time_budget`` / ``--time-budget S``, a fixed number of seconds for the whole call): by
+default the local search runs to a local optimum but for at most :data:`AUTO_BUDGET_MAX_S` (120 s), and kicks
+run for :func:`auto_budget` seconds (:data:`AUTO_BUDGET_MIN_S` + :data:`AUTO_BUDGET_PER_STROKE_S` per stroke,
+a little more per stroke beyond 10,000) or until a round of them gains less than :data:`STALL_GAIN`.
+"""
 
 from __future__ import annotations
 
@@ -27,22 +33,30 @@ _KICK_RUN = 30  # longest run of strokes (each of two) a double-bridge kick swap
 _KICKS_PER_STROKE = 10  # kicks tried per stroke at most, so small inputs finish long before their budget
 AUTO_BUDGET_MIN_S = 0.01
 """Least time the adaptive budget (``time_budget=None``) allows a call."""
-AUTO_BUDGET_PER_STROKE_S = 50e-6
+AUTO_BUDGET_PER_STROKE_S = 30e-6
 """Time the adaptive budget allows per stroke up to 10,000 strokes (vpype's ``linesort`` spends 0.1-0.2 ms a path)."""
-AUTO_BUDGET_MAX_S = 60.0
-"""Most time the adaptive budget allows a call."""
+AUTO_BUDGET_MAX_S = 120.0
+"""Most time an adaptive call (``time_budget=None``) spends, however large the input: a bound on the local search."""
 STALL_GAIN = 1e-3
 """Kicks stop when a round of them (an eighth of the strokes, at least 64) cut the cost by less than this fraction."""
 
 
 def auto_budget(n_strokes: int) -> float:
-    """The adaptive time budget (seconds) for ordering ``n_strokes`` strokes.
+    """The adaptive time budget (seconds) for the kicks of ordering ``n_strokes`` strokes.
 
     It grows a little faster than the stroke count beyond 10,000 strokes (by ``(n / 10,000) ** 0.2``), since the
     local search's reversals and splices get longer with the tour.
     """
     n = max(0, int(n_strokes))
     return min(AUTO_BUDGET_MAX_S, AUTO_BUDGET_MIN_S + AUTO_BUDGET_PER_STROKE_S * n * max(1.0, (n / 10_000) ** 0.2))
+
+
+def _deadlines(time_budget: float | None, n: int) -> tuple[float, float]:
+    """Clock times at which kicks stop and at which the local search stops (the same for a fixed budget)."""
+    now = time.perf_counter()
+    if time_budget is None:
+        return now + auto_budget(n), now + AUTO_BUDGET_MAX_S
+    return now + time_budget, now + time_budget
 
 
 def stroke_groups(dl: DisplayList, across_layers: bool = False) -> list[np.ndarray]:
@@ -82,9 +96,11 @@ def order_paths(
     Otherwise near stroke ends are first linked into chains by greedy matching (shortest gap first), the
     chains joined by nearest neighbour, and 2-opt / Or-opt moves on neighbour lists improve the order
     until none gains, then random kicks until their gains stall (below :data:`STALL_GAIN`), all within
-    ``time_budget`` seconds for the whole call (None: :func:`auto_budget` of the stroke count). With a ``profile`` a hop
-    costs its pen-up travel time under the profile's motion limits instead of its length. Groups (see
-    :func:`stroke_groups`) keep their order. The result never has more pen-up travel, nor with a profile
+    ``time_budget`` seconds for the whole call. With ``time_budget`` None (adaptive) the 2-opt / Or-opt search
+    always runs until no move gains (a local optimum, the same on a busy machine as on an idle one; at most
+    :data:`AUTO_BUDGET_MAX_S`) and kicks follow while the call is within :func:`auto_budget` of the stroke
+    count. With a ``profile`` a hop costs its pen-up travel time under the profile's motion limits instead of
+    its length. Groups (see :func:`stroke_groups`) keep their order. The result never has more pen-up travel, nor with a profile
     more pen-up time, than the input's strokes taken group by group in their given order, which is the
     input itself whenever its layers and pens already come in runs.
     """
@@ -98,7 +114,7 @@ def order_paths(
     if not len(dl):
         return dl.reordered(np.arange(0))
     cost_scalar = float if profile is None else _TravelTime(profile.pen_up, dl.unit_mm)
-    t_end = time.perf_counter() + (auto_budget(len(dl)) if time_budget is None else time_budget)
+    t_end, t_cap = _deadlines(time_budget, len(dl))
     starts, ends = dl.starts, dl.ends
     groups = stroke_groups(dl, across_layers)
     order_parts, flip_parts = [], []
@@ -107,8 +123,9 @@ def order_paths(
     for g in groups:
         share = len(g) / remaining
         remaining -= len(g)
-        deadline = time.perf_counter() + max(0.0, t_end - time.perf_counter()) * share
-        o, f = _order_group(starts[g], ends[g], at, reverse, deadline, cost_scalar)
+        now = time.perf_counter()
+        deadlines = (now + max(0.0, t_end - now) * share, now + max(0.0, t_cap - now) * share)
+        o, f = _order_group(starts[g], ends[g], at, reverse, deadlines, cost_scalar)
         keep = np.arange(len(g)), np.zeros(len(g), bool)
         if _worse_than((starts[g][o], ends[g][o], f), (starts[g], ends[g], keep[1]), at, cost_scalar):
             o, f = keep  # the group as given is at least as good
@@ -152,8 +169,12 @@ class _TravelTime:
         return self.limits.move_times(np.asarray(d, dtype=np.float64) * self.scale)
 
 
-def _order_group(starts, ends, home, reverse, deadline, cost_scalar):
-    """Order one group of strokes: returns (order, reversed) arrays indexing the group."""
+def _order_group(starts, ends, home, reverse, deadlines, cost_scalar):
+    """Order one group of strokes: returns (order, reversed) arrays indexing the group.
+
+    ``deadlines`` are the clock times at which kicks stop and at which the whole search stops.
+    """
+    deadline = deadlines[1]
     n = len(starts)
     xy = np.empty((2 * n, 2))
     xy[0::2], xy[1::2] = starts, ends
@@ -177,9 +198,9 @@ def _order_group(starts, ends, home, reverse, deadline, cost_scalar):
         # search by distance first: under a concave time cost the search alone stalls in poorer optima;
         # from the distance optimum it goes on to cut the travel time
         if cost_scalar is not float:
-            entries = _local_search(xy, home, entries, nb, dist, reverse, deadline, float, kicks=False)
+            entries = _local_search(xy, home, entries, nb, dist, reverse, (deadline, deadline), float, kicks=False)
         if time.perf_counter() < deadline:
-            entries = _local_search(xy, home, entries, nb, dist, reverse, deadline, cost_scalar)
+            entries = _local_search(xy, home, entries, nb, dist, reverse, deadlines, cost_scalar)
     return entries >> 1, (entries & 1).astype(bool)
 
 
@@ -223,7 +244,7 @@ def _nearest_neighbour(xy: np.ndarray, home: np.ndarray, reverse: bool) -> np.nd
     return np.asarray(seq, dtype=np.int64)
 
 
-def _local_search(xy, home, entries, nb, dist, reverse, deadline, cost_scalar, kicks: bool = True) -> np.ndarray:
+def _local_search(xy, home, entries, nb, dist, reverse, deadlines, cost_scalar, kicks: bool = True) -> np.ndarray:
     """Improve a visiting order by 2-opt (when strokes may be reversed) and Or-opt moves, then by kicks.
 
     The order is held as a cycle of end points: home (``H_out``), each stroke's entry and exit point, then
@@ -233,8 +254,11 @@ def _local_search(xy, home, entries, nb, dist, reverse, deadline, cost_scalar, k
     are queued again (don't-look bits); reversals and splices take the shorter side of the cycle. Once no
     move gains, and while time is left, ``kicks`` perturbs the order with local double bridges (swapping
     two short adjacent runs of strokes), searches again around them and keeps the result only if it is
-    cheaper (iterated local search). Returns the entry point of each stroke in the improved order.
+    cheaper (iterated local search); kicks stop at ``deadlines[0]``, or when a round of them gains less than
+    :data:`STALL_GAIN`, and all search at ``deadlines[1]``. Returns the entry point of each stroke in the
+    improved order.
     """
+    kick_deadline, deadline = deadlines
     n = len(entries)
     N = 2 * n + 2
     HOUT, HIN = 2 * n, 2 * n + 1
@@ -434,7 +458,7 @@ def _local_search(xy, home, entries, nb, dist, reverse, deadline, cost_scalar, k
         tries = 0
         rounds = max(64, n // 8)
         round_start = total
-        while tries < _KICKS_PER_STROKE * n and not active and clock() < deadline:
+        while tries < _KICKS_PER_STROKE * n and not active and clock() < min(kick_deadline, deadline):
             tries += 1
             if not tries % rounds:
                 if round_start - total < STALL_GAIN * total:
