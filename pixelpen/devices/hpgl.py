@@ -32,8 +32,20 @@ the plotter taking nothing, not on the time a long stroke needs at the line's sp
 
 Connecting sends ``ESC.(`` and ``ESC.K`` (before any byte that enters the buffer: a connection that
 broke mid-instruction may have left half a number there), the handshake preamble, ``IN;`` with
-``PSn;`` and ``VSv;`` where asked for, and ``OI;OE;``; the OI answer (the model) ends any stale
-answers of an earlier connection, OE checks the setup, then ``ESC.E`` and ``ESC.B`` start the job.
+``PSn;`` and ``VSv;`` where asked for, and ``OS;OI;OE;``; OS clears the status bit 8 that IN set
+(so that a later OS showing it means the plotter was switched on again), the OI answer (the model)
+ends any stale answers of an earlier connection, OE checks the setup, then ``ESC.E`` and ``ESC.B``
+start the job.
+
+After a fault, before that handshake (``_where``): ``ESC.(``, then ``ESC.B`` every ``MAX_POLL_S``
+until its answer has not changed for ``SETTLE_S`` plus the longest time one instruction of the
+strokes in doubt can take (the plotter has executed every complete instruction it received and
+finished moving; answers of the old connection that arrive meanwhile are read and dropped), then
+``ESC.K`` (drops a half-received instruction; nothing is moving any more) and ``OS;OA;``: OA is
+the pen position and state, OS bit 8 set means the plotter was switched off and on (its buffer and
+what it was drawing are lost: the position is reported lost).  At each sync point the OA answer
+must be the end of the last stroke sent before it; another position is a fault (a corrupted
+coordinate or a skipped instruction).
 
 Confirmation and errors: after every ``sync_strokes`` strokes or ``sync_bytes`` bytes (at pen-up) the
 driver sends ``PU;OA;OE;`` and ``ESC.E``.  OA and OE are buffered output instructions, answered when
@@ -70,7 +82,7 @@ from ..urls import Options, parse_bool
 from ..vector.displaylist import DisplayList
 from ..vector.profiles import DeviceProfile
 from . import hpgl_encode as enc
-from .plotter import PlotterDisplay
+from .plotter import DeviceWhere, PlotterDisplay
 
 log = logging.getLogger(__name__)
 
@@ -109,6 +121,8 @@ MAX_POLL_S = 0.25
 """Longest gap between ESC.B queries while waiting; the plotter still holds buffer-size minus reserve bytes."""
 PAUSE_CHECK_S = 1.0
 """Seconds without progress after which the driver asks ESC.O whether the plotter is paused."""
+SETTLE_S = 2.0
+"""Seconds ESC.B must stay unchanged, beyond one instruction's drawing time, before the plotter counts as settled."""
 SAFE_WAIT_S = 10.0
 """Longest wait for the safe-stop sequence to be executed before closing."""
 DISCOVERY_TIMEOUT_S = 0.5
@@ -162,6 +176,8 @@ class _SyncPoint:
     """The answer before OE: ``OA`` (x,y,pen) or ``OI`` (the model name)."""
     seen: str | None = None
     """The marker's answer once it came."""
+    expect: tuple[int, int] | None = None
+    """Where OA must find the pen (the end of the last stroke before the sync point; None: not checked)."""
 
 
 @dataclass
@@ -188,6 +204,8 @@ class _Wire:
     window: list[bytes] = field(default_factory=list)
     window_first: int = 0
     strokes_sent: int = 0
+    last_point: tuple[int, int] | None = None
+    """End of the last stroke sent (where the next sync point's OA must find the pen)."""
     since_sync_strokes: int = 0
     since_sync_bytes: int = 0
     written: int = 0
@@ -389,6 +407,7 @@ class HPGLDisplay(PlotterDisplay):
             w.window_first = index
         self._send(instructions)
         w.strokes_sent = index + 1
+        w.last_point = (int(points[-1, 0]), int(points[-1, 1]))
         w.since_sync_strokes += 1
         w.since_sync_bytes += sum(len(i) for i in instructions)
         if w.since_sync_strokes >= self.sync_strokes or w.since_sync_bytes >= self.sync_bytes:
@@ -432,6 +451,107 @@ class HPGLDisplay(PlotterDisplay):
         except Exception as exc:  # leaving the plotter safe is best effort; say why it may not be
             log.warning("%s: safe stop may be incomplete: %s", self.profile.name, exc)
 
+    # -- after a fault: where the plotter stopped ---------------------------------------------
+    def _where(self) -> DeviceWhere:
+        """Let the plotter finish what the old connection left, drop a half instruction, ask OS and OA (module docstring)."""
+        link = self._require_link()
+        link.reset_input()
+        self._wire = _Wire(progress_at=self.clock.now(), connecting=True)
+        self._write(enc.PLOTTER_ON, graphics=False)
+        self._settle(SETTLE_S + self._instruction_time_s())
+        self._write(enc.ABORT_GRAPHICS + enc.WHERE_REQUEST, graphics=False)
+        status = self._answer(_NUMBER, "OS")
+        x, y, pen = (int(v) for v in self._answer(_OA, "OA").split(","))
+        if int(status) & enc.STATUS_INITIALISED:
+            return DeviceWhere(
+                (x, y), bool(pen), position_lost=True,
+                detail=f"the plotter was switched off or reset (OS {int(status)}: initialised since the job began), "
+                "so what it had received but not drawn is lost",
+            )
+        return DeviceWhere((x, y), bool(pen), detail=f"OA {x},{y},{pen}")
+
+    def _settle(self, hold_s: float) -> None:
+        """Ask ESC.B until its answer stays the same for ``hold_s`` seconds (waiting as long as VIEW or the lever holds)."""
+        last, since = None, self.clock.now()
+        after_output = False
+        while True:
+            self._write(enc.ASK_FREE, graphics=False)
+            while True:  # answers of the old connection's buffered requests may come first
+                text = self._answer(None, "ESC.B")
+                if _OA.fullmatch(text) or (_IDENT.fullmatch(text) and not _NUMBER.fullmatch(text)):
+                    after_output = True  # an OA or OI answer: the OE answer follows it
+                elif after_output and int(text) <= MAX_OE:
+                    after_output = False
+                else:
+                    break
+            now = self.clock.now()
+            if text != last:
+                last, since = text, now
+            elif now - since >= hold_s:
+                self._write(enc.ASK_STATUS, graphics=False)
+                if not int(self._answer(_NUMBER, "ESC.O")) & (STATUS_VIEW | STATUS_PAPER_LEVER):
+                    self._pause_changed(False)
+                    return
+                self._pause_changed(True)
+                since = now
+            self.clock.sleep(MAX_POLL_S)
+
+    def _answer(self, form: re.Pattern[str] | None, what: str) -> str:
+        """The next non-empty answer line, which must match ``form`` (None: an OA, OI or number)."""
+        link = self._require_link()
+        while True:
+            try:
+                line = _clean(link.read_until(b"\r", timeout=self.timeout, max_size=_MAX_REPLY))
+            except LinkTimeout:
+                raise LinkTimeout(f"{self._name()}: no answer to {what}; is the plotter switched on?") from None
+            if not line:
+                continue
+            ok = _OA.fullmatch(line) or _NUMBER.fullmatch(line) or _IDENT.fullmatch(line) if form is None else form.fullmatch(line)
+            if not ok:
+                raise LinkError(f"{self._name()}: expected the {what} answer, got {line!r}")
+            return line
+
+    def _instruction_time_s(self) -> float:
+        """Longest time one instruction of the strokes in doubt can take to draw (the whole job's when unknown)."""
+        speed_mm_s = 10.0 * (self.velocity_cm_s or self.max_velocity_cm_s)
+        job = self._job
+        if job is None or not len(job):
+            x0, x1 = self.paper.x_range
+            y0, y1 = self.paper.y_range
+            diagonal = math.hypot(x1 - x0, y1 - y0) * self.profile.unit_mm
+            return diagonal * enc.MAX_INSTRUCTION / len("PD0,0,") / speed_mm_s
+        lo, hi = job.offsets[self.confirmed], job.offsets[min(len(job), max(self.confirmed + 1, self._sent_end))]
+        pts = job.points[lo:hi]
+        longest = float(np.hypot(*np.diff(pts, axis=0).T).sum()) if len(pts) > 1 else 0.0
+        return longest * job.unit_mm / speed_mm_s
+
+    # -- manual control ----------------------------------------------------------------------
+    def _manual_pen(self, down: bool) -> None:
+        self._run_now([b"PD;" if down else enc.PEN_UP])
+
+    def _manual_pen_state(self) -> bool | None:
+        return self._run_now([]).split(",")[2] != "0"
+
+    def _manual_home(self) -> None:
+        x, y = self.paper.park if self.paper.park is not None else (0, 0)
+        self._run_now([enc.PEN_UP, b"PU%d,%d;" % (x, y)])
+
+    def _manual_motors_off(self) -> None:
+        raise ConfigError(
+            f"{self.profile.name}: HP-GL plotters have no motors-off command (the pen carriage is held while the "
+            "plotter is on); switch the plotter off to move it by hand"
+        )
+
+    def _run_now(self, instructions: list[bytes]) -> str:
+        """Send instructions and ``OA;OE;``, wait until the plotter has executed them; return the OA answer."""
+        w = self._wire
+        point = _SyncPoint(None, list(instructions), w.strokes_sent)
+        w.syncs.append(point)
+        self._send([*instructions, enc.SYNC_REQUEST])
+        self._wait(lambda: point not in w.syncs, "waiting for the plotter to move", poll=MAX_POLL_S)
+        assert point.seen is not None
+        return point.seen
+
     # -- streaming ---------------------------------------------------------------------------
     def _send(self, instructions: list[bytes]) -> None:
         """Write HP-GL instructions under the handshake, recording them in the current sync window."""
@@ -464,7 +584,7 @@ class HPGLDisplay(PlotterDisplay):
     def _sync(self) -> None:
         """``PU;OA;OE;`` and ``ESC.E``: confirm every stroke so far and check both error registers."""
         w = self._wire
-        point = _SyncPoint(w.strokes_sent, w.window, w.window_first)
+        point = _SyncPoint(w.strokes_sent, w.window, w.window_first, expect=w.last_point)
         w.syncs.append(point)
         self._send([enc.PEN_UP, enc.SYNC_REQUEST])
         w.window, w.window_first = [], w.strokes_sent
@@ -536,6 +656,7 @@ class HPGLDisplay(PlotterDisplay):
             if done():
                 if announced:
                     log.info("%s: plotting resumed", self.profile.name)
+                    self._pause_changed(False)
                 return
             now = self.clock.now()
             self._check_overdue(now)
@@ -545,6 +666,7 @@ class HPGLDisplay(PlotterDisplay):
                     why = "the paper lever is raised" if w.status & STATUS_PAPER_LEVER else "VIEW is pressed"
                     log.info("%s: paused (%s); waiting", self.profile.name, why)
                     announced = True
+                    self._pause_changed(True)
                 w.progress_at = now
             elif now - w.progress_at > self.stall_s:
                 raise LinkTimeout(
@@ -609,6 +731,14 @@ class HPGLDisplay(PlotterDisplay):
             return
         if head is not None and _is_marker(head.marker, text):
             head.seen = text
+            if head.expect is not None:
+                x, y, _ = (int(v) for v in text.split(","))
+                if (x, y) != head.expect:
+                    self._mark_damaged(range(head.first_stroke, head.confirms or head.first_stroke))
+                    raise LinkError(
+                        f"{self._name()}: OA found the pen at {x},{y} after {_strokes(head)}, not at "
+                        f"{head.expect[0]},{head.expect[1]} where they end (an instruction was corrupted or lost)"
+                    )
             return
         if _NUMBER.fullmatch(text) and w.queries:
             self._on_query_answer(w.queries.popleft(), int(text))
@@ -626,6 +756,8 @@ class HPGLDisplay(PlotterDisplay):
         w.syncs.popleft()
         if code:
             strokes = "the setup instructions" if point.confirms is None else _strokes(point)
+            if point.confirms is not None:
+                self._mark_damaged(range(point.first_stroke, point.confirms))
             raise ProtocolError(
                 f"HP-GL error {code} ({HPGL_ERRORS.get(code, 'unknown error')}) in {strokes}",
                 code=code, command=self._culprit(point.instructions, code), device=self.profile.name,
@@ -658,6 +790,8 @@ class HPGLDisplay(PlotterDisplay):
                 log.warning("%s: the plotter held RS-232 error %d (%s) from before; cleared",
                             self.profile.name, value, IO_ERRORS[value])
             elif value and q.sync is not None:
+                if q.sync.confirms is not None:
+                    self._mark_damaged(range(q.sync.first_stroke, q.sync.confirms))
                 raise ProtocolError(
                     f"RS-232 error {value} ({IO_ERRORS[value]}) while receiving {_strokes(q.sync)}",
                     code=value, command=_describe(q.sync.instructions), device=self.profile.name,
@@ -729,7 +863,8 @@ class HP7475A(HPGLDisplay):
     profile_name = "hp7475a"
     family = "hp7475a"
     ident = "7475A"
-    mnemonics = HPGLDisplay.mnemonics | {"DC", "DP", "OD"}
+    mnemonics = HPGLDisplay.mnemonics | {"DC", "DP", "OD", "PS"}
+    """PS included: chiplotle3's 7475A instruction list has it and the simulator takes it (not sent unless ps=true)."""
 
 
 @register_display("hp7550a")

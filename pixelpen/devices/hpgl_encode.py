@@ -42,8 +42,13 @@ ASK_STATUS: Final = b"\x1b.O"
 
 SYNC_REQUEST: Final = b"OA;OE;"
 """Buffered output requests answered when execution reaches them: pen position, then the HP-GL error."""
-IDENTIFY_REQUEST: Final = b"OI;OE;"
-"""Buffered model identification (a 7475A answers OI only after IN), then the HP-GL error."""
+IDENTIFY_REQUEST: Final = b"OS;OI;OE;"
+"""Buffered status (read to clear its 'initialised' bit 8, set by IN), model identification (a 7475A answers
+OI only after IN), then the HP-GL error."""
+WHERE_REQUEST: Final = b"OS;OA;"
+"""Status (bit 8: switched on or initialised since the last OS) and actual pen position after a fault."""
+STATUS_INITIALISED: Final = 8
+"""OS bit: the plotter was switched on or got IN since the last OS (plotters.md §1.4)."""
 PEN_UP: Final = b"PU;"
 
 HANDSHAKES: Final = ("escb", "xonxoff", "hardwire", "none")

@@ -331,6 +331,10 @@ class PlotterDisplay(VectorDisplay):
         self._where_found: DeviceWhere | None = None
         """What ``_where()`` said on the last fresh link opened for a resume."""
         self._paused_now = False
+        self._damaged: range | None = None
+        """Strokes the device reported it did not draw as sent (an error, a wrong position)."""
+        self._redo = range(0)
+        """Whole strokes a resume draws again before it continues (a damaged stretch)."""
 
     # -- construction ------------------------------------------------------------------------
     @classmethod
@@ -430,6 +434,7 @@ class PlotterDisplay(VectorDisplay):
     def _attach(self, link: Link) -> None:
         """Use ``link``; a display given no clock keeps time on the link's (a ``speed=fast`` simulator's)."""
         self.link = link
+        self._paused_now = False  # a fresh link knows of no pause yet: the next one is announced again
         if not self._clock_given:
             self.clock = link.clock
 
@@ -454,8 +459,9 @@ class PlotterDisplay(VectorDisplay):
         pts = self._device_points(dl)
         start = self._start_job(dl, resume, pts, position_confirmed)
         self._head = None
+        redo, self._redo = self._redo, range(0)
         try:
-            for i in range(start.stroke, len(dl)):
+            for i in [*redo, *range(start.stroke, len(dl))]:
                 self._hold_while_paused()
                 pen = int(dl.pens[i])
                 if pen != self.pen:
@@ -521,7 +527,7 @@ class PlotterDisplay(VectorDisplay):
         elif resume:
             raise ConfigError("nothing to resume: no interrupted plot in this process and no state file")
         self._job = dl
-        self._job_state = PlotState(self.port, fp, len(dl), start.stroke)
+        self._job_state = PlotState(self.port, fp, len(dl), self._redo.start if self._redo else start.stroke)
         seg = np.hypot(*np.diff(dl.points, axis=0).T) if len(dl.points) > 1 else np.zeros(0)
         per_stroke = np.add.reduceat(np.append(seg, 0.0), dl.offsets[:-1]) - np.where(
             dl.offsets[1:] < len(dl.points), np.append(seg, 0.0)[np.minimum(dl.offsets[1:] - 1, len(seg))], 0.0
@@ -529,8 +535,8 @@ class PlotterDisplay(VectorDisplay):
         self._cum_mm = np.concatenate([[0.0], np.cumsum(per_stroke)]) * dl.unit_mm
         self._estimate_s = _estimate_seconds(dl, self.profile)
         self._started = self.clock.now()
-        self.confirmed = start.stroke
-        self._sent_end = start.stroke
+        self.confirmed = self._redo.start if self._redo else start.stroke
+        self._sent_end = self.confirmed
         self._save_state()
         return start
 
@@ -545,6 +551,18 @@ class PlotterDisplay(VectorDisplay):
             self._position_lost = True
         lost = self._position_lost or where is None or not where.settled
         found = [] if lost else locate(window, where, before)
+        damaged, self._damaged = self._damaged, None
+        self._redo = range(0)
+        if damaged is not None and len(found) == 1 and not lost:
+            first = max(confirmed, damaged.start)
+            if found[0].stroke <= first:
+                return found[0]
+            if found[0].stroke < damaged.stop:
+                return ResumePoint(first)
+            self._redo = range(first, damaged.stop)
+            return found[0]
+        if damaged is not None and found:
+            found = [ResumePoint(max(confirmed, damaged.start))]  # draw the damaged strokes again, then on
         if len(found) == 1 and not self._position_lost:
             return found[0]
         if confirmed_by_user:
@@ -617,6 +635,16 @@ class PlotterDisplay(VectorDisplay):
         if announced:
             log.info("%s: resumed", self.profile.name)
             self._pause_changed(False)
+
+    def _mark_damaged(self, strokes: range) -> None:
+        """Families call this before raising for an error the device found in ``strokes`` (an instruction skipped or misread).
+
+        The resume draws those strokes again whole (never losing one; their good parts are drawn twice),
+        then continues where the device stopped.
+        """
+        if self._damaged is not None:
+            strokes = range(min(self._damaged.start, strokes.start), max(self._damaged.stop, strokes.stop))
+        self._damaged = strokes
 
     def _pause_changed(self, paused: bool) -> None:
         """Tell ``on_pause`` the device has actually paused (True) or goes on (False); families call it for their own pauses."""

@@ -14,11 +14,11 @@ import pytest
 import pixelpen
 from pixelpen.clock import SimulatedClock
 from pixelpen.devices.hpgl import HP7440A, HP7475A, HP7550A, HPGLDisplay
-from pixelpen.devices.plotter import PlotInterrupted, PlotState
+from pixelpen.devices.plotter import PlotInterrupted, PlotState, PositionUnknown
 from pixelpen.display.registry import known_schemes
 from pixelpen.drivers import discovery
 from pixelpen.drivers.link import Link
-from pixelpen.errors import ConfigError, LinkError, LinkTimeout, ProtocolError, URLError
+from pixelpen.errors import ConfigError, LinkError, LinkTimeout, PixelpenError, ProtocolError, URLError
 from pixelpen.sim.base import create_simulator, forget_simulator, named_simulator
 from pixelpen.sim.transport import open_sim_port
 from pixelpen.urls import parse_url
@@ -162,11 +162,11 @@ def test_wire_bytes_of_a_square_are_exact():
     rig = Rig()
     with rig.display as d:
         d.plot(DisplayList.from_polylines([square(1000, 1000)], pens=1, unit_mm=UNIT))
-    # ESC.( plotter on, ESC.K abort leftovers, ESC.(; (the escb preamble); IN then OI/OE to identify and
-    # check; pen 1; the square; PU;OA;OE; to confirm it; on close ESC.K, PU;SP0;, the A4 park position
+    # ESC.( plotter on, ESC.K abort leftovers, ESC.(; (the escb preamble); IN, OS (clears its bit 8, so that
+    # a later OS can tell a power cycle), OI/OE to identify and check; pen 1; the square; PU;OA;OE; to confirm it; on close ESC.K, PU;SP0;, the A4 park position
     # and OI; to see them done.
     assert graphics(rig.sent) == (
-        b"\x1b.(\x1b.K\x1b.(;IN;OI;OE;"
+        b"\x1b.(\x1b.K\x1b.(;IN;OS;OI;OE;"
         b"SP1;PU1000,1000;PD3000,1000,3000,3000,1000,3000,1000,1000;PU;OA;OE;"
         b"\x1b.KPU;SP0;PU11040,7721;OI;"
     )
@@ -178,7 +178,7 @@ def test_velocity_and_paper_size_go_after_in():
     rig = Rig("hp7550a", "velocity=20")
     with rig.display as d:
         d.plot(DisplayList.from_polylines([square(500, 500)], pens=3, unit_mm=0.025))
-    assert graphics(rig.sent).startswith(b"\x1b.(\x1b.K\x1b.(;IN;PS4;VS20;OI;OE;SP3;PU500,500;")
+    assert graphics(rig.sent).startswith(b"\x1b.(\x1b.K\x1b.(;IN;PS4;VS20;OS;OI;OE;SP3;PU500,500;")
     assert rig.device.error_log == [] and rig.display.model_reply == "7550A"
 
 
@@ -202,12 +202,11 @@ def test_pens_are_selected_when_they_change_and_land_on_paper_in_order():
     assert np.array_equal(seg[:4, :2], square(500, 500)[:4])
 
 
-def test_ps_on_a_7475a_is_reported_naming_the_instruction():
-    with pytest.raises(ProtocolError) as info:
-        Rig(options="ps=true")
-    err = info.value
-    assert err.code == 1 and err.command == "PS4;"  # the 7475A has no PS (chiplotle3's 7475A whitelist)
-    assert "instruction not recognised" in str(err) and "setup" in str(err)
+def test_ps_on_a_7475a_is_sent_when_asked_for_and_taken():
+    rig = Rig(options="ps=true")  # chiplotle3's 7475A instruction list has PS; vpype's hp7475a files start IN;DF;PS4;
+    assert b"IN;PS4;OS;OI;OE;" in graphics(rig.sent) and rig.device.error_log == []
+    assert "PS" in HP7475A.mnemonics and not HP7475A.knows_ps  # known, but not sent unless asked for
+    rig.display.close()
 
 
 def test_a_point_outside_the_hpgl_range_is_refused_before_anything_is_sent():
@@ -339,7 +338,9 @@ def test_escb_does_not_starve_a_plotter_that_is_slower_than_the_link():
     big = [square(300, 300, 7000), square(600, 600, 6000), square(900, 900, 5000)]
     with rig.display as d:
         d.plot(DisplayList.from_polylines(big, pens=1, unit_mm=UNIT))
-    assert rig.device.stats.starved_time < 0.05  # simulated seconds idle with nothing to execute
+    # simulated seconds idle with nothing to execute: the connect handshake's round trip (OS/OI/OE answers,
+    # ESC.E and ESC.B at 9600 baud) is all of it
+    assert rig.device.stats.starved_time < 0.06
 
 
 def test_escb_keeps_a_fast_plotter_about_as_busy_as_hardware_handshake():
@@ -561,37 +562,83 @@ def test_ctrl_c_aborts_then_stores_the_pen():
 # -- faults and resuming --------------------------------------------------------------------------------
 
 
-def _plot_through_faults(dl: DisplayList, fault: dict[str, str]) -> tuple[Rig, int]:
-    rig = Rig(first_link=fault, options="sync_strokes=3")
-    interruptions = 0
+def _plot_through_faults(dl: DisplayList, fault: dict[str, str], options: str = "sync_strokes=3", **kw):
+    """Plot with a fault on the first link, power the plotter on again if it lost it, resume (confirming if asked)."""
+    rig = Rig(first_link=fault, options=options, **kw)
+    interruptions, asked = 0, []
     try:
         rig.display.plot(dl)
-    except PlotInterrupted as exc:
+    except (PlotInterrupted, ProtocolError) as exc:
         interruptions += 1
-        assert 0 <= exc.resume_from <= len(dl)
+        assert 0 <= getattr(exc, "resume_from", 0) <= len(dl)
         if "power_loss_after" in fault:
             rig.device.inject("reset")  # the operator switches it on again
-        rig.display.resume_after_fault()
+        try:
+            rig.display.resume_after_fault()
+        except PositionUnknown as unknown:
+            asked.append(unknown)
+            rig.display.resume_after_fault(position_confirmed=True)
     rig.display.close()
-    return rig, interruptions
+    return rig, interruptions, asked
 
 
-def test_every_fault_point_resumes_to_the_same_paper():
+def _segments(device) -> list[tuple]:
+    """The sheet as a sorted list of (x0, y0, x1, y1, pen): a multiset, so a line drawn twice shows."""
+    seg, pens, _ = device.segments()
+    return sorted((*map(float, s), int(p)) for s, p in zip(seg, pens))
+
+
+def _reference(dl: DisplayList, options: str = "sync_strokes=3") -> tuple[list[tuple], int]:
+    rig = Rig(options=options)
+    rig.display.plot(dl)
+    rig.display.close()
+    return _segments(rig.device), len(rig.links[0].sent)
+
+
+def test_a_drop_or_stall_anywhere_resumes_drawing_every_segment_exactly_once():
+    # the drawing has no closed strokes and no revisited points: every fault point has one reading
     dl = drawing(n=10, seed=5, pens=(1, 2, 3))
-    reference = Rig(options="sync_strokes=3")
-    reference.display.plot(dl)
-    reference.display.close()
-    total = len(reference.links[0].sent)
-    expected = reference.paper()
+    expected, total = _reference(dl)
     rng = np.random.default_rng(2026)
-    interrupted = 0
     for kind in ("drop_after", "stall_after"):
-        for at in rng.integers(40, total - 40, size=4):
-            rig, n = _plot_through_faults(dl, {kind: str(int(at))})
-            interrupted += n
-            assert np.array_equal(rig.paper(), expected), f"{kind}={at}: the paper differs"
+        for at in rng.integers(40, total - 40, size=5):
+            rig, n, asked = _plot_through_faults(dl, {kind: str(int(at))})
+            assert (n, asked) == (1, []), f"{kind}={at}"
+            assert _segments(rig.device) == expected, f"{kind}={at}: a segment is missing or drawn twice"
             assert rig.display.confirmed == len(dl)
-    assert interrupted == 8
+
+
+def test_a_stroke_cut_mid_way_is_finished_from_where_the_pen_stopped():
+    zigzag = np.array([[500 + 400 * i, 1000 + 3000 * (i % 2)] for i in range(14)], float)
+    dl = DisplayList.from_polylines([square(200, 200, 200), zigzag], pens=1, unit_mm=UNIT)
+    expected, total = _reference(dl, "sync_strokes=1")
+    rig, n, asked = _plot_through_faults(dl, {"drop_after": str(total - 160)}, "sync_strokes=1")
+    assert (n, asked) == (1, []) and _segments(rig.device) == expected
+    resumed = graphics(bytes(rig.links[1].sent))
+    first_pu = re.search(rb"(?<=;)PU(\d+),(\d+);PD", resumed)
+    assert first_pu and (int(first_pu[1]), int(first_pu[2])) != (500, 1000)  # not the stroke's start again
+    assert [int(first_pu[1]), int(first_pu[2])] in zigzag[1:].astype(int).tolist()  # a vertex the pen reached
+
+
+def test_a_power_loss_asks_for_confirmation_and_then_loses_nothing():
+    # the plotter forgets its buffer: which of the unconfirmed strokes it drew is unknowable, so the driver
+    # asks; confirmed, it redraws from the last confirmed stroke: every reference segment is there, and every
+    # other mark is a reference segment again or a part of one (the vector cut by the power loss)
+    dl = drawing(n=10, seed=5, pens=(1, 2, 3))
+    expected, total = _reference(dl)
+    ref = np.array([s[:4] for s in expected])
+    for at in np.random.default_rng(7).integers(200, total - 40, size=3):
+        rig, n, asked = _plot_through_faults(dl, {"power_loss_after": str(int(at))})
+        assert n == 1 and len(asked) == 1 and rig.display.confirmed == len(dl)
+        message = str(asked[0])
+        assert "switched off or reset" in message and "position_confirmed=True" in message
+        assert "--confirm-position" in message and f"stroke {asked[0].resume_from}" in message
+        have = _segments(rig.device)
+        assert all(have.count(s) >= 1 for s in expected)
+        for s in have:
+            same_pen = ref[[e[4] == s[4] for e in expected]]
+            dist = _on_segment(np.array([s[:2], s[2:4]]), same_pen)
+            assert (dist.max(axis=0) < 1e-6).any(), f"power_loss_after={at}: stray mark {s}"
 
 
 def _on_segment(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
@@ -602,42 +649,59 @@ def _on_segment(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
     return np.hypot(*(a + t[..., None] * d - p[:, None, :]).transpose(2, 0, 1))
 
 
-def test_power_loss_resumes_with_nothing_lost_and_nothing_new():
-    # A power loss cuts the vector being drawn: its inked part stays on the sheet and the driver draws the
-    # whole stroke again.  The sheet then holds every reference segment, and every other mark lies on a
-    # reference segment of the same pen (the simulator rasterises such a part on its own, so pixels may
-    # differ by the rounding of its cut end; the geometry may not).
-    dl = drawing(n=10, seed=5, pens=(1, 2, 3))
-    reference = Rig(options="sync_strokes=3")
-    reference.display.plot(dl)
-    reference.display.close()
-    ref_seg, ref_pens, _ = reference.device.segments()
-    total = len(reference.links[0].sent)
-    for at in np.random.default_rng(7).integers(40, total - 40, size=3):
-        rig, n = _plot_through_faults(dl, {"power_loss_after": str(int(at))})
-        assert n == 1 and rig.display.confirmed == len(dl)
-        seg, pens, _ = rig.device.segments()
-        have = {(tuple(s), p) for s, p in zip(seg.tolist(), pens.tolist())}
-        assert all((tuple(s), p) in have for s, p in zip(ref_seg.tolist(), ref_pens.tolist()))
-        for s, p in zip(seg, pens):
-            same_pen = ref_seg[ref_pens == p]
-            dist = _on_segment(np.array([s[:2], s[2:]]), same_pen)
-            assert (dist.max(axis=0) < 1e-6).any(), f"power_loss_after={at}: stray mark {s} (pen {p})"
+def test_a_garbled_answer_interrupts_and_the_resume_draws_each_segment_once():
+    dl = drawing(n=8, seed=3)
+    expected, _ = _reference(dl, "sync_strokes=2")
+    rig = Rig(options="sync_strokes=2", mangle=_Mangler(6, b"1,2;3\r"))
+    with pytest.raises(PlotInterrupted) as info:
+        rig.display.plot(dl)
+    assert isinstance(info.value.cause, LinkError)
+    rig.links[-1].mangle = None
+    rig.display.resume_after_fault()
+    rig.display.close()
+    assert _segments(rig.device) == expected
+
+
+def test_a_wrong_position_at_a_confirmation_is_a_fault_and_the_strokes_are_redrawn():
+    dl = drawing(n=6, seed=2)
+    expected, _ = _reference(dl, "sync_strokes=2")
+    oa = re.compile(rb"-?\d+,-?\d+,\d\r")
+    line, answers = bytearray(), []
+
+    def wrong_oa(data: bytes) -> bytes:  # the second OA answer reports another place (as after a corrupted PD)
+        if answers.count(True) >= 2:
+            return data
+        out = bytearray()
+        for byte in data:
+            line.append(byte)
+            if byte == 0x0D:
+                answers.append(oa.fullmatch(line) is not None)
+                out += b"1,1,0\r" if answers.count(True) == 2 and answers[-1] else line
+                line.clear()
+        return bytes(out)
+
+    rig = Rig(options="sync_strokes=2", mangle=wrong_oa)
+    with pytest.raises(PlotInterrupted, match="OA found the pen at 1,1 after strokes 2..3"):
+        rig.display.plot(dl)
+    rig.display.resume_after_fault()
+    rig.display.close()
+    have = _segments(rig.device)
+    assert all(s in have for s in expected)  # nothing lost: strokes 2..3 drawn again (twice, not lost)
+    assert len(have) - len(expected) == sum(len(dl.stroke(i)) - 1 for i in (2, 3))
 
 
 def test_resume_from_the_state_file_in_a_new_session(tmp_path):
     dl = drawing(n=10, seed=7)
-    reference = Rig()
-    reference.display.plot(dl)
-    reference.display.close()
+    expected, total = _reference(dl, "")
     state = tmp_path / "plot.json"
-    drop = len(reference.links[0].sent) - 40  # late: while the last strokes are being drawn
+    drop = total - 40  # late: while the last strokes are being drawn
     first = Rig(first_link={"drop_after": str(drop)}, options=f"sync_strokes=2&state={state}")
     with pytest.raises(PlotInterrupted) as info:
         first.display.plot(dl)
     saved = PlotState.load(state)
     assert saved.confirmed == info.value.resume_from and 0 < saved.confirmed < len(dl)
-    # a new session (new display, same plotter and paper) picks the job up from the file
+    assert saved.sent == len(dl) and not saved.position_lost  # every stroke went out before the drop
+    # a new session (new display, same plotter and paper) asks the plotter before its handshake
     second_links = []
 
     def factory():
@@ -647,8 +711,81 @@ def test_resume_from_the_state_file_in_a_new_session(tmp_path):
     d = pixelpen.open(f"sim:hp7475a?state={state}", link_factory=factory)
     d.plot(dl, resume=True)
     d.close()
-    assert np.array_equal(first.paper(), reference.paper())
-    assert b"PU" + b"%d,%d" % tuple(dl.stroke(0)[0].astype(int)) not in graphics(bytes(second_links[0].sent))
+    assert _segments(first.device) == expected
+    assert graphics(bytes(second_links[0].sent)).startswith(b"\x1b.(\x1b.KOS;OA;")  # asked where, before IN
+
+
+def test_resume_with_a_missing_state_file_is_refused_naming_it(tmp_path):
+    missing = tmp_path / "nope.json"
+    rig = Rig(options=f"state={missing}")
+    with pytest.raises(ConfigError, match=f"{re.escape(str(missing))}: no plot state to resume"):
+        rig.display.plot(drawing(n=2), resume=True)
+    assert not missing.exists()
+
+
+def test_a_fault_message_names_the_plotter_once():
+    rig = Rig(first_link={"drop_after": "300"})
+    with pytest.raises(PlotInterrupted) as info:
+        rig.display.plot(drawing(n=6))
+    text = str(info.value)
+    assert text.count("hp7475a") == 1 and text.startswith("plot interrupted: ")
+
+
+# -- pause confirmation and manual control -------------------------------------------------------------
+
+
+def test_on_pause_reports_a_pause_only_once_the_plotter_is_idle_with_the_pen_up():
+    dl = drawing(n=8)
+    expected, total = _reference(dl, "sync_strokes=4")
+    seen = []
+    rig = None
+
+    def on_pause(paused):
+        dev = rig.device
+        seen.append((paused, dev.paused, dev._pen_down))
+        if paused:
+            dev.press_view()  # the operator lets it go on
+
+    rig = Rig(first_link={"pause_after": str(total // 2)}, options="sync_strokes=4", on_pause=on_pause)
+    rig.display.plot(dl)
+    rig.display.close()
+    # VIEW lifts the pen and stops the plotter: True once it stopped, False once it goes on
+    assert seen == [(True, True, False), (False, False, False)]
+    assert _segments(rig.device) == expected
+
+
+def test_a_host_pause_is_confirmed_after_the_plotter_drained():
+    rig = Rig(options="sync_strokes=4")
+    states, asks = [], []
+
+    def pause_requested():
+        asks.append(1)
+        return 3 <= len(asks) <= 5
+
+    rig.display.pause_requested = pause_requested
+    rig.display.on_pause = lambda paused: states.append((paused, rig.device.buffered_bytes, rig.device._pen_down))
+    rig.display.plot(drawing(n=6))
+    rig.display.close()
+    assert states == [(True, 0, False), (False, 0, False)]
+
+
+def test_manual_pen_home_and_no_motors_off():
+    rig = Rig()
+    d = rig.display
+    d.pen_down()
+    assert rig.device._pen_down
+    d.toggle_pen()
+    assert not rig.device._pen_down
+    d.toggle_pen()
+    assert rig.device._pen_down
+    d.pen_up()
+    d.go_home()
+    assert not rig.device._pen_down and rig.device.pen_position == tuple(float(v) for v in d.paper.park)
+    with pytest.raises(ConfigError, match="HP-GL plotters have no motors-off command"):
+        d.motors_off()
+    d.close()
+    with pytest.raises(PixelpenError, match="not open"):
+        d.pen_up()
 
 
 # -- other links ----------------------------------------------------------------------------------------
