@@ -42,6 +42,7 @@ import re
 from collections import deque
 from collections.abc import Generator, Iterator
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -1286,6 +1287,11 @@ def machine_defaults(profile: str = PROFILE) -> dict[str, object]:
     The pen: the profile's ``[servo]`` up/down commands give the S outputs; the pen is ``servo`` when down
     is the larger, ``servo-inverted`` when it is the smaller, with the threshold half-way between.
     """
+    return dict(_machine_defaults(profile))
+
+
+@lru_cache(maxsize=8)
+def _machine_defaults(profile: str) -> tuple[tuple[str, object], ...]:
     from ..vector.profiles import load_profile
 
     prof = load_profile(profile)
@@ -1304,7 +1310,7 @@ def machine_defaults(profile: str = PROFILE) -> dict[str, object]:
     if prof.pen_colours:
         out["pen_colour"] = prof.pen_colours[min(prof.pen_colours)]
     out["pen_width"] = prof.pen_width_mm
-    return out
+    return tuple(out.items())
 
 
 def create(clock: Clock | None = None, **options: str) -> GrblSimulator:
