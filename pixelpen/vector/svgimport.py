@@ -462,7 +462,8 @@ class _Flattener:
 
     def element(self, element: se.Shape, what: str) -> list[np.ndarray]:
         """The subpaths of ``element`` as (N, 2) polylines in mm, after its full transform."""
-        m = self.correction @ _affine(element.transform)
+        with np.errstate(all="ignore"):
+            m = self.correction @ _affine(element.transform)
         if not np.isfinite(m).all():
             raise ParseError(f"{what} has a non-finite transform", source=self.name)
         stretch = _largest_stretch(m)

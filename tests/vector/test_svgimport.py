@@ -306,3 +306,59 @@ def test_huge_arc_with_tiny_tolerance_is_capped_not_hung(monkeypatch):
     dl = read_svg(svg('<circle cx="0" cy="0" r="1e9" stroke="black" fill="none"/>'), tolerance=1e-9)
     assert len(dl.points) == 4 * 500 + 1  # move, four capped arcs
     assert np.array_equal(dl.points[0], dl.points[-1])  # a closed subpath ends exactly at its start
+
+
+def segment_set(dl, digits=6):
+    """Pen-down segments as an orientation-free set, rounded to ``digits`` decimals of a mm."""
+    seg = np.round(dl.segments() * dl.unit_mm, digits)
+    return {tuple(s) if tuple(s[:2]) <= tuple(s[2:]) else tuple(s[2:]) + tuple(s[:2]) for s in seg.tolist()}
+
+
+def test_page_survives_write_and_read(tmp_path):
+    # an A4 landscape page whose drawing sits at (100, 50) mm, far from the page's origin
+    body = ('<g transform="translate(100,50)"><rect x="0" y="0" width="30" height="20" stroke="black" fill="none"/>'
+            '<circle cx="40" cy="10" r="5" stroke="red" fill="none"/></g>')
+    dl = read_svg(svg(body, 'width="297mm" height="210mm" viewBox="0 0 297 210"'))
+    assert dl.page == (297.0, 210.0)
+    assert dl.bounds()[:2] == pytest.approx((100, 50))
+    path = tmp_path / "page.svg"
+    write_svg(dl, path)
+    assert 'width="297mm" height="210mm" viewBox="0 0 297 210"' in path.read_text()
+    back = read_svg(path)
+    assert back.page == (297.0, 210.0)
+    assert segment_set(back) == segment_set(dl)
+    # derived display lists keep the page
+    assert dl.reordered(range(len(dl))[::-1]).page == dl.page
+    assert dl.select(np.arange(len(dl)) % 2 == 0).page == dl.page
+    assert DisplayList.concat([dl, make_dl()]).page == dl.page
+
+
+@pytest.mark.parametrize("attrs, page", [
+    ('width="210mm" height="297mm"', (210, 297)),
+    ('width="8.5in" height="11in" viewBox="0 0 816 1056"', (215.9, 279.4)),
+    ('width="21cm" height="29.7cm" viewBox="0 0 2100 2970"', (210, 297)),
+    ('width="595pt" height="842pt"', (595 * 25.4 / 72, 842 * 25.4 / 72)),
+    ('viewBox="0 0 96 48"', (25.4, 12.7)),  # no size: the viewBox in px
+    ('width="100%" height="100%" viewBox="0 0 96 48"', (25.4, 12.7)),
+    ('', None),  # no size and no viewBox: no page
+    ('width="100mm"', None),
+])
+def test_page_size_from_width_height_and_viewbox(attrs, page):
+    dl = read_svg(svg('<line x1="0" y1="0" x2="1" y2="0" stroke="black"/>', attrs))
+    assert dl.page == (None if page is None else pytest.approx(page, rel=1e-12))
+
+
+def test_page_in_device_units_is_written_in_mm():
+    dl = DisplayList.from_polylines([np.array([[4000, 2000], [4400, 2000]])], unit_mm=0.025, page=(11880, 8400))
+    buf = io.StringIO()
+    write_svg(dl, buf)
+    assert 'width="297mm" height="210mm" viewBox="0 0 11880 8400"' in buf.getvalue()
+    back = read_svg(buf.getvalue().encode())
+    assert back.page == pytest.approx((297, 210), rel=1e-12)
+    np.testing.assert_allclose(back.points, [[100, 50], [110, 50]], rtol=1e-9)  # svgelements prints matrices to 12 digits
+
+
+@pytest.mark.parametrize("page", [(0, 10), (10, -1), (float("inf"), 1), (1, 2, 3), "a4"])
+def test_bad_page_is_a_config_error(page):
+    with pytest.raises(ConfigError, match="page"):
+        DisplayList(page=page)
