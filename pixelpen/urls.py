@@ -63,6 +63,10 @@ def parse_url(url: str) -> DeviceURL:
         raise URLError(f"a device URL must be a non-empty string like 'svg:out.svg', got {quote_token(url)}")
     if len(url) > MAX_URL:
         raise URLError(f"a device URL of {len(url)} characters is longer than {MAX_URL}: {quote_token(url)}")
+    try:
+        url.encode("utf-8")
+    except UnicodeEncodeError as exc:
+        raise URLError(f"{quote_token(url)}: character {exc.start} is a lone surrogate, not text") from None
     scheme, sep, rest = url.partition(":")
     if not sep or not scheme:
         raise URLError(f"{url!r}: expected 'scheme:target', e.g. 'png:out.png' or 'sim:hp7475a'")

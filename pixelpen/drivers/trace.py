@@ -229,18 +229,22 @@ def _read_lines(f: IO[str]) -> Iterable[str]:
 
 def read_trace(source: PathOrFile, max_bytes: int = DEFAULT_MAX_BYTES) -> Trace:
     """Read a trace from a path or an open text file (ParseError on malformed content or an unreadable file)."""
-    if isinstance(source, (str, os.PathLike)):
-        name = os.fspath(source)
+    if not isinstance(source, (str, os.PathLike)):
+        name = str(getattr(source, "name", "<trace>"))
         try:
-            with open(check_path(name, "trace file"), encoding="utf-8", newline="") as f:
-                return parse_trace(_read_lines(f), name, max_bytes)
+            return parse_trace(_read_lines(source), name, max_bytes)
         except UnicodeDecodeError as exc:
-            raise ParseError(f"not UTF-8 text: {exc.reason}", source=name, offset=exc.start) from None
-        except ConfigError as exc:
-            raise ParseError(str(exc), source="<trace>") from None
-        except OSError as exc:
-            raise ParseError(f"cannot read trace: {exc.strerror or exc}", source=name) from None
-    return parse_trace(_read_lines(source), getattr(source, "name", "<trace>"), max_bytes)
+            raise ParseError(f"not UTF-8 text: {exc.reason}", source=name) from None
+    name = os.fspath(source)
+    try:
+        with open(check_path(name, "trace file"), encoding="utf-8", newline="") as f:
+            return parse_trace(_read_lines(f), name, max_bytes)
+    except UnicodeDecodeError as exc:
+        raise ParseError(f"not UTF-8 text: {exc.reason}", source=name, offset=exc.start) from None
+    except ConfigError as exc:
+        raise ParseError(str(exc), source="<trace>") from None
+    except OSError as exc:
+        raise ParseError(f"cannot read trace: {exc.strerror or exc}", source=name) from None
 
 
 class TraceWriter:

@@ -20,8 +20,8 @@ from .transforms import ArrayLike, as_number, as_points, split_rows
 
 DEFAULT_TOLERANCE = 0.1
 """Default flattening tolerance (units of the points)."""
-MAX_ARC_POINTS = 1 << 20
-"""Points one flattened arc may have (a radius of 1e12 at tolerance 0.1 would need 7 million); read at call time."""
+MAX_ARC_POINTS = 1 << 18
+"""Points one flattened arc may have (a radius of 1e9 at tolerance 0.1 would need 220,000); read at call time."""
 
 BEZIER_BASIS = np.array([
     [-1.0, 3.0, -3.0, 1.0],

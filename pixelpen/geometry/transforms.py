@@ -159,22 +159,29 @@ def shear(shx: float = 0.0, shy: float = 0.0, ref: Sequence[float] = (0.0, 0.0))
 def compose(*matrices: ArrayLike) -> np.ndarray:
     """Matrix product in the usual order: compose(A, B) applies B first, then A (identity when empty)."""
     result = np.eye(3)
-    for index, m in enumerate(matrices):
-        result = result @ as_matrix(m, f"matrix {index}")
+    with np.errstate(over="ignore", invalid="ignore"):
+        for index, m in enumerate(matrices):
+            result = result @ as_matrix(m, f"matrix {index}")
+    if not np.isfinite(result).all():
+        raise InvalidArgument(f"the composed matrix overflows (NaN or inf): {result.tolist()}")
     return result
 
 
 def apply(m: ArrayLike, points: ArrayLike) -> np.ndarray:
-    """Map an (N, 2) array (or a single (2,) point) through the homogeneous matrix m."""
+    """Map an (N, 2) array (or a single (2,) point) through the homogeneous matrix m; InvalidArgument if it overflows."""
     mat = as_matrix(m)
     pts, single = as_points(points)
-    out = pts @ mat[:2, :2].T + mat[:2, 2]
-    if not (mat[2, 0] == 0.0 and mat[2, 1] == 0.0 and mat[2, 2] == 1.0):
-        w = pts @ mat[2, :2] + mat[2, 2]
-        if (np.abs(w) < 1e-300).any():
-            row = int(np.flatnonzero(np.abs(w) < 1e-300)[0])
-            raise InvalidArgument(f"point {pts[row].tolist()} (row {row}) maps to infinity (w = 0) under this matrix")
-        out = out / w[:, None]
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = pts @ mat[:2, :2].T + mat[:2, 2]
+        if not (mat[2, 0] == 0.0 and mat[2, 1] == 0.0 and mat[2, 2] == 1.0):
+            w = pts @ mat[2, :2] + mat[2, 2]
+            if (np.abs(w) < 1e-300).any():
+                row = int(np.flatnonzero(np.abs(w) < 1e-300)[0])
+                raise InvalidArgument(f"point {pts[row].tolist()} (row {row}) maps to infinity (w = 0) under this matrix")
+            out = out / w[:, None]
+    if not np.isfinite(out).all():
+        row = int(np.flatnonzero(~np.isfinite(out).all(axis=1))[0])
+        raise InvalidArgument(f"point {pts[row].tolist()} (row {row}) maps beyond the floating-point range")
     return out[0] if single else out
 
 

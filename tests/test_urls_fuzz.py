@@ -1,0 +1,56 @@
+"""Fuzzing the URL grammar: seeded mutations of valid device URLs, parsed, read as options and formatted back."""
+
+from __future__ import annotations
+
+import pytest
+
+from pixelpen.errors import PixelpenError
+from pixelpen.urls import Options, check_path, format_url, parse_bool, parse_size, parse_url
+from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
+
+SEEDS = [
+    url.encode() for url in (
+        "hp7475a:[rfc2217://plotter-host:4000?logging=debug]?paper=a3",
+        "hp7475a:/dev/ttyUSB0?baud=9600&paper=a4&flow=xonxoff",
+        "sim:hp7475a?paper=a4&pens=black,red",
+        "png:out/scene.png?size=800x600&dpi=96&mode=RGB",
+        "svg:out%20dir/a.svg?size=210x297mm&pen_width=0.3",
+        "axidraw:[socket://[::1]:4000]?model=v3",
+        "sim://grbl?speed=fast&id=bench",
+    )
+]
+
+
+def parse_and_read(data: bytes) -> None:
+    """The fuzz target: parse, read every option as size, bool and path, and check the URL formats back to itself."""
+    url = parse_url(data.decode("utf-8", errors="surrogateescape"))
+    options = Options(url, url.options)
+    for key in url.options:
+        for convert in (parse_size, parse_bool):
+            try:
+                options.get(key, convert, None)
+            except PixelpenError:
+                pass
+    if url.target:
+        try:
+            check_path(url.target, "the target")
+        except PixelpenError:
+            pass
+    again = parse_url(format_url(url.scheme, url.target, url.options))
+    assert (again.scheme, again.target, dict(again.options)) == (url.scheme, url.target, dict(url.options))
+
+
+def test_the_seeds_are_valid_urls():
+    for seed in SEEDS:
+        parse_and_read(seed)
+
+
+def test_url_fuzz_quick():
+    campaign("urls", parse_and_read, SEEDS, QUICK_CASES, seed=1).check()
+
+
+@pytest.mark.slow
+def test_url_fuzz_slow():
+    result = campaign("urls", parse_and_read, SEEDS, SLOW_CASES, seed=2)
+    print(result.summary())
+    result.check()
