@@ -122,6 +122,7 @@ class AxiDrawPlotter(PlotterDisplay):
 
     profile_name: ClassVar[str] = "axidraw_v3"
     family: ClassVar[str] = "axidraw"
+    reports_position: ClassVar[bool] = True
     url_options: ClassVar[dict[str, str]] = {
         **PlotterDisplay.url_options,
         "model": f"AxiDraw model: {', '.join(MODELS)}; default v3",

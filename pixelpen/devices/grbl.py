@@ -131,7 +131,8 @@ class _Tag:
     done (the lift's dwell) and the track may drop the legs before point number ``confirms``."""
 
     stroke: int
-    vertex: int
+    vertex: int | None
+    """None for the travel to the stroke's start (the pen is not down yet)."""
     confirms: int | None = None
 
 
@@ -147,6 +148,7 @@ class GrblPlotter(PlotterDisplay):
 
     profile_name: ClassVar[str] = "grbl"
     family: ClassVar[str] = "grbl"
+    reports_position: ClassVar[bool] = True
     url_options: ClassVar[dict[str, str]] = {
         **PlotterDisplay.url_options,
         "stream": "counting (fill GRBL's RX buffer, default) or wait (send a line, wait for its ok)",
@@ -291,7 +293,7 @@ class GrblPlotter(PlotterDisplay):
         lines = stroke_lines(pts, self.coordinate_format, self.pen_motion, self.feed)
         n_down = len(self.pen_motion.down_lines())
         self.track.append(tuple(pts[0].tolist()), False)
-        self._send_line(lines[0])
+        self._send_line(lines[0], _Tag(index, None))
         for line in lines[1:1 + n_down]:
             self._send_line(line, _Tag(index, 0))
         for k in range(1, len(pts)):
@@ -381,11 +383,16 @@ class GrblPlotter(PlotterDisplay):
         if lost or status.state in ("Alarm", "Sleep"):
             return DeviceWhere(None, None, position_lost=True, detail=lost or f"GRBL is in {status.state} state")
         drawing: bool | None = None
-        settings: dict[int, float] = {}
-        if status.state == "Idle":  # no line is parsed during a hold: the queries would wait for the resume
-            drawing = self._parser_modes().get("G") == 1.0
-            settings = self._settings()
+        if status.held:  # no line is parsed during a hold: end it as _connect would, position kept when at rest
+            self.soft_reset()
+            self._settle()
             status = self.query_status()
+            if status.state == "Alarm":
+                return DeviceWhere(None, None, position_lost=True, detail="GRBL raised an alarm on the reset that ended its hold")
+        else:
+            drawing = self._parser_modes().get("G") == 1.0
+        settings = self._settings()
+        status = self.query_status()
         steps = min(settings.get(100, math.inf), settings.get(101, math.inf))
         tolerance_mm = 0.0015 + (0.5 * math.sqrt(2.0) / steps if math.isfinite(steps) and steps > 0 else 0.0)
         return _device_where(self._work_units(status), self._pen_down_of(status),
@@ -507,17 +514,21 @@ class GrblPlotter(PlotterDisplay):
             self._idle_polls = 0
             _, tag = self.counter.acknowledged()
             if isinstance(tag, _Tag):
-                self._reached = (tag.stroke, tag.vertex)
+                if tag.vertex is not None:
+                    self._reached = (tag.stroke, tag.vertex)
                 if tag.confirms is not None:
                     self._confirm(tag.stroke + 1)
                     self.track.done_until(tag.confirms)
                     self._link().write(REALTIME_STATUS)  # verify the position at every confirmation point
         elif line.startswith("error:"):
             code = parse_code(line)
-            sent, _ = self.counter.acknowledged()
+            sent, tag = self.counter.acknowledged()
+            garbled = code in GARBLE_ERRORS and self._tracking
             self._stop_motion()  # the lines behind the rejected one would draw a shortcut
             message = f"GRBL rejected a line: error:{code} {ERROR_CODES.get(code, 'unknown error code')}"
-            if code in GARBLE_ERRORS and self._tracking:
+            if isinstance(tag, _Tag):
+                self._mark_damaged(range(tag.stroke, tag.stroke + 1))  # redrawn whole: part of it never ran
+            if garbled:
                 raise LinkError(f"grbl: {message} in {sent!r}, which pixelpen wrote valid: it was garbled on the line")
             raise ProtocolError(message, code=code, command=sent, device="grbl")
         elif line.startswith("ALARM:"):
@@ -570,6 +581,7 @@ class GrblPlotter(PlotterDisplay):
                                    TRACK_TOLERANCE_MM / self.profile.unit_mm)
             if why is not None:
                 self._stop_motion()
+                self._mark_damaged(range(self.confirmed, max(self._sent_end, self.confirmed + 1)))
                 raise LinkError(
                     f"grbl: position check failed: {why} (GRBL reports {status.state} at {self._work_units(status)} "
                     "units): a line was changed on the wire (a dropped byte), so the plot stops here"
@@ -580,7 +592,11 @@ class GrblPlotter(PlotterDisplay):
         self._tracking = False
         link = self.link
         if link is not None and not link.closed:
-            link.write(REALTIME_HOLD)
+            try:
+                link.write(REALTIME_HOLD)
+                link.flush()  # out before the link is closed for the reconnect
+            except LinkError as exc:
+                log.warning("grbl: could not send the feed hold: %s", exc)
 
     def _work_units(self, status: GrblStatus) -> tuple[float, float]:
         """The pen's XY in device units (work coordinates, as the G-code is written) from a status report."""
