@@ -328,3 +328,52 @@ def test_bad_curve_input():
         eval_basis(np.eye(3), np.zeros((4, 2)), 0.5)
     with pytest.raises(ValueError, match="exactly 4 rows"):
         basis_to_bezier(BSPLINE_BASIS, np.zeros((5, 2)))
+
+
+# ---------------------------------------------------------------------------------------------
+# Bounded work on any input
+
+@settings(max_examples=40, deadline=None)
+@given(kd=knot_vectors(), seed=st.integers(0, 2**32 - 1), fractions=st.lists(st.floats(0, 1), min_size=1, max_size=8))
+def test_per_span_curve_points_match_the_recursive_basis(kd, seed, fractions):
+    degree, knots = kd
+    n = len(knots) - degree - 1
+    lo, hi = knots[degree], knots[n]
+    t = np.concatenate([lo + np.array(fractions) * (hi - lo), [lo, hi]])
+    ctrl = np.random.default_rng(seed).uniform(-100, 100, size=(n, 2))
+    expected = [[sum(cox_de_boor_reference(knots, i, degree, ti, hi) * ctrl[i, d] for i in range(n)) for d in (0, 1)]
+                for ti in t]
+    np.testing.assert_allclose(bspline_point(ctrl, degree, knots, t), expected, atol=1e-9)
+
+
+def test_bspline_memory_does_not_grow_with_the_control_points():
+    import tracemalloc
+
+    rng = np.random.default_rng(3)
+    ctrl = np.cumsum(rng.uniform(-1, 1, size=(20_000, 2)), axis=0)  # a 20,000-point random walk
+    t = np.linspace(0.0, 20_000 - 3, 80_000)  # the open uniform domain of a cubic: [0, n - degree]
+    tracemalloc.start()
+    try:
+        pts = bspline_point(ctrl, 3, None, t)
+        poly = flatten_bspline(ctrl, 3, tolerance=0.05)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    # a (samples x control points) basis would be 80,000 x 20,000 doubles = 12.8 GB; per span it is a few MB
+    assert peak < 64 * 2**20, f"peak {peak / 2**20:.0f} MB"
+    np.testing.assert_allclose(pts[[0, -1]], ctrl[[0, -1]], atol=1e-9)  # clamped: ends on the end points
+    np.testing.assert_allclose(poly[[0, -1]], ctrl[[0, -1]], atol=1e-9)
+
+
+def test_arc_point_count_is_bounded_and_small_tolerances_stay_exact():
+    from pixelpen.errors import InvalidArgument
+    from pixelpen.geometry import curves
+
+    with pytest.raises(InvalidArgument, match="MAX_ARC_POINTS"):
+        flatten_arc((0, 0), 1e15, 1e15, 0, 2 * math.pi, tolerance=0.1)  # acos(1 - 1e-16) = 0: was a ZeroDivisionError
+    # tol / r = 1e-10: the old form 2 acos(1 - tol / r) loses half its digits; the sagitta must hold
+    r, tol = 1e6, 1e-4
+    pts = flatten_arc((0, 0), r, r, 0, 0.01, tolerance=tol)
+    mid = (pts[:-1] + pts[1:]) / 2
+    assert (r - np.hypot(*mid.T)).max() <= tol * (1 + 1e-6)
+    assert len(pts) <= curves.MAX_ARC_POINTS

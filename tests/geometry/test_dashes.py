@@ -7,6 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from pixelpen.errors import InvalidArgument, PixelpenError
 from pixelpen.geometry.dashes import as_pattern, dash_polylines
 
 
@@ -141,3 +142,10 @@ def test_bad_polylines_and_offsets_are_rejected():
         dash_polylines([[(0, 0), (1, 0)]], (1, 1), offset=math.inf)
     with pytest.raises(ValueError, match="too fine"):
         dash_polylines([[(0, 0), (1e6, 0)]], (1e-6, 1e-6))
+
+
+def test_a_vanishingly_fine_pattern_is_refused_before_counting_overflows():
+    # 100 / 2e-300 dashes: floor() gives 5e301, which int64 turned into garbage before the limit check
+    with pytest.raises(InvalidArgument, match="too fine") as info:
+        dash_polylines([np.array([[0.0, 0.0], [100.0, 0.0]])], [1e-300, 1e-300])
+    assert isinstance(info.value, PixelpenError) and isinstance(info.value, ValueError)

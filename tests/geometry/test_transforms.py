@@ -7,6 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from pixelpen.errors import InvalidArgument, PixelpenError
 from pixelpen.geometry.transforms import (
     apply,
     compose,
@@ -193,3 +194,20 @@ def test_bad_matrices_and_parameters_are_rejected():
         reflect("z")
     with pytest.raises(ValueError, match="distinct"):
         reflect(((1, 1), (1, 1)))
+
+
+@pytest.mark.parametrize("points", [[[0.0, np.inf]], [[np.nan, 1.0]], [[1e308, 0.0], [-np.inf, 0.0]]])
+def test_non_finite_points_are_a_pixelpen_error_and_a_value_error(points):
+    with pytest.raises(InvalidArgument, match="non-finite") as info:
+        apply(identity(), points)
+    assert isinstance(info.value, PixelpenError) and isinstance(info.value, ValueError)
+
+
+def test_overflow_on_the_way_is_refused_not_returned_as_inf():
+    with pytest.raises(InvalidArgument, match="floating-point range"):
+        apply(scale(1e300, 1e300), [[1e10, 0.0]])
+    with pytest.raises(InvalidArgument, match="overflows"):
+        compose(scale(1e200, 1e200), scale(1e200, 1e200))
+    with pytest.raises(TypeError) as info:
+        translate("1", 0)
+    assert isinstance(info.value, PixelpenError)

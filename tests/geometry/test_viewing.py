@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from pixelpen.errors import InvalidArgument
 from pixelpen.geometry.viewing import ViewingPipeline, as_rect, window_to_viewport
 
 
@@ -162,3 +163,15 @@ def test_bad_pipeline_arguments():
         ViewingPipeline((0, 0, 1, 1), device_size=(10, 10)).replace(colour="red")
     with pytest.raises(TypeError):
         ViewingPipeline((0, 0, 1, 1))  # device_size is required
+
+
+@pytest.mark.parametrize("rect, message", [
+    ((0, 0, 0, 10), "degenerate"),
+    ((0, 0, 10, float("inf")), "finite"),
+    ((-1e308, 0, 1e308, 10), "overflows"),  # finite corners, but the width is inf: --fit on such an extent
+])
+def test_bad_windows_are_pixelpen_errors_and_value_errors(rect, message):
+    with pytest.raises(InvalidArgument, match=message):
+        as_rect(rect)
+    with pytest.raises(ValueError, match=message):
+        ViewingPipeline(rect, device_size=(100, 100))
