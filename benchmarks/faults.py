@@ -93,9 +93,10 @@ def compare(ref: DisplayList, drawn: DisplayList, tol: float = TOL_MM) -> Tally:
         if not len(hits):
             tally.stray += 1
             continue
-        # several reference segments hold it where they meet at a vertex (take the one it runs along) or where
-        # the drawing itself goes over a line twice (take the copy with the least ink so far)
-        k = int(min(hits, key=lambda h: (len(pieces[h]), -length[h])))
+        # several reference segments hold it where the drawing runs (nearly) along itself: take one it lies on
+        # exactly, then the copy with the least ink so far, then the nearest
+        off = np.maximum(_distance(seg[:2], rseg[hits], length[hits]), _distance(seg[2:], rseg[hits], length[hits]))
+        k = int(hits[min(range(len(hits)), key=lambda i: (off[i] > 1e-6, len(pieces[hits[i]]), off[i]))])
         a, d = rseg[k, :2], rseg[k, 2:] - rseg[k, :2]
         t0, t1 = sorted(float((p - a) @ d) / max(length[k], 1e-12) for p in (seg[:2], seg[2:]))
         if t1 - t0 > tol / 4 or length[k] <= tol:
@@ -107,11 +108,16 @@ def compare(ref: DisplayList, drawn: DisplayList, tol: float = TOL_MM) -> Tally:
     return tally
 
 
-def _on(p: np.ndarray, seg: np.ndarray, length: np.ndarray, tol: float) -> np.ndarray:
-    """Which segments pass within ``tol`` of point p."""
+def _distance(p: np.ndarray, seg: np.ndarray, length: np.ndarray) -> np.ndarray:
+    """Distance of point p from each segment."""
     a, d = seg[:, :2], seg[:, 2:] - seg[:, :2]
     t = np.clip(((p - a) * d).sum(1) / np.maximum(length * length, 1e-12), 0, 1)
-    return np.hypot(*(a + t[:, None] * d - p).T) <= tol
+    return np.hypot(*(a + t[:, None] * d - p).T)
+
+
+def _on(p: np.ndarray, seg: np.ndarray, length: np.ndarray, tol: float) -> np.ndarray:
+    """Which segments pass within ``tol`` of point p."""
+    return _distance(p, seg, length) <= tol
 
 
 def _coverage(spans: list[tuple[float, float]], length: float) -> tuple[float, float, float]:
@@ -276,12 +282,14 @@ def run_cli(family: str, kind: str, at: int, svg: Path, ref: DisplayList, ident:
     code, text = _main([*base, "--to", url(family, ident, f"{FAULT_OPTION[kind]}={at}")])
     if code != 0:
         out.interrupted = True
+        out.faults.append(text.strip()[-300:])
         if code != 3:
             raise PixelpenError(f"first run exit {code}: {text.strip()[-300:]}")
         recover(family, kind, ident)
         extra: list[str] = []
         for _ in range(MAX_RESUMES):
             code, text = _main([*base, "--to", url(family, ident), "--resume", *extra])
+            out.faults.append(text.strip()[-300:])
             if code == 0:
                 break
             if "--confirm-position" in text and not extra:

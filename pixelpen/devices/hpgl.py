@@ -232,6 +232,7 @@ class _Wire:
 class HPGLDisplay(PlotterDisplay):
     """An HP-GL plotter on RS-232, rfc2217:// or a USB printer-class adapter (see the module docstring)."""
 
+    reports_position = True
     ident: ClassVar[str] = ""
     """What the model answers to OI."""
     max_velocity_cm_s: ClassVar[float] = 38.1

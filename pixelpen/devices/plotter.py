@@ -39,6 +39,7 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
+import math
 import os
 from abc import abstractmethod
 from dataclasses import asdict, dataclass
@@ -91,6 +92,15 @@ class PlotInterrupted(PixelpenError):
         self.cause = cause
         where = f"; state saved to {state_file} (plot again with --resume)" if state_file else ""
         super().__init__(f"{message}; {resume_from} strokes were confirmed{where}")
+
+
+class DeviceFault(PlotInterrupted, ProtocolError):
+    """The device reported an error during a plot: a ProtocolError (``code``, ``command``) the plot resumes from."""
+
+    def __init__(self, error: ProtocolError, *, resume_from: int, state_file: Path | None) -> None:
+        PlotInterrupted.__init__(self, f"plot stopped by a device error: {error}", resume_from=resume_from,
+                                 state_file=state_file, cause=error)
+        self.code, self.command, self.device = error.code, error.command, error.device
 
 
 class PositionUnknown(PixelpenError):
@@ -211,6 +221,10 @@ class PlotState:
     """One past the last stroke whose bytes went out (None: unknown, every unconfirmed stroke is in doubt)."""
     position_lost: bool = False
     """The device said it lost its position; a resume needs ``position_confirmed``."""
+    damaged: list[int] | None = None
+    """[start, stop) of strokes the device reported it did not draw as sent; a resume draws them again."""
+    stopped_at: list[float] | None = None
+    """[x, y, pen down 1/0/-1 unknown, tolerance]: where the device stopped, asked before the safe stop parked it."""
     version: int = STATE_VERSION
 
     def save(self, path: Path) -> None:
@@ -241,6 +255,19 @@ class PlotState:
             raise ParseError("plot state field 'confirmed' is out of range", source=str(path), token=state.confirmed)
         if state.sent is not None and not (isinstance(state.sent, int) and state.confirmed <= state.sent <= state.strokes):
             raise ParseError("plot state field 'sent' is out of range", source=str(path), token=state.sent)
+        if state.damaged is not None and not (
+            isinstance(state.damaged, list) and len(state.damaged) == 2 and all(isinstance(v, int) for v in state.damaged)
+            and 0 <= state.damaged[0] <= state.damaged[1] <= state.strokes
+        ):
+            raise ParseError("plot state field 'damaged' is not a [start, stop] stroke range", source=str(path),
+                             token=state.damaged)
+        if state.stopped_at is not None and not (
+            isinstance(state.stopped_at, list) and len(state.stopped_at) == 4
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in state.stopped_at)
+            and state.stopped_at[2] in (-1, 0, 1) and state.stopped_at[3] >= 0
+        ):
+            raise ParseError("plot state field 'stopped_at' is not [x, y, pen -1/0/1, tolerance]", source=str(path),
+                             token=state.stopped_at)
         if not isinstance(state.position_lost, bool):
             raise ParseError("plot state field 'position_lost' is not true or false", source=str(path), token=state.position_lost)
         return state
@@ -261,6 +288,9 @@ class PlotterDisplay(VectorDisplay):
     """Built-in profile the scheme uses unless the URL names another."""
     family: ClassVar[str] = ""
     """Simulator model name for ``sim:`` URLs (usually the scheme)."""
+    reports_position: ClassVar[bool] = False
+    """True when the family implements ``_where``; otherwise a resume restarts at the last confirmed stroke
+    (strokes drawn since are drawn again) without asking the device."""
     url_options = {
         "paper": "paper size known to the profile (a4, a3, letter, ...); default the profile's",
         "baud": "serial speed; default the profile's",
@@ -331,6 +361,8 @@ class PlotterDisplay(VectorDisplay):
         self._where_found: DeviceWhere | None = None
         """What ``_where()`` said on the last fresh link opened for a resume."""
         self._paused_now = False
+        self._stopped_at: DeviceWhere | None = None
+        """Where an interrupted job's device stopped, asked before the safe stop parked it."""
         self._damaged: range | None = None
         """Strokes the device reported it did not draw as sent (an error, a wrong position)."""
         self._redo = range(0)
@@ -377,7 +409,7 @@ class PlotterDisplay(VectorDisplay):
     def _open_device(self) -> None:
         self._attach(self._make_link())
         try:
-            if self._unfinished_state_file():
+            if self.reports_position and self._unfinished_state_file():
                 self._where_found = self._where()
             self._connect()
         except BaseException:
@@ -403,6 +435,8 @@ class PlotterDisplay(VectorDisplay):
     def _make_safe_on(self, link: Link) -> None:
         self.link = link
         try:
+            if self._interrupted and self.reports_position:
+                self._note_where_stopped()
             self._make_safe()
         except Exception as exc:  # leaving the device safe is best effort on a failing link
             log.warning("could not leave %s safe: %s", self.profile.name, exc)
@@ -418,7 +452,7 @@ class PlotterDisplay(VectorDisplay):
                 self.link = None
         self.pen = None
         self._attach(self._make_link())
-        self._where_found = self._where() if self._interrupted else None
+        self._where_found = self._where() if self._interrupted and self.reports_position else None
         self._connect()
 
     def _unfinished_state_file(self) -> bool:
@@ -474,10 +508,10 @@ class PlotterDisplay(VectorDisplay):
                 self._send_stroke(i, stroke, pen)
                 self._poll()
             self._drain()
-        except ProtocolError:  # the device refused something: said as it is, and the job stays resumable
+        except ProtocolError as exc:  # the device refused something: said as it is, and the job is resumable
             self._interrupted = True
             self._save_state(sent=self._sent_end)
-            raise
+            raise DeviceFault(exc, resume_from=self.confirmed, state_file=self.state_file) from exc
         except (LinkError, ParseError) as exc:  # a garbled reply on a live link is a link fault
             self._poll_quietly()
             self._interrupted = True
@@ -518,9 +552,17 @@ class PlotterDisplay(VectorDisplay):
             if state.fingerprint != fp or state.strokes != len(dl):
                 raise ConfigError(f"{self.state_file}: the plot state belongs to another drawing; refusing to resume")
             self._position_lost = self._position_lost or state.position_lost
-            if self._where_found is None and not position_confirmed:
+            if state.damaged is not None:
+                self._mark_damaged(range(*state.damaged))
+            if self._where_found is None and self.reports_position:
                 self._interrupted = True
                 self.reconnect()  # the display was opened without the state file: ask the device now
+            now = self._where_found
+            if state.stopped_at is not None and now is not None and not now.position_lost:
+                # the last session asked where the device stopped before it parked it
+                x, y, pen, tol = state.stopped_at
+                self._where_found = DeviceWhere((x, y), None if pen < 0 else bool(pen), tolerance=tol,
+                                                detail=f"stopped at {x:g},{y:g} (asked before the last session parked it)")
             sent = len(dl) if state.sent is None else state.sent
             self._job, self._head = dl, None
             start = self._resume_point(dl, pts, state.confirmed, sent, position_confirmed)
@@ -543,6 +585,11 @@ class PlotterDisplay(VectorDisplay):
     def _resume_point(self, dl: DisplayList, pts: np.ndarray, confirmed: int, sent: int, confirmed_by_user: bool) -> ResumePoint:
         """Where to continue the job: located from ``_where()`` among strokes confirmed..sent, or PositionUnknown."""
         where, self._where_found = self._where_found, None
+        self._stopped_at = None
+        if not self.reports_position:
+            log.warning("%s: resuming at stroke %d, the last confirmed one: strokes drawn since are drawn again",
+                        self.profile.name, confirmed)
+            return ResumePoint(confirmed)
         window = [(i, pts[dl.offsets[i] : dl.offsets[i + 1]]) for i in range(confirmed, sent)]
         if self._head is not None and self._head[0] == confirmed and window:
             window[0] = self._head
@@ -620,6 +667,10 @@ class PlotterDisplay(VectorDisplay):
             self._job_state.confirmed = self.confirmed
             self._job_state.sent = sent
             self._job_state.position_lost = self._position_lost
+            self._job_state.damaged = [self._damaged.start, self._damaged.stop] if self._damaged else None
+            at = self._stopped_at
+            self._job_state.stopped_at = None if at is None or at.position is None else [
+                float(at.position[0]), float(at.position[1]), -1 if at.pen_down is None else int(at.pen_down), at.tolerance]
             self._job_state.save(self.state_file)
 
     def _hold_while_paused(self) -> None:
@@ -645,6 +696,19 @@ class PlotterDisplay(VectorDisplay):
         if self._damaged is not None:
             strokes = range(min(self._damaged.start, strokes.start), max(self._damaged.stop, strokes.stop))
         self._damaged = strokes
+
+    def _note_where_stopped(self) -> None:
+        """Before the safe stop parks an interrupted job's device, ask where it stopped and keep it in the state file."""
+        try:
+            where = self._where()
+        except PixelpenError as exc:  # the link that failed the plot may be gone: the next session asks the device
+            log.debug("%s: cannot ask where the plot stopped: %s", self.profile.name, exc)
+            return
+        if where.position_lost:
+            self._position_lost = True
+        elif where.position is not None and where.settled:
+            self._stopped_at = where
+        self._save_state(sent=self._sent_end)
 
     def _pause_changed(self, paused: bool) -> None:
         """Tell ``on_pause`` the device has actually paused (True) or goes on (False); families call it for their own pauses."""
@@ -731,7 +795,7 @@ class PlotterDisplay(VectorDisplay):
         """Stop, pen up, park, motors off — best effort on ``self.link``."""
 
     def _where(self) -> DeviceWhere:
-        """On a fresh link before ``_connect()``: let the device settle, say where it is (default: it cannot tell)."""
+        """On a fresh link before ``_connect()``: let the device settle, say where it is (only if ``reports_position``)."""
         return DeviceWhere(None, None, position_lost=True, detail=f"the {self.profile.name} driver cannot ask where it stopped")
 
     def _manual_pen(self, down: bool) -> None:

@@ -134,6 +134,8 @@ class FakePlotter(PlotterDisplay):
     At the cut it stops mid-segment (pen down) and the link fails; ``answer`` is what ``_where`` reports.
     """
 
+    reports_position = True
+
     def __init__(self, budget=None, tell=True, **kw) -> None:
         clock = SimulatedClock()
         super().__init__("fake", profile=load_profile("hp7475a"), clock=clock, link_factory=lambda: NullLink(clock), **kw)
