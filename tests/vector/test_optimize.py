@@ -150,3 +150,10 @@ def test_bad_options(bad):
 
     with pytest.raises(ConfigError):
         optimize(DisplayList.from_polylines([[(0, 0), (1, 1)], [(2, 2), (3, 3)]]), **bad)
+
+
+def test_every_step_keeps_the_page_and_names():
+    dl = DisplayList.from_polylines([[(0, 0), (1, 0)], [(1, 0), (0, 0)], [(1, 0), (5, 0.001), (9, 0)], [(5, 5)]],
+                                    layer_names={0: "ink"}, pen_colours={1: "#123456"}, page=(297.0, 210.0))
+    out = optimize(dl, merge=0.1, simplify=0.01, min_length=0.0, time_budget=0.01)
+    assert out.page == (297.0, 210.0) and out.layer_names == {0: "ink"} and out.pen_colours == {1: "#123456"}
