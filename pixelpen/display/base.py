@@ -100,8 +100,8 @@ class Display(ABC):
 
         A degenerate, non-finite or overflowing window raises ``InvalidArgument`` (a ValueError) at once.
         """
-        self._window = geo.as_rect((xmin, ymin, xmax, ymax), "window")
-        self._window_angle = geo.as_number(angle, "window angle")
+        window, window_angle = geo.as_rect((xmin, ymin, xmax, ymax), "window"), geo.as_number(angle, "window angle")
+        self._window, self._window_angle = window, window_angle
         self._pipeline = None
 
     def viewport(self, xmin: float, ymin: float, xmax: float, ymax: float, *, preserve_aspect: bool = True) -> None:

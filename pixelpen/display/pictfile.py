@@ -172,18 +172,15 @@ def _json_int(text: str) -> int | float:
     return int(text) if len(text) <= 19 else float(text)
 
 
-_DEPTH_CHUNK = 1 << 22
-
-
-def _first_too_deep(raw: bytes, limit: int) -> int | None:
+def _first_too_deep(raw: bytes, limit: int, chunk: int = 1 << 22) -> int | None:
     """Byte offset of the first ``[`` or ``{`` (outside strings) nested more than ``limit`` deep, or None.
 
-    Vectorised over 4 MiB chunks, carrying the depth, whether a string is open and the run of
+    Vectorised over chunks (4 MiB), carrying the depth, whether a string is open and the run of
     backslashes at the end of the previous chunk.
     """
     depth, inside, run = 0, False, 0
-    for begin in range(0, len(raw), _DEPTH_CHUNK):
-        a = np.frombuffer(raw, np.uint8, count=min(_DEPTH_CHUNK, len(raw) - begin), offset=begin)
+    for begin in range(0, len(raw), chunk):
+        a = np.frombuffer(raw, np.uint8, count=min(chunk, len(raw) - begin), offset=begin)
         idx = np.arange(len(a))
         plain = np.maximum.accumulate(np.where(a == 92, -1, idx))  # last non-backslash at or before i
         before = np.concatenate([[-1], plain[:-1]])

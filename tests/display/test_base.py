@@ -116,3 +116,15 @@ def test_deferred_items_keep_the_pipeline_they_were_drawn_under():
     d.viewport(0, 0, 1, 1)
     d.flush()
     np.testing.assert_allclose(d.rendered[0][0].paths[0], [[0, 0], [500, 250]], atol=1e-9)
+
+
+@pytest.mark.parametrize("window", [(0, 0, 0, 10), (0, 0, 10, float("nan")), (-1e308, 0, 1e308, 1)])
+def test_a_bad_window_is_refused_at_once_as_pixelpen_and_value_error(window):
+    d = RecordingDisplay()
+    with pytest.raises(ValueError, match="window") as info:
+        d.window(*window)
+    assert isinstance(info.value, PixelpenError)
+    assert d.pipeline.window == (0.0, 0.0, 100.0, 50.0)  # the old window stays in force
+    with pytest.raises(ValueError, match="angle"):
+        d.window(0, 0, 1, 1, angle=float("inf"))
+    assert d.pipeline.window == (0.0, 0.0, 100.0, 50.0)

@@ -94,3 +94,32 @@ def test_curves_arcs_and_text_become_strokes():
     assert np.ptp(ell.paths[0][:, 1]) == pytest.approx(400, abs=1) and np.ptp(ell.paths[0][:, 0]) == pytest.approx(200, abs=1)
     (txt,) = shapes(Text((10, 10), "Hi", height=5))
     assert len(txt.paths) >= 3
+
+
+def test_zero_radius_curves_are_exact_degenerate_shapes():
+    dot = shapes(Circle((50, 50), 0))
+    assert [s.kind for s in dot] == ["stroke"]
+    np.testing.assert_allclose(np.vstack(dot[0].paths), [[500, 500]] * len(np.vstack(dot[0].paths)))
+    # a flat ellipse is the segment between its extremes, rotated by its angle: (50 +- 20 cos a, 50 +- 20 sin a)
+    line = np.vstack(shapes(Ellipse((50, 50), 20, 0, angle=np.pi / 6))[0].paths)
+    world = line / 10 * [1, -1] + [0, 100]  # device -> world for this y-down pipeline
+    ends = [50 + 20 * np.cos(np.pi / 6), 50 + 20 * np.sin(np.pi / 6)], [50 - 20 * np.cos(np.pi / 6), 50 - 20 * np.sin(np.pi / 6)]
+    np.testing.assert_allclose(sorted(map(tuple, world))[::len(world) - 1], sorted(map(tuple, ends)), atol=1e-9)
+    quarter = np.vstack(shapes(Arc((0, 0), 0, 10, 0.0, np.pi / 2), pipeline((-50, -50, 50, 50)))[0].paths)
+    assert len(quarter) == 2  # from u = 0 (the centre) to u = pi/2 (10 up): one straight piece
+
+
+def test_an_undrawable_item_is_named():
+    from pixelpen.errors import InvalidArgument
+
+    pic = Picture()
+    pic.add(Polyline([[0, 0], [10, 10]]))
+    pic.add(Polyline([[0, 0], [100, 0]], Style(dash=(1e-300, 1e-300))))
+    with pytest.raises(InvalidArgument, match=r"visible item 1 \(Polyline\).*too fine"):
+        shapes(pic)
+    seg = Segment("big", transform=np.diag([1e10, 1e10, 1.0]))
+    seg.add(Circle((0, 0), 1e5))
+    pic = Picture()
+    pic.add(seg)
+    with pytest.raises(InvalidArgument, match=r"segment 'big', visible item 0 \(Circle\)"):
+        shapes(pic)

@@ -4,6 +4,8 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from pixelpen.display.pictfile import load_picture, loads_picture, picture_to_dict, save_picture
 from pixelpen.display.picture import (
@@ -90,3 +92,111 @@ def test_oversized_file_is_refused(tmp_path, monkeypatch):
     monkeypatch.setattr(pf, "MAX_BYTES", 10)
     with pytest.raises(ParseError, match="more than"):
         load_picture(path)
+
+
+P2 = [[0, 0], [1, 1]]
+
+
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        (_doc({"type": {}}), r"\$\.items\[0\]\.type: unknown primitive type"),  # was TypeError: unhashable dict
+        (_doc({"type": "rectangle", "x0": 0, "y0": 0, "x1": 1, "y1": 1,
+               "style": {"fill": {"style": "pattern", "pattern": 5}}}), r"\$\.items\[0\]\.style\.fill.*rows"),
+        (_doc({"type": "segment", "name": "s", "items": 5}), r"\$\.items\[0\]\.items: expected a list"),
+        (_doc({"type": "segment", "name": "s", "items": [5]}), r"\$\.items\[0\]\.items\[0\]: expected an object"),
+        (_doc({"type": "text", "position": [0, 0], "text": 5}), r"\$\.items\[0\]: .*text must be a string"),
+        (_doc({"type": "marker", "points": P2, "size": "2"}), r"\$\.items\[0\]: .*marker size"),
+        (_doc({"type": "arc", "center": [0, 0], "rx": 1, "ry": 1, "start": [1], "end": 2}), r"\$\.items\[0\]: .*arc start"),
+        (_doc({"type": "circle", "center": [0, 0], "r": 1e308}), r"\$\.items\[0\]: .*circle radius"),
+        (_doc({"type": "ellipse", "center": [0, 0], "rx": 1, "ry": 1, "angle": 1e400}), r"\$\.items\[0\]: .*ellipse angle"),
+        (_doc({"type": "polyline", "points": P2}, window=[0, 0, 0, 10]), r"\$\.window: .*degenerate"),
+        (_doc({"type": "polyline", "points": [[0, 1e400], [1, 1]]}), r"\$\.items\[0\]\.points\[0\]: expected finite"),
+        (_doc({"type": "polyline", "points": P2}, window=[0, 0, 10, 1e400]), r"\$\.window\[3\]: expected a finite"),
+        (_doc({"type": "polyline", "points": P2, "style": {"width": "1"}}), r"\$\.items\[0\]\.style: .*line width"),
+        (_doc({"type": "segment", "name": "s", "visible": "no"}), r"\$\.items\[0\]: .*visible"),
+        (_doc({"type": "segment", "name": "s"}, {"type": "segment", "name": "s"}), r"\$\.items\[1\]: .*already exists"),
+        (_doc({"type": "polyline", "points": P2}).replace('"version": 1', '"version": true'), r"\$\.version"),
+    ],
+)
+def test_wrong_types_and_values_name_the_json_path(text, words):
+    with pytest.raises(ParseError, match=words) as err:
+        loads_picture(text, source="bad.json")
+    assert "bad.json" in str(err.value)
+
+
+def test_numbers_beyond_python_limits_are_parse_errors():
+    digits = "9" * 5000  # int() of this raises ValueError (the 4300-digit limit); float() of 400 digits is inf
+    text = _doc({"type": "polyline", "points": [[0, 0], [1, 1]]}).replace("[1, 1]", f"[1, {digits}]")
+    with pytest.raises(ParseError, match=r"\$\.items\[0\]\.points\[1\]: expected finite"):
+        loads_picture(text)
+    pen = _doc({"type": "polyline", "points": [[0, 0]], "style": {"pen": 1}}).replace('"pen": 1', '"pen": ' + "1" * 400)
+    with pytest.raises(ParseError, match="pen number"):
+        loads_picture(pen)
+
+
+@pytest.mark.parametrize("opener", ["[", "{\"a\":", "[{\"b\":"])
+def test_deep_nesting_is_refused_with_its_byte_offset(opener):
+    text = opener * 5000  # json.loads raised RecursionError on this
+    with pytest.raises(ParseError, match=r"byte offset \d+: JSON nested more than 32 deep"):
+        loads_picture(text)
+
+
+def test_nesting_inside_strings_does_not_count():
+    text = _doc({"type": "text", "position": [0, 0], "text": "[" * 5000 + '"{' * 100})  # dumps escapes the quotes
+    assert loads_picture(text).items[0].text == "[" * 5000 + '"{' * 100
+
+
+def _depth_reference(raw: bytes, limit: int):
+    """Scalar scan: the offset of the first bracket outside strings nested more than ``limit`` deep."""
+    depth, inside, escaped = 0, False, False
+    for offset, char in enumerate(raw.decode("latin-1")):
+        if inside:
+            escaped, inside = (False, inside) if escaped else (char == "\\", char != '"')
+        elif char == '"':
+            inside = True
+        elif char in "[{":
+            depth += 1
+            if depth > limit:
+                return offset
+        elif char in "]}":
+            depth -= 1
+    return None
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    parts=st.lists(st.one_of(
+        st.sampled_from(["[", "]", "{", "}", ",", "1"]),
+        st.lists(st.sampled_from(["a", "[", "{", "]", '\\"', "\\\\"]), max_size=5).map(lambda p: '"' + "".join(p) + '"'),
+    ), max_size=40),
+    limit=st.integers(0, 5),
+    chunk=st.sampled_from([1, 2, 3, 7, 1 << 22]),
+)
+def test_the_vectorised_depth_scan_matches_a_scalar_scan(parts, limit, chunk):
+    from pixelpen.display.pictfile import _first_too_deep
+
+    raw = "".join(parts).encode()
+    assert _first_too_deep(raw, limit, chunk) == _depth_reference(raw, limit)  # small chunks split strings, escapes
+
+
+@pytest.mark.parametrize("limit, value, words", [
+    ("MAX_ITEMS", 1, "more than 1 items"),
+    ("MAX_POINTS", 3, "more than 3 points"),
+    ("MAX_DEPTH", 4, "nested more than 4"),  # object, items, polyline, points, point: 5
+])
+def test_per_file_limits_are_overridable(monkeypatch, limit, value, words):
+    import pixelpen.display.pictfile as pf
+
+    text = _doc(*[{"type": "polyline", "points": [[0, 0], [1, 1]]}] * 2)
+    loads_picture(text)  # within the defaults
+    monkeypatch.setattr(pf, limit, value)
+    with pytest.raises(ParseError, match=words):
+        loads_picture(text)
+
+
+def test_bad_file_names_are_parse_errors(tmp_path):
+    with pytest.raises(ParseError, match="NUL"):
+        load_picture("a\x00b.json")
+    with pytest.raises(ParseError, match="more than the 255"):
+        load_picture(tmp_path / ("x" * 300 + ".json"))

@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 
 from pixelpen.display.picture import (
-    Bezier, BSpline, Circle, Fill, Image, Picture, Polygon, Polyline, Segment, Style, parse_colour,
+    Arc, Bezier, BSpline, Circle, Ellipse, Fill, Image, Marker, Picture, Polygon, Polyline, Rectangle, Segment, Style,
+    Text, parse_colour,
 )
-from pixelpen.errors import ConfigError
+from pixelpen.errors import ConfigError, PixelpenError
 
 
 def test_colours():
@@ -67,3 +68,41 @@ def test_segments_walk_with_their_transform_and_hide():
         pic.segment("x")
     with pytest.raises(ConfigError):
         pic.add("not a primitive")
+
+
+@pytest.mark.parametrize(
+    "make, error, words",
+    [
+        (lambda: Text((0, 0), 5), TypeError, "text must be a string"),
+        (lambda: Marker([[0, 0]], size="2"), TypeError, "marker size"),
+        (lambda: Arc((0, 0), 1, 1, [0.5], 2.0), TypeError, "arc start"),
+        (lambda: Ellipse((0, 0), 1, 1, angle=float("inf")), ValueError, "ellipse angle"),
+        (lambda: Circle((0, 0), 1e308), ValueError, "circle radius"),  # finite, but its extent overflows
+        (lambda: Circle((0, 0), 10**400), ValueError, "circle radius"),  # float() would raise OverflowError
+        (lambda: Rectangle(0, 0, "1", 1), TypeError, "rectangle x1"),
+        (lambda: Polyline([[0, 0], [1e300, 0]]), ValueError, "beyond"),
+        (lambda: Style(dash=(1, float("nan"))), ValueError, "dash"),
+        (lambda: Style(pen=10**30), ValueError, "pen number"),
+        (lambda: Style(pen=2.0), TypeError, "pen number"),
+        (lambda: Style(layer=["a"]), TypeError, "layer"),
+        (lambda: Fill("pattern", pattern=5), TypeError, "rows"),
+        (lambda: Fill("pattern", pattern=((1, 2),)), ValueError, "0 or 1"),
+        (lambda: Fill("pattern", pattern=((1, 0), (1,))), ValueError, "one length"),
+        (lambda: Fill("hatch", spacing=1e-300), ValueError, "hatch spacing"),
+        (lambda: Text((0, 0), "a", align={}), ValueError, "align"),
+        (lambda: Segment("s", transform=np.full((3, 3), np.inf)), ValueError, "transform"),
+        (lambda: Segment("s", visible="no"), TypeError, "visible"),
+        (lambda: Picture(window=(0, 0, 0, 10)), ValueError, "degenerate"),
+    ],
+)
+def test_bad_fields_are_pixelpen_errors_of_the_matching_builtin(make, error, words):
+    with pytest.raises(error, match=words) as info:
+        make()
+    assert isinstance(info.value, PixelpenError)
+
+
+def test_checked_fields_are_stored_as_floats():
+    arc = Arc((1, 2), 3, 4, 0, 1)
+    assert arc.center == (1.0, 2.0) and isinstance(arc.rx, float)
+    assert Style(pen=np.int64(3)).pen == 3 and type(Style(pen=np.int64(3)).pen) is int
+    assert Fill("pattern", pattern=[[1, 0], [0, 1]]).pattern == ((1, 0), (0, 1))
