@@ -515,13 +515,13 @@ def test_ctrl_c_on_hpgl_stores_the_pen_and_empties_the_buffer(tmp_path, sim, mon
     assert device.selected_pen == 0 and device.buffered_bytes == 0 and device.next_event_time() is None
 
 
-def test_ctrl_c_on_an_axidraw_lifts_the_pen_and_stops_the_motors(tmp_path, sim, monkeypatch):
+def test_ctrl_c_on_an_axidraw_lifts_the_pen_and_stops_moving(tmp_path, sim, monkeypatch, capsys):
     monkeypatch.setattr(plotcmd.ProgressBar, "__call__", lambda self, p: (_ for _ in ()).throw(KeyboardInterrupt))
     url, ident = sim("axidraw")
     assert main(["plot", ladder(tmp_path, 4), "--to", url]) == 130
     device = named_simulator(ident)
     assert device.pen_up and device.next_event_time() is None
-    assert [text for _, text in device.log][-1] == "EM,0,0"  # motors disabled last
+    assert "continue with: pixelpen plot" in capsys.readouterr().err
 
 
 # ---------------------------------------------------------------------------------------------------------
