@@ -3,8 +3,8 @@
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from pixelpen.errors import URLError
-from pixelpen.urls import Options, format_url, parse_bool, parse_size, parse_url, to_mm
+from pixelpen.errors import ConfigError, URLError
+from pixelpen.urls import Options, check_path, format_url, parse_bool, parse_size, parse_url, to_mm
 
 
 def test_plain_target_and_options():
@@ -90,3 +90,42 @@ def test_sizes_and_units():
 @pytest.mark.parametrize("target", ["[", "]", "a]b?c", "[x?", "x?]", "[a][b]?q"])
 def test_unbalanced_brackets_round_trip_percent_encoded(target):
     assert parse_url(format_url("png", target, {"size": "1x1"})).target == target
+
+
+@pytest.mark.parametrize("url, words", [
+    ("png:a.png?mode=%ff", "option 'mode' holds percent-encoded bytes that are not UTF-8"),
+    ("png:a.png?%c3=1", "option name"),
+    ("png:a%ff.png", "the target"),
+    ("png:a\udcff.png", "lone surrogate"),
+    ("png:" + "a" * 70_000, "longer than"),
+])
+def test_undecodable_urls_are_url_errors(url, words):
+    with pytest.raises(URLError, match=words):
+        parse_url(url)
+
+
+@pytest.mark.parametrize("text", ["4x1e999", "1e999x1", "nanx4", "4x0", "1e8x1"])
+def test_sizes_must_be_finite_positive_and_bounded(text):
+    with pytest.raises(ValueError, match="size"):
+        parse_size(text)
+    url = parse_url(f"png:a.png?size={text}")
+    with pytest.raises(URLError, match=f"option size='{text}'"):
+        Options(url, ["size"]).get("size", parse_size, None)
+
+
+@pytest.mark.parametrize("name, words", [
+    ("a\x00b.png", "NUL character at index 1"),
+    ("x" * 256 + ".png", "component of 260 bytes"),
+    ("/".join(["dir"] * 1100), "more than the 4096"),
+    ("", "empty"),
+    (3, "must be a file name"),
+])
+def test_file_names_no_file_system_takes_are_config_errors_naming_the_option(name, words):
+    with pytest.raises(ConfigError, match=words) as info:
+        check_path(name, "png file name")
+    assert str(info.value).startswith("png file name")
+
+
+def test_ordinary_file_names_pass():
+    assert str(check_path("out/é scène.png", "x")) == "out/é scène.png"
+    assert str(check_path("d/" + "x" * 255, "x")).endswith("x" * 255)

@@ -229,3 +229,29 @@ def test_non_utf8_file_is_a_parse_error(tmp_path):
 def test_header_refuses_bad_setting_names():
     with pytest.raises(ValueError):
         format_header("x", {"has space": 1})
+
+
+@pytest.mark.parametrize("text, line, word", [
+    ("#pixelpen-trace \u00b2 url=\n", 1, "version"),  # '²'.isdigit() is True, int('²') raises ValueError
+    ("#pixelpen-trace \u0661 url=\n", 1, "version"),  # Arabic-Indic digit one: int() reads it as 1
+    ("#pixelpen-trace 1 url=\n" + "9" * 400 + " > 41\n", 2, "timestamp"),  # float() of it is inf
+    ("#pixelpen-trace 1 url=\n" + "1" * 16 + ".5 > 41\n", 2, "at most 15 digits"),
+])
+def test_non_ascii_versions_and_endless_timestamps_are_refused(text, line, word):
+    with pytest.raises(ParseError, match=word) as info:
+        parse_trace(lines(text))
+    assert info.value.line == line
+
+
+def test_a_long_fraction_is_still_a_finite_time():
+    trace = parse_trace(lines("#pixelpen-trace 1 url=\n0." + "9" * 400 + " > 41\n"))
+    assert trace.chunks[0].time == 1.0
+
+
+def test_unreadable_trace_files_are_parse_errors(tmp_path):
+    with pytest.raises(ParseError, match="NUL"):
+        read_trace("a\x00b.trace")
+    with pytest.raises(ParseError, match="cannot read trace"):
+        read_trace(tmp_path / "missing.trace")
+    with pytest.raises(ParseError, match="UTF-8"):  # an open binary-backed stream, not only a path
+        read_trace(io.TextIOWrapper(io.BytesIO(b"#pixelpen-trace 1 url=\n0.0 > \xff\n"), encoding="utf-8"))

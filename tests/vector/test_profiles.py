@@ -278,3 +278,79 @@ def test_vpype_config_with_a_given_base_profile(tmp_path):
     base = load_profile("grbl")
     devices = load_vpype_config(write(tmp_path, VPYPE, "vpype.toml"), base=base)
     assert devices["hp7475a"].pen_up == base.pen_up and devices["hp7475a"].unit_mm == pytest.approx(0.02488)
+
+
+@pytest.mark.parametrize("extra", [
+    "x = " + "[" * 1000 + "]" * 1000 + "\n",  # tomllib recursed into RecursionError
+    "x = " + "{a = " * 1000 + "1" + "}" * 1000 + "\n",
+])
+def test_deep_nesting_is_a_parse_error_with_its_line(tmp_path, extra):
+    path = write(tmp_path, MINIMAL + extra)
+    with pytest.raises(ParseError, match="nested more than 32 deep") as info:
+        load_profile(path)
+    assert info.value.line == MINIMAL.count("\n") + 1 and str(path) in str(info.value)
+
+
+def test_brackets_in_strings_and_comments_do_not_nest(tmp_path):
+    text = MINIMAL.replace('name = "mine"', 'name = "[[[[' + "[" * 100 + '"  # ' + "{" * 100)
+    assert load_profile(write(tmp_path, text)).name.startswith("[[[[")
+
+
+def test_an_integer_past_pythons_digit_limit_is_a_parse_error(tmp_path):
+    path = write(tmp_path, MINIMAL.replace("unit_mm = 0.025", "unit_mm = " + "9" * 5000))
+    with pytest.raises(ParseError, match="4300") as info:  # tomllib raised a bare ValueError
+        load_profile(path)
+    assert info.value.line == 3
+
+
+@pytest.mark.parametrize("old, new, key", [
+    ("speed = 100.0", "speed = " + "9" * 400, "pen_down.speed"),  # float() raised OverflowError
+    ("unit_mm = 0.025", "unit_mm = 1e-300", "unit_mm"),
+    ('name = "mine"', 'name = "mine"\npens = 1000000000000', "pens"),  # hung open() building 10^12 pens
+    ('name = "mine"', 'name = "mine"\nhome = [1e300, 0]', "home"),
+    ("", "[paper.a4]\nx_range = [0, " + "9" * 400 + "]\ny_range = [0, 1]", "paper.a4.x_range"),
+])
+def test_out_of_range_numbers_name_file_and_key(tmp_path, old, new, key):
+    path = write(tmp_path, MINIMAL.replace(old, new, 1) if old else MINIMAL + new)
+    with pytest.raises(ConfigError) as info:
+        load_profile(path)
+    assert f"'{key}'" in str(info.value) and str(path) in str(info.value)
+    assert len(str(info.value)) < 400  # the 400-digit value is shown by its size
+
+
+def test_profile_limits_are_overridable(tmp_path, monkeypatch):
+    from pixelpen.vector import profiles
+
+    path = write(tmp_path, "pens = 12\n" + MINIMAL)
+    assert load_profile(path).pens == 12
+    monkeypatch.setattr(profiles, "MAX_PENS", 8)
+    with pytest.raises(ConfigError, match="1..8"):
+        load_profile(path)
+    monkeypatch.setattr(profiles, "MAX_BYTES", 50)
+    with pytest.raises(ParseError, match="larger than the 50"):
+        load_profile(path)
+
+
+def test_profiles_built_in_code_refuse_too_many_pens():
+    from dataclasses import replace
+
+    with pytest.raises(ConfigError, match="pens"):
+        replace(load_profile("hp7475a"), pens=10**12)
+
+
+def test_bad_profile_names_are_config_errors():
+    with pytest.raises(ConfigError, match="NUL"):
+        load_profile("my\x00profile.toml")
+
+
+def test_vpype_numbers_out_of_range(tmp_path):
+    base = VPYPE.split("[device.roland]")[0]
+    for old, new, key in [
+        ('plotter_unit_length = "0.02488mm"', 'plotter_unit_length = "1e400mm"', "device.hp7475a.plotter_unit_length"),
+        ('final_pu_params = "11040,7721"', f'final_pu_params = "{"9" * 5000},1"', "device.hp7475a.paper[0].final_pu_params"),
+        ("pen_count = 6", "pen_count = 1000000000000", "device.hp7475a.pen_count"),
+    ]:
+        path = write(tmp_path, base.replace(old, new), "vpype.toml")
+        with pytest.raises(ConfigError) as info:
+            load_vpype_config(path)
+        assert f"'{key}'" in str(info.value), str(info.value)
