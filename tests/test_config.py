@@ -115,3 +115,45 @@ def test_a_missing_named_file_is_an_error_a_missing_default_is_none(tmp_path, mo
     monkeypatch.delenv("PIXELPEN_CONFIG")
     monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path))
     assert load_config().common == {} and main(["devices", "--no-probe", "--json"]) == 0
+
+
+# ---------------------------------------------------------------------------------------------------------
+# fuzzing: mutants of valid configuration files give a configuration or a ParseError, nothing else
+
+CONFIG_SEEDS = [
+    b'to = "axidraw:auto"\n[plot]\nmargin = 10\ncenter = true\noptimize-time = 2\nlayers = ["1", "outline"]\n',
+    b'[plot]\nto = "sim:grbl?speed=fast"\nrotate = 90.5\nfit = false\npage = "a4"\nretries = 3\n',
+    b'[sim]\nspeed = "fast"\noption = ["baud=9600", "flow=xonxoff"]\n[draw]\nto = ["png:a.png"]\n',
+]
+
+
+def config_campaign(tmp_path, cases, seed):
+    from tests.fuzzing import campaign
+    from pixelpen.cli import build_parser
+
+    commands = build_parser().commands
+    path = tmp_path / "fuzz.toml"
+
+    def target(data):
+        path.write_bytes(data)
+        load_config(path, required=True).apply(commands)
+
+    return campaign("user configuration", target, CONFIG_SEEDS, cases, seed=seed, seconds_per_case=2.0,
+                    memory_mb=64)
+
+
+def test_config_reader_fuzz_quick(tmp_path):
+    from tests.fuzzing import QUICK_CASES
+
+    result = config_campaign(tmp_path, QUICK_CASES, seed=1)
+    result.check()
+    assert result.accepted >= len(CONFIG_SEEDS) and result.rejected > 0
+
+
+@pytest.mark.slow
+def test_config_reader_fuzz_slow(tmp_path):
+    from tests.fuzzing import SLOW_CASES
+
+    result = config_campaign(tmp_path, SLOW_CASES, seed=2)
+    print(result.summary())
+    result.check()

@@ -677,3 +677,51 @@ def test_plot_demo_saves_each_paper_and_skips_unknown_models(tmp_path, monkeypat
         img = np.asarray(Image.open(path).convert("L"))
         assert (img < 128).any() and (img == 255).mean() > 0.9
     assert "skipping nosuch" in caplog.text
+
+
+# ---------------------------------------------------------------------------------------------------------
+# fuzzing: layout values from the command line or the configuration file give a layout or a PixelpenError
+
+LAYOUT_SEEDS = [b"a4 90 1.5 10", b"210x297mm -45 0.5 0", b"11x8.5in 180 2 5", b"letter 0 1 0", b"30x20cm 1e-3 3 1"]
+
+
+def layout_campaign(cases, seed):
+    from tests.fuzzing import campaign
+
+    display = plotcmd.plotter_for("sim:hp7475a")
+    points = np.array([[10.0, 20.0], [50.0, 20.0], [30.0, 60.0]])
+
+    def target(data):
+        page, rotate, scale, margin = (data.decode("utf-8", "replace").split(" ") + ["", "", "", ""])[:4]
+        numbers = []
+        for text, convert in ((rotate, plotcmd._angle), (scale, plotcmd._number(0.0, False)),
+                              (margin, plotcmd._number(0.0, True))):
+            try:
+                numbers.append(convert(text))
+            except plotcmd.argparse.ArgumentTypeError:  # argparse turns it into a usage error
+                return
+        layout = plotcmd.Layout(rotate_deg=numbers[0], scale=numbers[1], center=True, margin_mm=numbers[2],
+                                page=page or None)
+        w, h = layout.page_size(display)
+        assert np.isfinite([w, h]).all() and w > 0 and h > 0
+        matrix, factor = layout.matrix(points, (numbers[2], numbers[2], w - numbers[2], h - numbers[2]))
+        assert np.isfinite(matrix).all() and factor > 0
+
+    return campaign("plot layout options", target, LAYOUT_SEEDS, cases, seed=seed, seconds_per_case=2.0)
+
+
+def test_layout_options_fuzz_quick():
+    from tests.fuzzing import QUICK_CASES
+
+    result = layout_campaign(QUICK_CASES, seed=3)
+    result.check()
+    assert result.accepted >= len(LAYOUT_SEEDS)
+
+
+@pytest.mark.slow
+def test_layout_options_fuzz_slow():
+    from tests.fuzzing import SLOW_CASES
+
+    result = layout_campaign(SLOW_CASES, seed=4)
+    print(result.summary())
+    result.check()
