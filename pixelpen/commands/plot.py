@@ -321,16 +321,20 @@ def prepare_drawing(path: str, display: PlotterDisplay, *, layout: Layout = Layo
     return dl, placement
 
 
+def home_of(display: PlotterDisplay) -> tuple[float, float]:
+    """The profile's home in the display list's frame (device units from the plottable area's corner)."""
+    home = np.asarray(display.profile.home, float) - [display.paper.x_range[0], display.paper.y_range[0]]
+    return float(home[0]), float(home[1])
+
+
 def optimise_for(dl: DisplayList, display: PlotterDisplay, time_budget: float | None, *,
                  dedupe: bool = True) -> tuple[DisplayList, OptimizeReport]:
     """Deduplicate (within each layer and pen), merge ends within MERGE_MM and order the strokes by pen-up time."""
     from ..vector.optimize import OptimizeReport, optimize
 
-    profile = display.profile
-    home = np.asarray(profile.home, float) - [display.paper.x_range[0], display.paper.y_range[0]]
     report = OptimizeReport()
-    result = optimize(dl, merge=MERGE_MM / dl.unit_mm, home=(float(home[0]), float(home[1])),
-                      time_budget=time_budget, profile=profile, dedupe=dedupe, report=report)
+    result = optimize(dl, merge=MERGE_MM / dl.unit_mm, home=home_of(display), time_budget=time_budget,
+                      profile=display.profile, dedupe=dedupe, report=report)
     return result, report
 
 
@@ -620,11 +624,11 @@ class PauseMessages:
 
 
 def _estimate(dl: DisplayList, display: PlotterDisplay) -> str:
+    """The plot's lengths, lifts, pen changes and estimated time, in words."""
     from ..vector.motion import estimate_time
 
-    home = np.asarray(display.profile.home, float) - [display.paper.x_range[0], display.paper.y_range[0]]
     try:
-        t = estimate_time(dl, display.profile, home=(float(home[0]), float(home[1])))
+        t = estimate_time(dl, display.profile, home=home_of(display))
     except ConfigError as exc:
         return f"no time estimate ({exc})"
     return (f"{t.pen_down_mm:.0f} mm pen down, {t.pen_up_mm:.0f} mm pen up, {t.lifts} lifts, "
@@ -648,6 +652,16 @@ def write_sheet(path: str, dl: DisplayList, display: PlotterDisplay, placement: 
     pens = [first + k for k in range(len(frames))] + pens
     sheet = DisplayList.from_polylines(strokes, pens=pens, unit_mm=1.0, pen_colours=colours)
     render_preview(sheet, path, show_travel=False, pen_width_mm=display.pen_width_mm)
+
+
+def _print_dry_run(args: argparse.Namespace, display: PlotterDisplay, dl: DisplayList, placement: Placement) -> None:
+    """What a plot would do, on stdout: the sheet, the placement, the cut, the estimate."""
+    print(f"dry run: {args.file} on {args.to} ({display.profile.name}, paper {display.paper.name}); nothing was sent")
+    for text in placement.lines():
+        print("  " + text)
+    print(f"  plot: {len(dl)} stroke{'s' * (len(dl) != 1)}; {_estimate(dl, display)}")
+    if args.sheet:
+        print(f"  sheet: {args.sheet}")
 
 
 def _layout(args: argparse.Namespace) -> Layout:
@@ -695,13 +709,7 @@ def run_plot(args: argparse.Namespace) -> int:
     if args.sheet:
         write_sheet(args.sheet, dl, display, placement)
     if args.dry_run:
-        print(f"dry run: {args.file} on {args.to} ({display.profile.name}, paper {display.paper.name}); "
-              "nothing was sent")
-        for text in placement.lines():
-            print("  " + text)
-        print(f"  plot: {len(dl)} stroke{'s' * (len(dl) != 1)}; {_estimate(dl, display)}")
-        if args.sheet:
-            print(f"  sheet: {args.sheet}")
+        _print_dry_run(args, display, dl, placement)
         return 0
     if placement.cut_mm > CUT_REPORT_MM:
         log.warning("%s: %.1f mm of %.1f mm of lines (%.1f %%) lie outside the %s's limits and were cut "
