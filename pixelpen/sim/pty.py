@@ -138,7 +138,7 @@ class PtyBridge:
         present = not hangup.poll(0)
         if present and not self._host_open:
             self.opens += 1
-            self.port.dtr_reset()
+            self.port.host_opened()
         elif self._host_open and not present:
             self.port.save_out()
         self._host_open = present
@@ -150,12 +150,11 @@ class PtyBridge:
         to_program = bytearray()
         fast_forward = False  # simulated clock: the program has been quiet, so jump from event to event
         while not self._stop.is_set():
-            present = self._program_present()
-            incoming = port.read(65536, 0.0)
-            if not present:  # nobody at the end of the cable: what the device says is lost
+            if not self._program_present():  # nobody at the end of the cable yet (or any more)
                 to_program.clear()
                 self._stop.wait(_MAX_IDLE)
                 continue
+            incoming = port.read(65536, 0.0)
             if incoming:
                 to_program += incoming
                 fast_forward = False  # give the program real time to react to what it gets

@@ -417,12 +417,17 @@ class SimPort:
             with self._lock:
                 self.device.save_paper(self.out)  # type: ignore[attr-defined]
 
-    def dtr_reset(self) -> None:
-        """The host opened the port and raised DTR: a device with ``resets_on_dtr`` (an Arduino) reboots."""
+    def host_opened(self) -> None:
+        """A program opened the port: what the device said while nobody listened is gone, and DTR rises,
+        so a device with ``resets_on_dtr`` (an Arduino's auto-reset) reboots."""
         with self._lock:
             self._run_until(self.clock.now())
+            self.device.take_output()
+            self._rx_line.clear()
+            self._inbuf.clear()
             if getattr(self.device, "resets_on_dtr", False):
                 self.device.inject("reset")
+            self._dev_next = self.device.next_event_time()
 
     # -- waiting ----------------------------------------------------------------------------
 
