@@ -32,6 +32,7 @@ import logging
 import math
 import os
 import select
+import shlex
 import sys
 import threading
 import time
@@ -664,6 +665,31 @@ def _print_dry_run(args: argparse.Namespace, display: PlotterDisplay, dl: Displa
         print(f"  sheet: {args.sheet}")
 
 
+DRAWING_OPTIONS = (("--layers", "layers", None), ("--tolerance", "tolerance", 0.05), ("--rotate", "rotate", 0.0),
+                   ("--scale", "scale", 1.0), ("--fit", "fit", False), ("--center", "center", False),
+                   ("--margin", "margin", 0.0), ("--page", "page", None), ("--landscape", "landscape", False),
+                   ("--portrait", "portrait", False))
+"""The options that shape the drawing a state file belongs to (flag, argparse dest, default): a resume repeats them."""
+
+
+def resume_command(args: argparse.Namespace) -> str:
+    """The command line that resumes this plot: the same file, plotter, state and drawing options, with --resume."""
+    words = ["pixelpen", "plot", args.file, "--to", args.to]
+    for flag, dest, default in DRAWING_OPTIONS:
+        value = getattr(args, dest)
+        if value == default:
+            continue
+        if isinstance(value, bool):
+            words.append(flag)
+        elif isinstance(value, list):
+            words += [flag, *value]
+        else:
+            words += [flag, str(value)]
+    if args.state:
+        words += ["--state", args.state]
+    return shlex.join(words + ["--resume"])
+
+
 def _layout(args: argparse.Namespace) -> Layout:
     orientation = "landscape" if args.landscape else "portrait" if args.portrait else None
     return Layout(rotate_deg=args.rotate, scale=args.scale, fit=args.fit, center=args.center,
@@ -720,7 +746,7 @@ def run_plot(args: argparse.Namespace) -> int:
         log.warning("%s holds an unfinished plot; plotting from the start (--resume continues it)", state)
     keys = _stdin_keys(pauses.key)
     display.pause_requested = keys.pause_requested if keys is not None else None
-    hint = f"pixelpen plot {args.file} --to '{args.to}'" + (f" --state {args.state}" if args.state else "") + " --resume"
+    hint = resume_command(args)
     try:
         with display:
             if not args.resume:

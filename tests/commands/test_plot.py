@@ -407,6 +407,24 @@ def test_a_fault_beyond_the_retries_exits_3_and_resume_draws_every_line_exactly_
     assert not state.exists() and not os.path.exists(f"{state}.drawing.npz")
 
 
+def test_the_printed_resume_command_repeats_the_layout_and_finishes_the_plot(tmp_path, sim, capsys, monkeypatch):
+    import shlex
+
+    monkeypatch.chdir(tmp_path)
+    path = ladder(tmp_path, 40, pitch=4)
+    broken, ident = sim("hp7475a", drop_after=900, buffer=256)
+    layout = ["--rotate", "90", "--center", "--margin", "12.5", "--page", "a4", "--tolerance", "0.02"]
+    assert run(path, "--to", broken, "--retries", "0", *layout) == 3
+    (command,) = [t.partition("resume with: ")[2] for t in capsys.readouterr().err.splitlines() if "resume with:" in t]
+    argv = shlex.split(command)
+    assert argv[:2] == ["pixelpen", "plot"] and argv[-1] == "--resume"
+    assert {"--rotate", "--center", "--margin", "--page", "--tolerance"} <= set(argv)
+    # the command as printed, on the same plotter reached over a healthy link, finishes the job
+    argv[argv.index("--to") + 1] = f"sim:hp7475a?speed=fast&id={ident}&buffer=256"
+    assert main(argv[1:]) == 0
+    assert not os.path.exists(f"{path}.plot-state.json")
+
+
 def test_resume_on_a_plotter_that_cannot_say_where_it_stopped_needs_confirmation(tmp_path, sim, capsys):
     path = ladder(tmp_path)
     state = tmp_path / "job.json"
