@@ -26,7 +26,10 @@ that a test relies on:
 * ``reserve_bug``: the last byte that would fill the buffer to the ESC.B figure is lost (ESC.E 16);
 * ``DT;`` restores ETX; label text executes one character at a time; ``DP`` digitizes at once where the
   pen stands (there is no operator); character sets 1-4 are accepted and drawn with the standard glyphs;
-* 7550A instructions beyond HP-GL/1 (``PG``, ``EP``, ``FP`` ...) are read and logged, with no effect.
+* 7550A instructions beyond HP-GL/1 (``PG``, ``EP``, ``FP`` ...) are read and logged, with no effect;
+* a bare ``PD;`` lowers the pen where it stands and leaves a dot (merged into a line then drawn from it);
+* the 7475A takes ``PS`` (chiplotle3's 7475A list; vpype's ``hp7475a`` files begin ``IN;DF;PS4;``); an
+  instruction a model lacks is error 1 (OE, the OS error bit) and the plot goes on with the next one.
 """
 
 from __future__ import annotations
