@@ -6,7 +6,8 @@ the fault in the URL (``drop_after=N``, ``stall_after=N``, ``corrupt_at=N``, ``p
 ``pause_after=N``; N uniform over the bytes of the uninterrupted plot).  After the fault the operator's
 part is played (power back on, the cable fixed: the resume uses the URL without the fault) and the plot
 is resumed — through ``resume_after_fault()`` (path ``api``) or through ``pixelpen plot --resume`` run
-in process with a state file (path ``cli``).  A resume that answers PositionUnknown counts as
+in process with a state file (path ``cli``; ``--no-optimize``, so that the reference plot and the
+interrupted one plan the same strokes).  A resume that answers PositionUnknown counts as
 ``asked``; it is then resumed with ``position_confirmed=True`` (``--confirm-position``) and checked too.
 
 The simulator's paper is compared with the uninterrupted plot's AS SEGMENT SETS (see :func:`compare`):
@@ -276,20 +277,18 @@ def run_api(family: str, kind: str, at: int, dl: DisplayList, ref: DisplayList, 
 def run_cli(family: str, kind: str, at: int, svg: Path, ref: DisplayList, ident: str, state: Path) -> Outcome:
     """Plot with the fault through ``pixelpen plot``, then ``--resume`` (and ``--confirm-position`` if asked), compare."""
     out = Outcome()
-    base = [
-        "plot", str(svg), "--state", str(state), "--retries", "0",
-    ]
+    base = ["plot", str(svg), "--state", str(state), "--retries", "0", "--no-optimize"]
     code, text = _main([*base, "--to", url(family, ident, f"{FAULT_OPTION[kind]}={at}")])
     if code != 0:
         out.interrupted = True
-        out.faults.append(text.strip()[-300:])
+        out.faults.append(_said(text))
         if code != 3:
             raise PixelpenError(f"first run exit {code}: {text.strip()[-300:]}")
         recover(family, kind, ident)
         extra: list[str] = []
         for _ in range(MAX_RESUMES):
             code, text = _main([*base, "--to", url(family, ident), "--resume", *extra])
-            out.faults.append(text.strip()[-300:])
+            out.faults.append(_said(text))
             if code == 0:
                 break
             if "--confirm-position" in text and not extra:
@@ -306,7 +305,7 @@ def run_cli(family: str, kind: str, at: int, svg: Path, ref: DisplayList, ident:
 def reference_cli(family: str, svg: Path, ident: str, state: Path) -> tuple[DisplayList, int]:
     """The uninterrupted CLI plot's paper and its host bytes (read from the simulator's counters)."""
     device_bytes = []
-    code, text = _main(["plot", str(svg), "--to", url(family, ident), "--state", str(state)])
+    code, text = _main(["plot", str(svg), "--to", url(family, ident), "--state", str(state), "--no-optimize"])
     if code != 0:
         raise PixelpenError(f"reference plot exit {code}: {text.strip()[-300:]}")
     device = named_simulator(ident)
@@ -314,6 +313,11 @@ def reference_cli(family: str, svg: Path, ident: str, state: Path) -> tuple[Disp
     paper = device.display_list()
     forget_simulator(ident)
     return paper, device_bytes[0]
+
+
+def _said(text: str) -> str:
+    """The CLI's messages without its progress bar lines."""
+    return "\n".join(line for line in text.splitlines() if line and not line.lstrip().startswith("[")).strip()
 
 
 def _main(argv: list[str]) -> tuple[int, str]:

@@ -233,6 +233,8 @@ class HPGLDisplay(PlotterDisplay):
     """An HP-GL plotter on RS-232, rfc2217:// or a USB printer-class adapter (see the module docstring)."""
 
     reports_position = True
+    lifts_after_each_stroke = False  # PUx,y lifts and travels in one instruction; a bare PU; only at sync points
+    rests_pen_down_at_start = False  # PD always comes with the vectors it draws
     ident: ClassVar[str] = ""
     """What the model answers to OI."""
     max_velocity_cm_s: ClassVar[float] = 38.1
@@ -425,6 +427,8 @@ class HPGLDisplay(PlotterDisplay):
         self._wait(lambda: not w.syncs and not w.queries, "waiting for the plotter to finish", poll=MAX_POLL_S)
 
     def _select_pen(self, pen: int) -> None:
+        if self._wire.strokes_sent:
+            self._lifted_in_place(self._wire.strokes_sent - 1)  # SP lifts the pen where it stands
         self._send([enc.select_pen(pen)])
 
     def _device_paused(self) -> bool:
@@ -587,6 +591,8 @@ class HPGLDisplay(PlotterDisplay):
         w = self._wire
         point = _SyncPoint(w.strokes_sent, w.window, w.window_first, expect=w.last_point)
         w.syncs.append(point)
+        if w.strokes_sent:
+            self._lifted_in_place(w.strokes_sent - 1)  # the PU; below
         self._send([enc.PEN_UP, enc.SYNC_REQUEST])
         w.window, w.window_first = [], w.strokes_sent
         w.since_sync_strokes = w.since_sync_bytes = 0

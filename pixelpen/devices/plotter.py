@@ -147,10 +147,16 @@ class ResumePoint:
         return np.concatenate([head, points[self.vertex + 1:]])
 
 
-def locate(window: list[tuple[int, np.ndarray]], where: DeviceWhere, before: np.ndarray | None) -> list[ResumePoint]:
+def locate(
+    window: list[tuple[int, np.ndarray]], where: DeviceWhere, before: np.ndarray | None, *,
+    lifts: Callable[[int], bool] = lambda stroke: True, down_at_start: bool = True,
+) -> list[ResumePoint]:
     """Every distinct place in the strokes ``window`` ((index, sent points) in order) the device state may be, earliest first.
 
     ``before`` is the pen position before the window's first stroke (the end of the stroke before it), or None.
+    ``lifts(s)``: the device may rest with the pen lifted at stroke s's end (False where lifting and travelling
+    to the next stroke are one instruction); ``down_at_start``: it may rest with the pen down at a stroke's
+    first point before drawing (False where lowering and drawing are one instruction).
     """
     if where.position is None:
         return []
@@ -167,7 +173,8 @@ def locate(window: list[tuple[int, np.ndarray]], where: DeviceWhere, before: np.
             if np.hypot(*(q - p[0])) <= tol:
                 if up_ok:
                     found.append(ResumePoint(index))
-                found.append(ResumePoint(index + 1))
+                if down_ok or lifts(index):
+                    found.append(ResumePoint(index + 1))
         else:
             for j in range(len(p) - 1):
                 t = _near_segment(q, p[j], p[j + 1], tol)
@@ -175,8 +182,13 @@ def locate(window: list[tuple[int, np.ndarray]], where: DeviceWhere, before: np.
                     continue
                 length = float(np.hypot(*(p[j + 1] - p[j])))
                 if t * length >= length - tol:
-                    found.append(ResumePoint(index + 1) if j + 1 == len(p) - 1 else ResumePoint(index, j + 1))
+                    last = j + 1 == len(p) - 1
+                    if last and not down_ok and not lifts(index):
+                        continue  # the pen cannot rest lifted here: it would have gone on to the next stroke
+                    found.append(ResumePoint(index + 1) if last else ResumePoint(index, j + 1))
                 elif t * length <= tol:
+                    if j == 0 and not up_ok and not down_at_start:
+                        continue  # the pen cannot rest down on a stroke's start before drawing
                     found.append(ResumePoint(index, j))
                 else:
                     found.append(ResumePoint(index, j, (float(q[0]), float(q[1]))))
@@ -223,6 +235,8 @@ class PlotState:
     """The device said it lost its position; a resume needs ``position_confirmed``."""
     damaged: list[int] | None = None
     """[start, stop) of strokes the device reported it did not draw as sent; a resume draws them again."""
+    lifts: list[int] | None = None
+    """Unconfirmed strokes after which the pen was lifted in place (None: unknown)."""
     stopped_at: list[float] | None = None
     """[x, y, pen down 1/0/-1 unknown, tolerance]: where the device stopped, asked before the safe stop parked it."""
     version: int = STATE_VERSION
@@ -261,6 +275,10 @@ class PlotState:
         ):
             raise ParseError("plot state field 'damaged' is not a [start, stop] stroke range", source=str(path),
                              token=state.damaged)
+        if state.lifts is not None and not (
+            isinstance(state.lifts, list) and all(isinstance(v, int) and 0 <= v < state.strokes for v in state.lifts)
+        ):
+            raise ParseError("plot state field 'lifts' is not a list of stroke numbers", source=str(path), token=state.lifts)
         if state.stopped_at is not None and not (
             isinstance(state.stopped_at, list) and len(state.stopped_at) == 4
             and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in state.stopped_at)
@@ -288,6 +306,10 @@ class PlotterDisplay(VectorDisplay):
     """Built-in profile the scheme uses unless the URL names another."""
     family: ClassVar[str] = ""
     """Simulator model name for ``sim:`` URLs (usually the scheme)."""
+    lifts_after_each_stroke: ClassVar[bool] = True
+    """The device may rest with the pen lifted at the end of any stroke (False: only after ``_lifted_in_place``)."""
+    rests_pen_down_at_start: ClassVar[bool] = True
+    """The device may rest with the pen lowered on a stroke's first point before drawing it."""
     reports_position: ClassVar[bool] = False
     """True when the family implements ``_where``; otherwise a resume restarts at the last confirmed stroke
     (strokes drawn since are drawn again) without asking the device."""
@@ -365,6 +387,8 @@ class PlotterDisplay(VectorDisplay):
         """Where an interrupted job's device stopped, asked before the safe stop parked it."""
         self._damaged: range | None = None
         """Strokes the device reported it did not draw as sent (an error, a wrong position)."""
+        self._lifts: set[int] | None = set()
+        """Strokes after which the family lifted the pen without moving (None: unknown, any may be)."""
         self._redo = range(0)
         """Whole strokes a resume draws again before it continues (a damaged stretch)."""
 
@@ -554,6 +578,7 @@ class PlotterDisplay(VectorDisplay):
             self._position_lost = self._position_lost or state.position_lost
             if state.damaged is not None:
                 self._mark_damaged(range(*state.damaged))
+            self._lifts = None if state.lifts is None else set(state.lifts)
             if self._where_found is None and self.reports_position:
                 self._interrupted = True
                 self.reconnect()  # the display was opened without the state file: ask the device now
@@ -564,10 +589,13 @@ class PlotterDisplay(VectorDisplay):
                 self._where_found = DeviceWhere((x, y), None if pen < 0 else bool(pen), tolerance=tol,
                                                 detail=f"stopped at {x:g},{y:g} (asked before the last session parked it)")
             sent = len(dl) if state.sent is None else state.sent
-            self._job, self._head = dl, None
+            self._job, self._head, self._job_state = dl, None, state  # a PositionUnknown below keeps the file current
+            self.confirmed = state.confirmed
             start = self._resume_point(dl, pts, state.confirmed, sent, position_confirmed)
         elif resume:
             raise ConfigError("nothing to resume: no interrupted plot in this process and no state file")
+        else:
+            self._lifts, self._damaged, self._position_lost, self._redo = set(), None, False, range(0)
         self._job = dl
         self._job_state = PlotState(self.port, fp, len(dl), self._redo.start if self._redo else start.stroke)
         seg = np.hypot(*np.diff(dl.points, axis=0).T) if len(dl.points) > 1 else np.zeros(0)
@@ -597,7 +625,11 @@ class PlotterDisplay(VectorDisplay):
         if where is not None and where.position_lost:
             self._position_lost = True
         lost = self._position_lost or where is None or not where.settled
-        found = [] if lost else locate(window, where, before)
+        lifts = self._lifts
+        found = [] if lost else locate(
+            window, where, before, down_at_start=self.rests_pen_down_at_start,
+            lifts=(lambda s: True) if self.lifts_after_each_stroke or lifts is None else lifts.__contains__,
+        )
         damaged, self._damaged = self._damaged, None
         self._redo = range(0)
         if damaged is not None and len(found) == 1 and not lost:
@@ -625,6 +657,8 @@ class PlotterDisplay(VectorDisplay):
         else:
             why = f"its position {where.position} (pen {_pen_word(where.pen_down)}) fits {len(found)} places: " + ", ".join(
                 f"stroke {r.stroke}" + (f" after vertex {r.vertex}" if r.vertex or r.at else "") for r in found)
+        self._damaged = damaged  # still to be drawn again by the confirmed resume
+        self._stopped_at = where if where is not None and where.position is not None and not lost else None
         self._save_state(sent=sent)
         raise PositionUnknown(
             f"{self.profile.name}: cannot tell which of strokes {confirmed}..{sent - 1} are on paper: {why}. "
@@ -668,6 +702,7 @@ class PlotterDisplay(VectorDisplay):
             self._job_state.sent = sent
             self._job_state.position_lost = self._position_lost
             self._job_state.damaged = [self._damaged.start, self._damaged.stop] if self._damaged else None
+            self._job_state.lifts = None if self._lifts is None else sorted(s for s in self._lifts if s >= self.confirmed)
             at = self._stopped_at
             self._job_state.stopped_at = None if at is None or at.position is None else [
                 float(at.position[0]), float(at.position[1]), -1 if at.pen_down is None else int(at.pen_down), at.tolerance]
@@ -709,6 +744,11 @@ class PlotterDisplay(VectorDisplay):
         elif where.position is not None and where.settled:
             self._stopped_at = where
         self._save_state(sent=self._sent_end)
+
+    def _lifted_in_place(self, stroke: int) -> None:
+        """Families whose pen lift is part of the travel call this when they lift the pen in place after ``stroke``."""
+        if self._lifts is not None:
+            self._lifts.add(stroke)
 
     def _pause_changed(self, paused: bool) -> None:
         """Tell ``on_pause`` the device has actually paused (True) or goes on (False); families call it for their own pauses."""

@@ -63,6 +63,17 @@ def test_a_closed_stroke_seen_pen_up_at_its_start_has_two_readings():
     assert locate([(3, loop)], where(10, 0, False), None) == [ResumePoint(3, 1)]  # elsewhere it is clear
 
 
+def test_a_device_that_lifts_only_with_its_travel_reads_a_closed_stroke_once():
+    # HP-GL: PUx,y lifts and travels in one instruction, so the pen rests lifted at a stroke's end only where
+    # the driver sent a bare PU (a sync point); PD comes with its vectors, so it never rests down at a start
+    loop = np.array([[0, 0], [10, 0], [10, 10], [0, 0]])
+    never = dict(lifts=lambda s: False, down_at_start=False)
+    assert locate([(3, loop)], where(0, 0, False), np.array([50, 50]), **never) == [ResumePoint(3)]
+    assert locate([(3, loop)], where(0, 0, True), np.array([50, 50]), **never) == [ResumePoint(4)]
+    synced = dict(lifts=lambda s: s == 3, down_at_start=False)
+    assert locate([(3, loop)], where(0, 0, False), np.array([50, 50]), **synced) == [ResumePoint(3), ResumePoint(4)]
+
+
 def test_a_path_through_its_own_line_is_ambiguous_where_it_crosses():
     cross = np.array([[0, 0], [10, 0], [10, 10], [5, 10], [5, -10]])
     found = locate([(0, cross)], where(5, 0, True), None)
