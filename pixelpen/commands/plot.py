@@ -28,6 +28,7 @@ removed when the plot completes.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
 import math
 import os
@@ -37,7 +38,7 @@ import sys
 import threading
 import time
 import uuid
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import IO, TYPE_CHECKING
@@ -407,6 +408,31 @@ class ProgressBar:
             self.stream.write("\n")
             self._open_line = False
 
+    @contextlib.contextmanager
+    def log_lines(self, logger: logging.Logger) -> Iterator[None]:
+        """While inside, a record printed by ``logger``'s handlers starts on its own line, not after the bar."""
+        guard = _EndLine(self)
+        handlers = list(logger.handlers)
+        for handler in handlers:
+            handler.addFilter(guard)
+        try:
+            yield
+        finally:
+            for handler in handlers:
+                handler.removeFilter(guard)
+
+
+class _EndLine(logging.Filter):
+    """A handler filter that ends the progress bar's line before the record is printed."""
+
+    def __init__(self, bar: ProgressBar) -> None:
+        super().__init__()
+        self.bar = bar
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        self.bar.end()
+        return True
+
 
 class KeyControl:
     """Keys typed while a plot runs, read from ``fd`` by a thread: ``p`` or space toggles a pause, Enter answers.
@@ -748,7 +774,7 @@ def run_plot(args: argparse.Namespace) -> int:
     display.pause_requested = keys.pause_requested if keys is not None else None
     hint = resume_command(args)
     try:
-        with display:
+        with display, bar.log_lines(logging.getLogger("pixelpen")):
             if not args.resume:
                 _save_drawing(_drawing_file(state), dl, source_fp)
             if display.profile.pens == 1 and len(set(dl.pens.tolist())) > 1:

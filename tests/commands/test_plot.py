@@ -579,6 +579,25 @@ def test_progress_bar_throttles_on_a_terminal_and_steps_in_a_log():
     assert len(log.getvalue().splitlines()) == 11  # 0 %, 10 %, ..., 100 %
 
 
+def test_a_warning_during_the_plot_starts_on_its_own_line():
+    tty = _Tty()
+    bar = plotcmd.ProgressBar(tty, interval=0.0)
+    logger = logging.getLogger("pixelpen.test_progress")
+    handler = logging.StreamHandler(tty)
+    logger.addHandler(handler)
+    try:
+        with bar.log_lines(logger):
+            bar(progress(3, 10, 3, 10))
+            logger.warning("reconnect 1/3 failed")
+        bar(progress(4, 10, 4, 10))
+        logger.warning("after the plot")  # outside: no filter left behind
+    finally:
+        logger.removeHandler(handler)
+    lines = tty.getvalue().split("\n")
+    assert lines[0].startswith("\r[") and lines[1] == "reconnect 1/3 failed"
+    assert lines[2].startswith("\r[") and lines[2].endswith("after the plot")
+
+
 def _until(cond, limit=5.0):
     end = time.monotonic() + limit
     while not cond():
