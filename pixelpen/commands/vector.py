@@ -194,7 +194,7 @@ def add_optimize(subparsers: argparse._SubParsersAction) -> argparse.ArgumentPar
                    help="most seconds to spend improving the order (default: adaptive, stopping when the gains stall;"
                         " about 30 us per path)")
     p.add_argument("--no-dedupe", action="store_true",
-                   help="keep lines drawn twice within one layer and pen (other layers and pens are never deduplicated)")
+                   help="keep lines drawn twice in one layer and pen (other layers and pens are never deduplicated)")
     p.add_argument("--across-layers", action="store_true", help="order paths across layers, not layer by layer")
     p.add_argument("--device", default=None, metavar="PROFILE", help="device profile for the time estimates")
     p.set_defaults(func=_guarded("optimize", run_optimize))

@@ -1,4 +1,4 @@
-"""Removing ink drawn twice within one layer and pen (repeated points, overlapping segments, repeated dots) and short strokes.
+"""Removing ink drawn twice in one layer and pen (repeated points, overlapping segments, repeated dots), short strokes.
 
 Strokes of different layers or pens never remove each other's ink: a second pass of the same lines in another
 layer or pen (another colour, or a line darkened on purpose) is kept.
@@ -21,7 +21,7 @@ __all__ = ["remove_duplicates", "deduplicate", "DuplicateRemoval", "filter_min_l
 
 @dataclasses.dataclass(frozen=True)
 class DuplicateRemoval:
-    """What duplicate removal took from one (layer, pen): strokes dropped whole, strokes cut, ink length (device units)."""
+    """What duplicate removal took from one (layer, pen): strokes dropped, strokes cut, ink length (device units)."""
 
     layer: int
     pen: int

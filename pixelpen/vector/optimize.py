@@ -52,7 +52,9 @@ class OptimizeReport:
         """Human-readable lines, one per (layer, pen) that lost duplicates, then what else changed the drawing."""
         out = []
         for r in self.duplicates:
-            what = [f"{r.strokes_removed} duplicate stroke{'s' * (r.strokes_removed != 1)}"] if r.strokes_removed else []
+            what = []
+            if r.strokes_removed:
+                what.append(f"{r.strokes_removed} duplicate stroke{'s' * (r.strokes_removed != 1)}")
             if r.strokes_shortened:
                 what.append(f"the retraced part of {r.strokes_shortened} stroke{'s' * (r.strokes_shortened != 1)}")
             out.append(f"removed {' and '.join(what)} ({r.length * self.unit_mm:.1f} mm) in "

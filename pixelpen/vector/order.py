@@ -100,8 +100,8 @@ def order_paths(
     always runs until no move gains (a local optimum, the same on a busy machine as on an idle one; at most
     :data:`AUTO_BUDGET_MAX_S`) and kicks follow while the call is within :func:`auto_budget` of the stroke
     count. With a ``profile`` a hop costs its pen-up travel time under the profile's motion limits instead of
-    its length. Groups (see :func:`stroke_groups`) keep their order. The result never has more pen-up travel, nor with a profile
-    more pen-up time, than the input's strokes taken group by group in their given order, which is the
+    its length. Groups (see :func:`stroke_groups`) keep their order. The result never has more pen-up travel,
+    nor with a profile more pen-up time, than the input's strokes taken group by group in their given order, which is the
     input itself whenever its layers and pens already come in runs.
     """
     if time_budget is not None and (isinstance(time_budget, bool) or not isinstance(time_budget, (int, float))

@@ -41,7 +41,8 @@ def _outlines(frames: Sequence[Frame], cut: DisplayList | None, unit_mm: float) 
     rings = [np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]], float) for (x0, y0, x1, y1), _ in frames]
     pens = [pen[c] for _, c in frames] + [pen.get(CUT_COLOUR, 0)] * len(cut_strokes)
     polys = rings + cut_strokes
-    return DisplayList.from_polylines(polys, pens=pens or 1, unit_mm=unit_mm, pen_colours={v: k for k, v in pen.items()})
+    colour_of = {v: k for k, v in pen.items()}
+    return DisplayList.from_polylines(polys, pens=pens or 1, unit_mm=unit_mm, pen_colours=colour_of)
 
 
 def _travel(dl: DisplayList, home: tuple[float, float]) -> np.ndarray:

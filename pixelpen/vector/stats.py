@@ -88,8 +88,9 @@ def _split(dl: DisplayList, prof: Any, home: tuple[float, float], return_home: b
         up_s = per_layer(hop_s, inner)
         lift = prof.pen_lift_s + prof.pen_drop_s
         times = [_time_entry(down_s[j], up_s[j], strokes[j] * lift, changes[j] * prof.pen_change_s) for j in range(k)]
-        between["time"] = _time_entry(0.0, float(hop_s[~inner].sum()) + float(prof.pen_up.move_times(np.array([back]))[0]),
-                                      0.0, between["pen_changes"] * prof.pen_change_s)
+        back_s = float(prof.pen_up.move_times(np.array([back]))[0])
+        between["time"] = _time_entry(0.0, float(hop_s[~inner].sum()) + back_s, 0.0,
+                                      between["pen_changes"] * prof.pen_change_s)
     layers = [{
         "id": layer_id, "name": dl.layer_names.get(layer_id, str(layer_id)),
         "strokes": int(strokes[j]), "points": int(points[j]), "pen_down_mm": float(down_mm[j]),

@@ -99,7 +99,8 @@ def test_report_counts_and_lines():
     assert lines[0] == "removed 1 duplicate stroke (10.0 mm) in layer 1 'red', pen 2"
     assert "dropped 1 strokes shorter than the minimum length (0.5 mm of ink)" in lines
     cut = OptimizeReport(unit_mm=0.5, duplicates=[DuplicateRemoval(0, 1, 3, 2, 25.0)])
-    assert cut.lines()[0] == "removed 3 duplicate strokes and the retraced part of 2 strokes (12.5 mm) in layer 0, pen 1"
+    assert cut.lines()[0] == ("removed 3 duplicate strokes and the retraced part of 2 strokes (12.5 mm) in layer 0, "
+                              "pen 1")
     assert "duplicate removal off" in OptimizeReport(dedupe=False).lines()[0]
 
 

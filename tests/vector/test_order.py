@@ -83,7 +83,7 @@ def test_no_reverse_never_reverses(dl, budget):
 
 
 def greedy_reference(dl: DisplayList) -> float:
-    """Pen-up length of vpype's ``linesort`` rule, one step at a time: from (0, 0) go to the nearest free end, flipping."""
+    """Pen-up length of vpype's ``linesort`` rule, step by step: from (0, 0) to the nearest free end, flipping."""
     starts, ends = dl.starts.copy(), dl.ends.copy()
     free = np.ones(len(dl), bool)
     at, total = np.zeros(2), 0.0
