@@ -29,7 +29,7 @@ import threading
 from types import TracebackType
 
 from ..clock import Clock, SimulatedClock
-from ..errors import Disconnected, LinkError
+from ..errors import Disconnected, LinkError, PixelpenError
 from .base import WireDevice
 from .transport import Faults, SimPort
 
@@ -140,7 +140,10 @@ class PtyBridge:
             self.opens += 1
             self.port.host_opened()
         elif self._host_open and not present:
-            self.port.save_out()
+            try:
+                self.port.save_out()
+            except PixelpenError as exc:  # the bridge serves on; the owner's own save reports it again
+                _log.error("%s: %s", self.path, exc)
         self._host_open = present
         return present
 

@@ -407,15 +407,20 @@ class SimPort:
             if self._closed:
                 return
             self._closed = True
-            self.save_out()
-            if close_device:
-                self.device.close()
+            try:
+                self.save_out()
+            finally:
+                if close_device:
+                    self.device.close()
 
     def save_out(self) -> None:
         """Write the device's paper to ``out`` as it stands now (nothing when no ``out`` was given)."""
         if self.out is not None:
             with self._lock:
-                self.device.save_paper(self.out)  # type: ignore[attr-defined]
+                try:
+                    self.device.save_paper(self.out)  # type: ignore[attr-defined]
+                except OSError as exc:
+                    raise ConfigError(f"out={self.out}: cannot write the paper: {exc.strerror or exc}") from None
 
     def host_opened(self) -> None:
         """A program opened the port: what the device said while nobody listened is gone, and DTR rises,

@@ -322,3 +322,13 @@ def test_out_must_name_a_png_or_svg_file(name):
 def test_out_needs_a_device_with_paper():
     with pytest.raises(LinkError, match="no paper"):
         SimPort(EchoDevice(SimulatedClock()), out="x.png")
+
+
+def test_an_unwritable_out_file_is_a_clear_error(tmp_path):
+    from pixelpen.errors import ConfigError
+    from pixelpen.sim.base import create_simulator
+
+    clock = SimulatedClock()
+    port = SimPort(create_simulator("grbl", clock=clock), clock=clock, out=str(tmp_path / "no" / "such" / "dir.png"))
+    with pytest.raises(ConfigError, match="cannot write the paper"):
+        port.close()
