@@ -87,8 +87,8 @@ SERVO_BOOT_OLD = (12000, 16000)
 """SC,4 / SC,5 at boot before firmware 2.6.0."""
 SERVO_RANGE = (9855, 27831)
 """pyaxidraw's servo range (0.82 .. 2.32 ms): pen height 0 % .. 100 %, a larger pulse raising the pen."""
-CONTACT_DEFAULT = 17944
-"""Pulse width at which the pen meets the paper: 45 % of SERVO_RANGE, midway between pyaxidraw's
+CONTACT_DEFAULT = round(SERVO_RANGE[0] + 0.45 * (SERVO_RANGE[1] - SERVO_RANGE[0]))
+"""Pulse width at which the pen meets the paper (17944): 45 % of SERVO_RANGE, midway between pyaxidraw's
 30 % (down, 15248) and 60 % (up, 20641) defaults, and between saxi's 15700 (down) and 28000 (up)."""
 SERVO_TIMEOUT_MS = 60000
 
