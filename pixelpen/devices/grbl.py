@@ -71,10 +71,12 @@ STOP_WAIT_S = 10.0
 """Longest wait for a feed hold to bring the carriage to rest when stopping safely."""
 SETTLE_LIMIT_S = 120.0
 """Longest wait, after a reconnect, for GRBL to finish the lines it still held from the broken connection."""
+HOMING_LIMIT_S = 120.0
+"""Longest wait for ``$H`` to report its ``ok``."""
 TRACK_TOLERANCE_MM = 0.1
 """How far a status report's position may lie off the path sent before the driver calls it a corrupted line."""
 GARBLE_ERRORS = frozenset({1, 2, 3, 11, *range(20, 39)})
-"""``error:N`` codes that a line pixelpen wrote can only earn by being garbled on the wire (syntax, words)."""
+"""``error:N`` codes a line pixelpen wrote can only earn by being garbled on the wire (syntax, words): said so."""
 POSITION_LOSING_ALARMS = frozenset({1, 3, 6, 7, 8, 9, 10})
 """``ALARM:N`` codes after which GRBL's position is likely lost (alarm_codes_en_US.csv: re-homing recommended)."""
 _Z_UP_DEFAULT, _Z_DOWN_DEFAULT = 2.0, 0.0
@@ -412,13 +414,25 @@ class GrblPlotter(PlotterDisplay):
 
     def _manual_home(self) -> None:
         """Pen up, then ``$H`` when homing is enabled ($22=1), else a rapid to the profile's home (work coordinates)."""
-        self._manual_pen(False)
         if self._settings().get(22, 0.0):
-            self._send_line("$H", wait=True)
+            self._home_cycle()
             return
+        self._manual_pen(False)
         x, y = self.coordinate_format.format(np.asarray(self.profile.home, dtype=np.float64))
         self._send_line(f"G0 X{x} Y{y}", wait=True)
         self._send_line("G4 P0", wait=True)  # acknowledged once the carriage is there
+
+    def _home_cycle(self) -> None:
+        """``$H``: GRBL seeks its limit switches and answers ``ok`` when done (it may not report status meanwhile)."""
+        self._drain()
+        link = self._link()
+        link.write(b"$H\n")
+        self.counter.sent("$H")
+        while len(self.counter):
+            line = self._read_line(HOMING_LIMIT_S)
+            if line is None:
+                raise LinkTimeout(f"grbl: homing ($H) did not finish within {HOMING_LIMIT_S}s")
+            self._dispatch(line)
 
     def _manual_motors_off(self) -> None:
         """``$SLP`` once idle: GRBL 1.1 cuts the stepper enable, spindle and coolant; a reset wakes it (in alarm)."""
@@ -525,12 +539,13 @@ class GrblPlotter(PlotterDisplay):
             sent, tag = self.counter.acknowledged()
             garbled = code in GARBLE_ERRORS and self._tracking
             self._stop_motion()  # the lines behind the rejected one would draw a shortcut
-            message = f"GRBL rejected a line: error:{code} {ERROR_CODES.get(code, 'unknown error code')}"
             if isinstance(tag, _Tag):
                 self._mark_damaged(range(tag.stroke, tag.stroke + 1))  # redrawn whole: part of it never ran
-            if garbled:
-                raise LinkError(f"grbl: {message} in {sent!r}, which pixelpen wrote valid: it was garbled on the line")
-            raise ProtocolError(message, code=code, command=sent, device="grbl")
+            raise ProtocolError(
+                f"GRBL rejected a line: error:{code} {ERROR_CODES.get(code, 'unknown error code')}"
+                + (" (pixelpen wrote it valid: it was garbled on the line)" if garbled else ""),
+                code=code, command=sent, device="grbl",
+            )
         elif line.startswith("ALARM:"):
             code = parse_code(line)
             meaning = ALARM_CODES.get(code, "unknown alarm code")
@@ -671,32 +686,43 @@ class GrblPlotter(PlotterDisplay):
         return settings
 
     def _system_query(self, command: str) -> list[str]:
-        """Send a ``$`` query and return the lines before its ``ok``.
+        """Send a ``$`` query and return the lines before its ``ok``, waiting while GRBL still runs older lines.
 
-        A half line a broken transfer left in GRBL's line buffer joins the query and makes it an error (a ``$``
-        inside a G-code line is never valid), so that line never runs; the query is then sent once more.
+        Acknowledgements of lines queued before the query come first and are skipped.  A half line a broken
+        transfer left in GRBL's line buffer joins the query and makes it an error (a ``$`` inside a G-code line is
+        never valid), so that line never runs; the query is then sent once more.  A silent GRBL is probed with
+        ``?`` (it may be dwelling on a ``G4`` a garbled byte made long); bounded by SETTLE_LIMIT_S.
         """
         self._drain()
         link = self._link()
+        deadline = self.clock.now() + SETTLE_LIMIT_S
         for attempt in range(2):
             link.write(command.encode("ascii") + b"\n")
             lines: list[str] = []
+            probed = False
             while True:
                 line = self._read_line(self.timeout)
                 if line is None:
-                    raise LinkTimeout(f"grbl: no answer to {command!r} within {self.timeout}s")
+                    if probed or self.clock.now() >= deadline:
+                        raise LinkTimeout(f"grbl: no answer to {command!r} within {self.timeout}s")
+                    link.write(REALTIME_STATUS)
+                    probed = True
+                    continue
+                probed = False
                 if line == "ok":
-                    return lines
+                    if lines:
+                        return lines
+                    continue  # the acknowledgement of a line queued before this query
                 if line.startswith("error:"):
                     if attempt == 0 and not lines:
                         log.info("grbl: a half line from the broken connection was discarded with %r", command)
                         break
                     raise ProtocolError(f"GRBL refused {command}", code=parse_code(line), command=command, device="grbl")
                 if line.startswith("<"):
-                    self.last_status = parse_status(line)
+                    self._status_seen(parse_status(line))
                 elif line.startswith("ALARM:") or parse_welcome(line) is not None:
                     self._dispatch(line)
-                else:
+                elif line.startswith(("[", "$")):
                     lines.append(line)
         raise ProtocolError(f"GRBL refused {command} twice", code=None, command=command, device="grbl")
 

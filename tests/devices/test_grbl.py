@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
@@ -10,7 +12,7 @@ import pytest
 import pixelpen
 from pixelpen.clock import SimulatedClock
 from pixelpen.devices.grbl import GrblPlotter
-from pixelpen.devices.plotter import PlotInterrupted
+from pixelpen.devices.plotter import DeviceWhere, PlotInterrupted, PositionUnknown
 from pixelpen.drivers.link import Link
 from pixelpen.drivers.serial import SerialLink
 from pixelpen.errors import ConfigError, LinkTimeout, ProtocolError, URLError
@@ -387,11 +389,7 @@ def test_ctrl_c_leaves_the_pen_up_and_the_machine_idle():
 
 
 def test_feed_hold_pauses_and_cycle_start_resumes():
-    """The hold button mid-plot pauses GRBL; the operator's cycle start (``~``) resumes; nothing is lost."""
-    reference, clock = new_sim()
-    plotter = sim_plotter(reference, clock)
-    plotter.plot(squares(4))
-    plotter.close()
+    """The hold button mid-plot pauses GRBL (on_pause hears it once it has stopped); cycle start (``~``) resumes."""
 
     class Operator(SimulatedClock):
         """Simulated time with an operator who presses cycle start three seconds into a hold."""
@@ -406,34 +404,181 @@ def test_feed_hold_pauses_and_cycle_start_resumes():
     held_since = [float("inf")]
     clock = Operator()
     dev, _ = new_sim(clock)
-    plotter = sim_plotter(dev, clock, url_extra="&pause_after=200")
+    paused = []
+    plotter = sim_plotter(dev, clock, url_extra="&pause_after=200", on_pause=lambda p: paused.append((p, dev.state)))
     plotter.plot(squares(4))
     plotter.close()
     assert held_since[0] < float("inf")
-    assert np.array_equal(dev.paper_image(50).array, reference.paper_image(50).array)
+    assert paused[0] == (True, "Hold:0") and paused[-1][0] is False  # told once the machine had stopped
+    assert ink_account(intended(squares(4)), drawn(dev)) == InkAccount(0, 0, 0)
 
 
-@pytest.mark.parametrize("fault", ["drop_after", "stall_after"])
-def test_resume_after_fault_gives_the_same_paper(fault):
-    """For many fault points, the interrupted-and-resumed plot equals the uninterrupted one pixel for pixel."""
-    drawing = squares(3, side_mm=4.0, step_mm=2.5)
-    reference, clock = new_sim()
-    plotter = sim_plotter(reference, clock)
-    plotter.plot(drawing)
+# -- resuming: compared as segment sets with the intended drawing -------------------------------------------
+@dataclass
+class InkAccount:
+    """What a sheet holds against the intended drawing: segments lost, doubled, and stray pieces."""
+
+    lost: int
+    doubled: int
+    stray: int
+
+
+def ink_account(intended: list[np.ndarray], drawn: list[np.ndarray], tol: float = 0.05) -> InkAccount:
+    """Segment-set comparison (mm): every drawn piece is credited to the intended segment it lies on.
+
+    A piece lies on a segment when both its ends are within ``tol`` of it; among several (at a corner) it runs
+    along the one most parallel to it, in its drawing direction.  A segment is lost when a stretch longer than
+    ``tol`` is not covered, doubled when its pieces overlap by more than ``tol``; a piece on none is stray.
+    """
+    ref = np.array([np.r_[a, b] for p in intended for a, b in zip(p[:-1], p[1:]) if np.hypot(*(b - a)) > 1e-9])
+    a, d = ref[:, :2], ref[:, 2:] - ref[:, :2]
+    length = np.hypot(*d.T)
+    spans: list[list[tuple[float, float]]] = [[] for _ in ref]
+    stray = 0
+    for piece in drawn:
+        for p0, p1 in zip(piece[:-1], piece[1:]):
+            if np.hypot(*(p1 - p0)) <= 1e-9:
+                continue
+            far, ts = np.zeros(len(ref)), []
+            for q in (p0, p1):
+                t = np.clip(((q - a) * d).sum(1) / length**2, 0.0, 1.0)
+                far = np.maximum(far, np.hypot(*(a + t[:, None] * d - q).T))
+                ts.append(t * length)
+            near = np.flatnonzero(far <= tol)
+            if not len(near):
+                stray += 1
+                continue
+            k = int(near[np.argmax((d[near] / length[near, None]) @ ((p1 - p0) / np.hypot(*(p1 - p0))))])
+            spans[k].append(tuple(sorted((ts[0][k], ts[1][k]))))
+    lost = doubled = 0
+    for k, pieces in enumerate(spans):
+        reach = total = covered = gap = 0.0
+        for t0, t1 in sorted(pieces):
+            total += t1 - t0
+            gap = max(gap, t0 - reach)
+            covered += max(0.0, t1 - max(t0, reach))
+            reach = max(reach, t1)
+        lost += max(gap, length[k] - reach) > tol
+        doubled += total - covered > tol
+    return InkAccount(lost, doubled, stray)
+
+
+def test_ink_account_sees_lost_doubled_and_stray_segments():
+    square = np.array([[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]], float)
+    assert ink_account([square], [square]) == InkAccount(0, 0, 0)
+    assert ink_account([square], [square[:3], square[2:]]) == InkAccount(0, 0, 0)  # resumed at a vertex
+    assert ink_account([square], [np.array([[0, 0], [4, 0]]), np.array([[4, 0], [10, 0], [10, 10], [0, 10], [0, 0]])]) \
+        == InkAccount(0, 0, 0)  # resumed inside a segment
+    assert ink_account([square], [square[:3]]) == InkAccount(2, 0, 0)
+    assert ink_account([square], [square, square[:2]]) == InkAccount(0, 1, 0)  # a segment drawn twice
+    assert ink_account([square], [square, np.array([[5, 5], [6, 6]])]) == InkAccount(0, 0, 1)
+    spike = np.array([[0, 0], [10, 0], [0, 0.1]])  # an acute corner: the way back is credited to its own segment
+    assert ink_account([spike], [spike]) == InkAccount(0, 0, 0)
+
+
+OPEN_STROKES = [[[20, 20], [45, 22], [30, 40]], [[50, 20], [52, 48], [60, 30], [70, 45]], [[25, 60], [60, 62]],
+                [[100, 25], [120, 40]], [[40, 70], [41, 80], [48, 72]]]
+CLOSED_STROKE = [[80, 20], [90, 20], [90, 30], [80, 30], [80, 20]]
+"""Its start and end are the same point: seen there, only the parser state ($G) tells before from after."""
+
+
+def drawing_mm(strokes) -> DisplayList:
+    return DisplayList.from_polylines([np.array(p, float) * MM for p in strokes], unit_mm=PROFILE.unit_mm)
+
+
+RESUME_DRAWING = drawing_mm([*OPEN_STROKES[:3], CLOSED_STROKE, *OPEN_STROKES[3:]])
+"""Open polylines, a closed square and a few acute corners, 6 strokes."""
+HINTS = {"drawing", "reached"} <= {f.name for f in dataclasses.fields(DeviceWhere)}
+needs_hints = pytest.mark.skipif(not HINTS, reason="closed strokes need DeviceWhere.drawing/reached in the base "
+                                 "(requested in notes/resume-interface-feedback.md): without them the resume asks")
+
+
+def intended(dl: DisplayList) -> list[np.ndarray]:
+    """The drawing's polylines in mm (the sheet's frame: the grbl profile's paper starts at 0,0)."""
+    return [dl.points[dl.offsets[i]:dl.offsets[i + 1]] * dl.unit_mm for i in range(len(dl))]
+
+
+def drawn(dev) -> list[np.ndarray]:
+    return [pts for _, pts in dev.paper.strokes()]
+
+
+def fault_points(seed: int, n: int, total: int) -> list[int]:
+    return np.random.default_rng(seed).integers(40, total - 10, size=n).tolist()
+
+
+def plotted_bytes(dl: DisplayList) -> int:
+    dev, clock = new_sim()
+    plotter = sim_plotter(dev, clock)
+    plotter.plot(dl)
     plotter.close()
-    want = reference.paper_image(50).array
-    rng = np.random.default_rng(7 if fault == "drop_after" else 11)
+    assert ink_account(intended(dl), drawn(dev)) == InkAccount(0, 0, 0)  # the uninterrupted plot is the drawing
+    return dev.stats.bytes_received
+
+
+@pytest.mark.parametrize("strokes", [pytest.param(OPEN_STROKES, id="open"),
+                                     pytest.param([*OPEN_STROKES[:3], CLOSED_STROKE, *OPEN_STROKES[3:]], id="closed",
+                                                  marks=needs_hints)])
+@pytest.mark.parametrize("fault", ["drop_after", "stall_after"])
+def test_resume_after_a_link_fault_draws_every_segment_once(fault, strokes):
+    """Drop or stall anywhere: the resume asks GRBL where it stopped and continues exactly there."""
+    dl = drawing_mm(strokes)
+    points = fault_points(7 if fault == "drop_after" else 11, 8, plotted_bytes(dl))
     interrupted = 0
-    for at in rng.integers(40, 420, size=6):
+    for at in points:
         dev, clock = new_sim()
         plotter = sim_plotter(dev, clock, url_extra=f"&{fault}={at}", timeout=0.5)
         try:
-            plotter.plot(drawing)
+            plotter.plot(dl)
         except PlotInterrupted as exc:
             interrupted += 1
             assert exc.resume_from == plotter.confirmed
             plotter.resume_after_fault()
         plotter.close()
-        assert plotter.confirmed == len(drawing)
-        assert np.array_equal(dev.paper_image(50).array, want), f"{fault}={at}"
-    assert interrupted >= 4
+        assert plotter.confirmed == len(dl)
+        assert ink_account(intended(dl), drawn(dev)) == InkAccount(0, 0, 0), f"{fault}={at}"
+    assert interrupted >= 6
+
+
+def test_a_corrupted_byte_is_caught_and_nothing_is_lost():
+    """GRBL drops a byte >= 0x80 (an inverted one): a rejected line, a wrong target or a wrong pen value.
+
+    The plot stops (a device error, an off-path status report or missing acknowledgements) and the
+    resume redraws the damaged strokes: nothing is lost.  A wrong target draws its wrong leg before any
+    report can show it (GRBL has no checksum), so a stray piece may stay; it is at most one per fault.
+    """
+    points = fault_points(13, 10, plotted_bytes(RESUME_DRAWING))
+    caught = 0
+    for at in points:
+        dev, clock = new_sim()
+        plotter = sim_plotter(dev, clock, url_extra=f"&corrupt_at={at}", timeout=0.5)
+        try:
+            plotter.plot(RESUME_DRAWING)
+        except PlotInterrupted:
+            caught += 1
+            try:
+                plotter.resume_after_fault()
+            except PositionUnknown:  # held on the garbled leg itself: off every stroke
+                plotter.resume_after_fault(position_confirmed=True)
+        plotter.close()
+        account = ink_account(intended(RESUME_DRAWING), drawn(dev))
+        assert account.lost == 0 and account.stray <= 1, f"corrupt_at={at}: {account}"
+    assert caught >= 5
+
+
+def test_power_loss_asks_and_homing_lets_it_go_on_without_losing_a_segment():
+    """A reboot loses GRBL's position: the resume refuses to guess; after $H and a confirmation it goes on."""
+    dev, clock = new_sim()
+    dev.settings[22] = 1.0  # homing enabled: after power-up GRBL waits alarm-locked for $H
+    total = plotted_bytes(RESUME_DRAWING)
+    plotter = sim_plotter(dev, clock, url_extra=f"&power_loss_after={total // 2}", timeout=0.5, unlock=True)
+    with pytest.raises(PlotInterrupted):
+        plotter.plot(RESUME_DRAWING)
+    before = len(drawn(dev))
+    with pytest.raises(PositionUnknown, match="restarted"):
+        plotter.resume_after_fault()
+    assert len(drawn(dev)) == before  # nothing was drawn at a guessed place
+    plotter.go_home()  # $H: the machine knows where it is again
+    plotter.resume_after_fault(position_confirmed=True)
+    plotter.close()
+    account = ink_account(intended(RESUME_DRAWING), drawn(dev))
+    assert account.lost == 0 and account.stray == 0, account  # strokes since the last confirmation are redrawn
