@@ -6,7 +6,8 @@ TypeError), a bad value ``ConfigError`` (also a ValueError). Limits (module attr
 * :data:`MAX_COORDINATE` -- world coordinates, radii and lengths beyond +-1e15 are refused (their
   differences would have no precision left and their extents overflow on the way to a device);
 * :data:`MAX_PEN` -- pen numbers; :data:`MAX_TEXT` -- characters of one text primitive;
-  :data:`MAX_PATTERN` -- rows and columns of a fill pattern; :data:`MIN_SPACING_MM` -- hatch spacing.
+  :data:`MAX_PATTERN` -- rows and columns of a fill pattern; :data:`MIN_SPACING_MM` -- hatch spacing;
+* :data:`MAX_DEGREE` -- degree of a Bézier curve (a path without ``degree`` is one curve) or B-spline.
 """
 
 from __future__ import annotations
@@ -43,6 +44,9 @@ MAX_PATTERN = 256
 """Rows and columns of a fill pattern."""
 MIN_SPACING_MM = 0.001
 """Smallest hatch spacing in millimetres."""
+MAX_DEGREE = 16
+"""Highest degree of a Bézier curve or B-spline (flattening costs grow with its square; the exact Bézier form of a
+B-spline span, through the inverse Bernstein matrix, loses digits fast above it)."""
 
 
 def _number(value: object, name: str, low: float | None = None, *, above: bool = False) -> float:
@@ -70,7 +74,7 @@ def _pair(value: object, name: str) -> tuple[float, float]:
 def _choice(value: object, name: str, options: tuple[str, ...]) -> str:
     """One of the names in ``options``."""
     if not isinstance(value, str) or value not in options:
-        raise ConfigError(f"{name} must be one of {', '.join(options)}, got {value!r}"[:300])
+        raise ConfigError(f"{name} must be one of {', '.join(options)}, got {quote_token(value)}")
     return value
 
 
@@ -86,7 +90,7 @@ def _integer(value: object, name: str, low: int, high: int) -> int:
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
         raise InvalidArgumentType(f"{name} must be an integer, got {type(value).__name__}")
     if not low <= value <= high:
-        raise ConfigError(f"{name} must be in {low}..{high}, got {value if abs(value) < 10**30 else 'a huge integer'}")
+        raise ConfigError(f"{name} must be in {low}..{high}, got {quote_token(value)}")
     return int(value)
 
 
@@ -154,7 +158,7 @@ def _pattern(rows: object) -> tuple[tuple[int, ...], ...]:
         raise InvalidArgumentType(f"a fill pattern must be rows (lists) of 0/1 cells, got {quote_token(rows)}")
     if not rows or len(rows) > MAX_PATTERN or len({len(r) for r in rows}) != 1 or not 0 < len(rows[0]) <= MAX_PATTERN:
         raise ConfigError(f"a fill pattern needs 1..{MAX_PATTERN} rows of one length 1..{MAX_PATTERN}")
-    if not all(c in (0, 1) and not isinstance(c, float) for r in rows for c in r):
+    if not all(isinstance(c, (int, np.integer)) and int(c) in (0, 1) for r in rows for c in r):
         raise ConfigError("fill pattern cells must be 0 or 1")
     return tuple(tuple(int(c) for c in r) for r in rows)
 
@@ -308,12 +312,9 @@ class Bezier:
     def __post_init__(self) -> None:
         pts = _points(self.control_points, "Bezier", 2)
         object.__setattr__(self, "control_points", pts)
-        if self.degree is not None:
-            _integer(self.degree, "Bezier degree", 1, len(pts) - 1)
-            if (len(pts) - 1) % self.degree:
-                raise ConfigError(
-                    f"a Bezier path of degree {self.degree} needs k*{self.degree}+1 control points, got {len(pts)}"
-                )
+        degree = _integer(len(pts) - 1 if self.degree is None else self.degree, "Bezier degree", 1, MAX_DEGREE)
+        if (len(pts) - 1) % degree:
+            raise ConfigError(f"a Bezier path of degree {degree} needs k*{degree}+1 control points, got {len(pts)}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -328,7 +329,7 @@ class BSpline:
     def __post_init__(self) -> None:
         pts = _points(self.control_points, "B-spline", 2)
         object.__setattr__(self, "control_points", pts)
-        _integer(self.degree, "B-spline degree", 1, MAX_PATTERN)
+        _integer(self.degree, "B-spline degree", 1, MAX_DEGREE)
         if not 1 <= self.degree < len(pts):
             raise ConfigError(f"a B-spline of degree {self.degree} needs more than {self.degree} control points, got {len(pts)}")
         if self.knots is not None:

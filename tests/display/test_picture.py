@@ -106,3 +106,14 @@ def test_checked_fields_are_stored_as_floats():
     assert arc.center == (1.0, 2.0) and isinstance(arc.rx, float)
     assert Style(pen=np.int64(3)).pen == 3 and type(Style(pen=np.int64(3)).pen) is int
     assert Fill("pattern", pattern=[[1, 0], [0, 1]]).pattern == ((1, 0), (0, 1))
+
+
+def test_curve_degrees_are_bounded():
+    from pixelpen.display import picture
+
+    Bezier(np.zeros((picture.MAX_DEGREE + 1, 2)))  # one curve of the highest degree
+    with pytest.raises(ConfigError, match="Bezier degree"):  # flattening a degree-1000 curve took seconds per level
+        Bezier(np.zeros((picture.MAX_DEGREE + 2, 2)))
+    with pytest.raises(ConfigError, match="B-spline degree"):
+        BSpline(np.zeros((100, 2)), degree=picture.MAX_DEGREE + 1)
+    Bezier(np.zeros((3 * 1000 + 1, 2)), degree=3)  # long paths of low degree are fine
