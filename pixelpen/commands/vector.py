@@ -101,9 +101,6 @@ def run_preview(args: argparse.Namespace) -> int:
 
 PREVIEW_SCHEMES = {"ebb": "axidraw", "grbl": "grbl", "hpgl": "hp7475a"}
 """The plotter driver that places a drawing for a device profile of each protocol (unless named after the profile)."""
-SHEET_COLOUR, LIMITS_COLOUR = "#999999", "#6fa8dc"
-CUT_REPORT_MM = 1e-3
-"""Cut lengths below this (rounding noise on an edge) are not reported."""
 
 
 def outside(dl: DisplayList, size: tuple[float, float]) -> DisplayList:
@@ -133,7 +130,7 @@ def _device_preview(args: argparse.Namespace) -> list[str]:
     from ..urls import format_url
     from ..vector.preview import CUT_COLOUR, render_preview
     from ..vector.profiles import load_profile
-    from .plot import Layout, clip_to_device, load_drawing, plotter_for, sheet_to_device
+    from .plot import CUT_REPORT_MM, SHEET_COLOURS, Layout, clip_to_device, load_drawing, plotter_for, sheet_to_device
 
     profile = load_profile(args.device)
     try:
@@ -160,7 +157,7 @@ def _device_preview(args: argparse.Namespace) -> list[str]:
     home = tuple(geo.apply(to_sheet, np.asarray(profile.home, float).reshape(1, 2))[0])
     render_preview(on_sheet(inside), args.output, size_px=args.size, show_travel=not args.no_travel, home=home,
                    pen_width_mm=args.pen_width or profile.pen_width_mm,
-                   frames=[((0.0, 0.0, w, h), SHEET_COLOUR), (limits, LIMITS_COLOUR)],
+                   frames=[((0.0, 0.0, w, h), SHEET_COLOURS[0]), (limits, SHEET_COLOURS[1])],
                    cut=on_sheet(outside(whole, display.capabilities.size)))
     total_mm, cut_mm = whole.pen_down_length() * whole.unit_mm, cut * whole.unit_mm
     lines = [f"sheet: {w:g} x {h:g} mm (paper {display.paper.name} of {profile.name}, grey); the plotter reaches "

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ConfigError
+from .dedupe import stroke_lengths
 from .displaylist import DisplayList
 
 log = logging.getLogger(__name__)
@@ -38,7 +39,7 @@ def _resolve_profile(profile: Any) -> Any:
         return None
 
 
-_ZERO_TIME = {"total_s": 0.0, "pen_down_s": 0.0, "pen_up_s": 0.0, "pen_lifts_s": 0.0, "pen_changes_s": 0.0}
+_TIME_KEYS = ("total_s", "pen_down_s", "pen_up_s", "pen_lifts_s", "pen_changes_s")
 
 
 def _split(dl: DisplayList, prof: Any, home: tuple[float, float], return_home: bool, layer_ids: list[int]
@@ -51,9 +52,7 @@ def _split(dl: DisplayList, prof: Any, home: tuple[float, float], return_home: b
     """
     n, k = len(dl), len(layer_ids)
     idx = np.searchsorted(np.asarray(layer_ids), dl.layers)  # layer index of each stroke
-    seg_len = np.hypot(*np.diff(dl.points, axis=0).T) if len(dl.points) > 1 else np.zeros(0)
-    cum = np.concatenate([[0.0], np.cumsum(seg_len)])
-    down = cum[dl.offsets[1:] - 1] - cum[dl.offsets[:-1]]  # pen-down length of each stroke
+    down = stroke_lengths(dl)
     h = np.asarray(home, dtype=np.float64)
     prev = np.vstack([h[None], dl.ends[:-1]]) if n else np.zeros((0, 2))
     hops = np.hypot(*(dl.starts - prev).T) * dl.unit_mm if n else np.zeros(0)
@@ -101,6 +100,7 @@ def _split(dl: DisplayList, prof: Any, home: tuple[float, float], return_home: b
 
 
 def _time_entry(down: float, up: float, lifts: float, changes: float) -> dict[str, float]:
+    """A ``time`` entry (seconds) from its parts."""
     return {"total_s": float(down + up + lifts + changes), "pen_down_s": float(down), "pen_up_s": float(up),
             "pen_lifts_s": float(lifts), "pen_changes_s": float(changes)}
 
@@ -129,7 +129,7 @@ def plot_stats(
         "pens": sorted({int(p) for p in dl.pens}), "time": None,
     }
     if prof is not None:
-        total["time"] = {key: sum(e["time"][key] for e in layers) + between["time"][key] for key in _ZERO_TIME}
+        total["time"] = {key: sum(e["time"][key] for e in layers) + between["time"][key] for key in _TIME_KEYS}
     bounds = dl.bounds()
     return {
         "unit_mm": dl.unit_mm,
