@@ -103,7 +103,7 @@ PREVIEW_SCHEMES = {"ebb": "axidraw", "grbl": "grbl", "hpgl": "hp7475a"}
 """The plotter driver that places a drawing for a device profile of each protocol (unless named after the profile)."""
 
 
-def outside(dl: DisplayList, size: tuple[float, float]) -> DisplayList:
+def _outside(dl: DisplayList, size: tuple[float, float]) -> DisplayList:
     """The parts of the strokes outside the rectangle 0..W x 0..H (device units): clipped to four bands around it."""
     from .. import geometry as geo
 
@@ -158,7 +158,7 @@ def _device_preview(args: argparse.Namespace) -> list[str]:
     render_preview(on_sheet(inside), args.output, size_px=args.size, show_travel=not args.no_travel, home=home,
                    pen_width_mm=args.pen_width or profile.pen_width_mm,
                    frames=[((0.0, 0.0, w, h), SHEET_COLOURS[0]), (limits, SHEET_COLOURS[1])],
-                   cut=on_sheet(outside(whole, display.capabilities.size)))
+                   cut=on_sheet(_outside(whole, display.capabilities.size)))
     total_mm, cut_mm = whole.pen_down_length() * whole.unit_mm, cut * whole.unit_mm
     lines = [f"sheet: {w:g} x {h:g} mm (paper {display.paper.name} of {profile.name}, grey); the plotter reaches "
              f"x {limits[0]:.1f}..{limits[2]:.1f}, y {limits[1]:.1f}..{limits[3]:.1f} mm from its top left (blue)"]
