@@ -125,8 +125,8 @@ def _style_to_dict(style: Style) -> dict[str, Any]:
 
 
 def save_picture(picture: Picture, path: str | Path) -> None:
-    """Write a picture file."""
-    Path(path).write_text(json.dumps(picture_to_dict(picture), separators=(",", ":")), encoding="utf-8")
+    """Write a picture file (a file name no file system takes is a ConfigError)."""
+    check_path(path, "picture file").write_text(json.dumps(picture_to_dict(picture), separators=(",", ":")), encoding="utf-8")
 
 
 # -- reading ---------------------------------------------------------------------------------

@@ -248,11 +248,14 @@ def read_trace(source: PathOrFile, max_bytes: int = DEFAULT_MAX_BYTES) -> Trace:
 
 
 class TraceWriter:
-    """Writes a trace incrementally, flushing after every line so a crash keeps what happened."""
+    """Writes a trace incrementally, flushing after every line so a crash keeps what happened.
+
+    A file name no file system takes (NUL, over-long) is a ConfigError before anything is opened.
+    """
 
     def __init__(self, dest: PathOrFile, url: str, settings: Mapping[str, object] | None = None) -> None:
         if isinstance(dest, (str, os.PathLike)):
-            self._file: IO[str] = open(os.fspath(dest), "w", encoding="utf-8", newline="\n")
+            self._file: IO[str] = open(check_path(dest, "trace file"), "w", encoding="utf-8", newline="\n")
             self._owns = True
         else:
             self._file, self._owns = dest, False

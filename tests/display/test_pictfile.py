@@ -200,3 +200,10 @@ def test_bad_file_names_are_parse_errors(tmp_path):
         load_picture("a\x00b.json")
     with pytest.raises(ParseError, match="more than the 255"):
         load_picture(tmp_path / ("x" * 300 + ".json"))
+
+
+def test_saving_under_a_bad_file_name_is_a_config_error(tmp_path):
+    from pixelpen.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="picture file.*NUL"):
+        save_picture(Picture(), str(tmp_path / "a\x00.json"))

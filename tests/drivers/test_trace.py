@@ -255,3 +255,13 @@ def test_unreadable_trace_files_are_parse_errors(tmp_path):
         read_trace(tmp_path / "missing.trace")
     with pytest.raises(ParseError, match="UTF-8"):  # an open binary-backed stream, not only a path
         read_trace(io.TextIOWrapper(io.BytesIO(b"#pixelpen-trace 1 url=\n0.0 > \xff\n"), encoding="utf-8"))
+
+
+def test_a_trace_file_name_no_file_system_takes_is_refused_before_opening(tmp_path):
+    from pixelpen.drivers.trace import TraceWriter
+    from pixelpen.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="trace file.*NUL"):
+        TraceWriter(str(tmp_path / "a\x00b"), "sim://x")
+    with pytest.raises(ConfigError, match="trace file.*255"):
+        TraceWriter(tmp_path / ("x" * 300), "sim://x")
