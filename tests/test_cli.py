@@ -88,3 +88,4 @@ def test_help_and_version_exit_0(capsys):
     out = capsys.readouterr().out
     # the layout order, the simulator's paper option and the configuration file are documented in --help
     assert "rotate, scale, layout" in out and "out=PAPER.png" in out and "config.toml" in out
+    assert max(len(line) for line in out.splitlines()) <= 100  # wrapped for a terminal

@@ -852,20 +852,23 @@ def _angle(text: str) -> float:
     return _number(-math.inf, False)(text)
 
 
+PLOT_DESCRIPTION = """\
+Plot FILE on the plotter at URL.  Keys while plotting (on a terminal): p or space pauses at the
+next pen-up and resumes; Ctrl-C stops with the pen up.  Exit status: 0 done, 2 error, 3 stopped
+by a fault (resume with --resume)."""
+
 PLOT_EPILOG = """\
-layout, in this order (as vpype's rotate, scale, layout):
-  --rotate DEG      turn the drawing DEG degrees clockwise about the centre of its bounds
-  --scale S         scale it by S about that centre (or --fit: fill the box)
-  --center          move it to the centre of the box: the page less --margin, within the plotter's limits
-  --page SIZE       the page (default the plotter's paper); --landscape/--portrait turn it
-Without --center or --fit a drawing stays where its file puts it (an SVG's page top left at the sheet's).
+layout, in this order (as vpype's rotate, scale, layout): --rotate, then --scale or --fit, then
+--center in the box (the --page less --margin, within the plotter's limits).  Without --center or
+--fit a drawing stays where its file puts it (an SVG's page top left at the sheet's top left).
 
-simulated plotters: --to 'sim:MODEL?speed=fast' plots in simulated time; add out=PAPER.png to save the
-paper when the plot ends (--to 'sim:hp7475a?speed=fast&out=paper.png'), id=NAME to reach the device again,
-drop_after=N and the other fault options to rehearse a recovery (docs/testing-with-simulators.md).
+simulated plotters: --to 'sim:MODEL?speed=fast' plots in simulated time; add out=PAPER.png to save
+the paper when the plot ends (--to 'sim:hp7475a?speed=fast&out=paper.png'), id=NAME to reach the
+device again, drop_after=N and the other fault options to rehearse a recovery
+(docs/testing-with-simulators.md).
 
-defaults for every option, --to included, can be set in the configuration file
-($PIXELPEN_CONFIG, else $XDG_CONFIG_HOME/pixelpen/config.toml or ~/.config/pixelpen/config.toml), e.g.
+defaults for every option, --to included, can be set in the configuration file ($PIXELPEN_CONFIG,
+else $XDG_CONFIG_HOME/pixelpen/config.toml or ~/.config/pixelpen/config.toml), e.g.
   [plot]
   to = "axidraw:auto"
   margin = 10
@@ -876,10 +879,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``pixelpen plot`` to the ``pixelpen`` parser."""
     p = subparsers.add_parser(
         "plot", help="plot an SVG or picture file on a pen plotter (layout, progress, pause, pen changes, resume)",
-        description="Plot FILE on the plotter at URL. Keys while plotting (on a terminal): p or space pauses at the "
-                    "next pen-up and resumes; Ctrl-C stops with the pen up. Exit status: 0 done, 2 error, 3 stopped by "
-                    "a fault (resume with --resume).",
-        epilog=PLOT_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+        description=PLOT_DESCRIPTION, epilog=PLOT_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", metavar="FILE", help="SVG (millimetres) or pixelpen picture JSON")
     p.add_argument("--to", required=True, metavar="URL", help="plotter URL: hp7475a:/dev/ttyUSB0, grbl:auto, "
                    "sim:axidraw?speed=fast&out=paper.png ... (default: the configuration file's)")
