@@ -120,7 +120,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if extras:
             parser.commands[args.command].unrecognized(extras)  # type: ignore[attr-defined]
     except SystemExit as exc:  # argparse printed the usage (or --help, --version)
-        return exc.code if isinstance(exc.code, int) else 2
+        return 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 2
     drop_configured(args, appended.get(args.command, {}))
     logger = logging.getLogger("pixelpen")
     handler, repeats = _log_handler(args.verbose)
