@@ -42,8 +42,8 @@ MAX_TEXT = 100_000
 """Characters of one text primitive."""
 MAX_PATTERN = 256
 """Rows and columns of a fill pattern."""
-MIN_SPACING_MM = 0.001
-"""Smallest hatch spacing in millimetres."""
+MIN_SPACING_MM = 0.01
+"""Smallest hatch spacing in millimetres (a tenth of the finest technical pen; an A4 sheet then holds 30,000 lines)."""
 MAX_DEGREE = 16
 """Highest degree of a Bézier curve or B-spline (flattening costs grow with its square; the exact Bézier form of a
 B-spline span, through the inverse Bernstein matrix, loses digits fast above it)."""
