@@ -662,6 +662,17 @@ def _estimate(dl: DisplayList, display: PlotterDisplay) -> str:
             f"{t.pen_changes} pen changes; estimated {_clock_text(t.total)}")
 
 
+def _check_sheet(path: str, drawing: str) -> None:
+    """ConfigError, before any work, for a --sheet file that cannot be written as SVG or an image."""
+    from PIL import Image
+
+    if Path(path).resolve() == Path(drawing).resolve():
+        raise ConfigError(f"--sheet {path} would overwrite the drawing; name another file")
+    suffix = Path(path).suffix.lower()
+    if suffix != ".svg" and suffix not in Image.registered_extensions():
+        raise ConfigError(f"--sheet {path}: the file name must end in .svg or an image extension such as .png")
+
+
 def write_sheet(path: str, dl: DisplayList, display: PlotterDisplay, placement: Placement) -> None:
     """Draw the sheet as it will come out (page, plotter limits, margin box, strokes) into an SVG or PNG."""
     from ..vector.preview import render_preview
@@ -741,8 +752,8 @@ def run_plot(args: argparse.Namespace) -> int:
 
     if args.confirm_position and not args.resume:
         raise ConfigError("--confirm-position goes with --resume (after a plot stopped without knowing where)")
-    if args.sheet and Path(args.sheet).resolve() == Path(args.file).resolve():
-        raise ConfigError(f"--sheet {args.sheet} would overwrite the drawing; name another file")
+    if args.sheet:
+        _check_sheet(args.sheet, args.file)
     bar = ProgressBar()
     pauses = PauseMessages(bar)
     url, state = _with_state(args)

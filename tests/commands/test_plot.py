@@ -359,6 +359,8 @@ def test_errors_are_one_line_and_exit_2(tmp_path, sim, capsys):
         ([svg(tmp_path, "", name="empty.svg"), "--to", url], "nothing to plot"),
         ([str(tmp_path / "d.txt"), "--to", url], "expected an SVG"),
         ([good, "--to", url, "--resume", "--state", str(tmp_path / "none.json")], "nothing to resume"),
+        ([good, "--to", f"{url}&state=a.json", "--state", "b.json"], "the state file is named twice"),
+        ([good, "--to", url, "--dry-run", "--sheet", str(tmp_path / "sheet.txt")], "must end in .svg"),
     ]
     for argv, needle in cases:
         assert run(*argv) == 2, argv
