@@ -109,7 +109,7 @@ class SimPlotter:
 
     @property
     def elapsed(self) -> float:
-        """Simulated seconds the device has run since it was created (its simulated clock starts at 0)."""
+        """Simulated seconds since the device was created (its clock starts at 0): initialising, pen changes and parking too."""
         return float(self.device.clock.now())
 
 
