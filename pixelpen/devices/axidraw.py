@@ -93,6 +93,8 @@ class _Sent:
     on_reply: Callable[[str], None] | None = None
     reached: tuple[int, int] | None = None
     """(stroke, vertex) the pen is down at once this queued command has run."""
+    stroke: int | None = None
+    """The stroke this command belongs to (its travel, pen moves and slices)."""
 
 
 def _model(text: str) -> str:
@@ -163,6 +165,7 @@ class AxiDrawPlotter(PlotterDisplay):
         self._adopt: np.ndarray | None = None
         self._lost: str | None = None
         self._reached: tuple[int, int] | None = None
+        self._stroke_now: int | None = None
         self._power_good = 0
         """Queued commands (counted like ``_queued_sent``) known to have finished with the motor supply on."""
 
@@ -242,12 +245,14 @@ class AxiDrawPlotter(PlotterDisplay):
     def _send_stroke(self, index: int, points: np.ndarray, pen: int) -> None:
         """Travel, pen down, the stroke, pen up; then a supply check that certifies what ran before it."""
         pts = np.asarray(points, dtype=np.int64).reshape(-1, 2)
+        self._stroke_now = index
         self._travel(pts[0])
         self._pen(up=False, reached=(index, 0))
         if len(pts) > 1:
             self._move(pts, self.profile.pen_down, stroke=index)
         self._pen(up=True, reached=(index, len(pts) - 1))
         self._marks.append((self._queued_sent, index))
+        self._stroke_now = None
         self._power_checkpoint()
 
     def _poll(self) -> None:
@@ -400,6 +405,20 @@ class AxiDrawPlotter(PlotterDisplay):
         self.position = np.zeros(2, dtype=np.int64)
         self._zeroed = False
 
+    def _abort_motion(self) -> None:
+        """``ES``: stop now and flush the FIFO, so the moves queued behind a refused one do not run shifted.
+
+        Every move is relative, so once one is refused the ones after it would draw off the path; the step
+        counters still say exactly where the carriage stopped.  Best effort: the error is raised either way.
+        """
+        if not supports(self.version or (0, 0, 0), "ES"):
+            return
+        try:
+            self._link().write(b"ES\r")
+            self._link().flush()
+        except LinkError as exc:
+            log.warning("axidraw: could not stop the motion after the error: %s", exc)
+
     # -- motor power -----------------------------------------------------------------------------
     def _power_checkpoint(self) -> None:
         """Queue a V+ check (``QC``; plus ``QG`` on fw >= 3): its good answer certifies the commands finished before it."""
@@ -439,7 +458,7 @@ class AxiDrawPlotter(PlotterDisplay):
         while len(self._unanswered) >= WINDOW:
             self._read_reply()
         self._link().write(text.encode("ascii") + b"\r")
-        self._unanswered.append(_Sent(text, queued, duration_s, on_reply, reached))
+        self._unanswered.append(_Sent(text, queued, duration_s, on_reply, reached, self._stroke_now))
         if queued:
             self._queued_sent += 1
 
@@ -473,6 +492,10 @@ class AxiDrawPlotter(PlotterDisplay):
                         raise ParseError(f"expected OK after the data of {sent.text!r}", source="ebb", token=ok)
         self._unanswered.popleft()
         if error is not None:
+            if sent.queued:
+                self._abort_motion()
+            if sent.stroke is not None:
+                self._mark_damaged(range(sent.stroke, sent.stroke + 1))  # redrawn whole: a piece of it never ran
             raise ProtocolError(f"EBB rejected a command: !{error[0]} Err: {error[1]}", code=error[0],
                                 command=sent.text, device="axidraw")
         if sent.queued:

@@ -546,7 +546,7 @@ def test_a_corrupted_byte_is_caught_and_nothing_is_lost():
     resume redraws the damaged strokes: nothing is lost.  A wrong target draws its wrong leg before any
     report can show it (GRBL has no checksum), so a stray piece may stay; it is at most one per fault.
     """
-    points = fault_points(13, 10, plotted_bytes(RESUME_DRAWING))
+    points = fault_points(13, 8, plotted_bytes(RESUME_DRAWING))
     caught = 0
     for at in points:
         dev, clock = new_sim()
