@@ -640,14 +640,22 @@ class PauseMessages:
 
     def __init__(self, bar: ProgressBar) -> None:
         self.bar = bar
+        self.requested = False
 
     def key(self, paused: bool) -> None:
         """``p`` or space was pressed: a pause was requested or withdrawn."""
+        self.requested = paused
         self.bar.message("pause requested - waiting for the pen to lift" if paused else "continuing")
 
     def device(self, paused: bool) -> None:
-        """The plotter reports that it holds (pen up) or goes on."""
-        self.bar.message("paused (pen up) - press p or space to continue" if paused else "resumed")
+        """The plotter reports that it holds (pen up) or goes on; a pause nobody asked for is the plotter's own."""
+        if not paused:
+            self.bar.message("resumed")
+        elif self.requested:
+            self.bar.message("paused (pen up) - press p or space to continue")
+        else:
+            self.bar.message("paused at the plotter (pen up: its pause button, VIEW or paper lever) - "
+                             "release it there to continue")
 
 
 def _estimate(dl: DisplayList, display: PlotterDisplay) -> str:

@@ -698,6 +698,25 @@ def test_the_pause_is_confirmed_only_once_the_plotter_holds_with_the_pen_up(tmp_
     assert len(grbl_strokes(ident)) == 5
 
 
+def test_a_pause_at_the_plotter_is_shown_as_the_plotters_own(tmp_path, sim, monkeypatch, capsys):
+    url, ident = sim("hp7475a", pause_after=400, buffer=256)
+    device_said = plotcmd.PauseMessages.device
+
+    def device(self, paused):  # the operator releases VIEW on the plotter once pixelpen says it holds
+        device_said(self, paused)
+        if paused:
+            named_simulator(ident).press_view()
+
+    monkeypatch.setattr(plotcmd.PauseMessages, "device", device)
+    assert run(ladder(tmp_path, 30, pitch=5), "--to", url, "--no-optimize") == 0
+    err = capsys.readouterr().err
+    assert "paused at the plotter (pen up" in err and "press p or space" not in err
+    seg, _, _ = named_simulator(ident).segments()
+    rungs, stray = ink_per_rung(seg, 30, 5)
+    np.testing.assert_allclose(rungs, 40.0, atol=0.05)  # and the plot went on, every rung once
+    assert stray < 0.05
+
+
 # ---------------------------------------------------------------------------------------------------------
 # demo
 
