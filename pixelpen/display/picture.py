@@ -6,6 +6,7 @@ TypeError), a bad value ``ConfigError`` (also a ValueError). Limits (module attr
 * :data:`MAX_COORDINATE` -- world coordinates, radii and lengths beyond +-1e15 are refused (their
   differences would have no precision left and their extents overflow on the way to a device);
 * :data:`MAX_PEN` -- pen numbers; :data:`MAX_TEXT` -- characters of one text primitive;
+  :data:`MAX_LENGTH_MM` -- line widths and marker sizes;
   :data:`MAX_PATTERN` -- rows and columns of a fill pattern; :data:`MIN_SPACING_MM` -- hatch spacing;
 * :data:`MAX_DEGREE` -- degree of a Bézier curve (a path without ``degree`` is one curve) or B-spline.
 """
@@ -38,8 +39,10 @@ MAX_COORDINATE = 1e15
 """Largest magnitude of a world coordinate, radius or length."""
 MAX_PEN = 65535
 """Largest pen number."""
-MAX_TEXT = 100_000
-"""Characters of one text primitive."""
+MAX_TEXT = 10_000
+"""Characters of one text primitive (the stroke font lays out about 4,000 a second)."""
+MAX_LENGTH_MM = 10_000.0
+"""Longest line width or marker size in millimetres."""
 MAX_PATTERN = 256
 """Rows and columns of a fill pattern."""
 MIN_SPACING_MM = 0.01
@@ -62,6 +65,14 @@ def _number(value: object, name: str, low: float | None = None, *, above: bool =
     if low is not None and (number <= low if above else number < low):
         raise ConfigError(f"{name} must be {'>' if above else '>='} {low:g}, got {number}")
     return number
+
+
+def _length_mm(value: object, name: str) -> float:
+    """A length in millimetres, 0..MAX_LENGTH_MM."""
+    length = _number(value, name, 0.0)
+    if length > MAX_LENGTH_MM:
+        raise ConfigError(f"{name} must be at most {MAX_LENGTH_MM:g} mm, got {length:g}")
+    return length
 
 
 def _pair(value: object, name: str) -> tuple[float, float]:
@@ -179,7 +190,7 @@ class Style:
     layer: str | None = None
 
     def __post_init__(self) -> None:
-        _set(self, colour=parse_colour(self.colour), width=_number(self.width, "line width (mm)", 0.0))
+        _set(self, colour=parse_colour(self.colour), width=_length_mm(self.width, "line width (mm)"))
         if self.dash is not None:
             if not isinstance(self.dash, (list, tuple, np.ndarray)):
                 raise InvalidArgumentType(f"a dash pattern is a sequence of lengths, got {type(self.dash).__name__}")
@@ -355,7 +366,7 @@ class Marker:
     def __post_init__(self) -> None:
         object.__setattr__(self, "points", _points(self.points, "marker", 1))
         _choice(self.kind, "marker kind", ("dot", "plus", "cross", "star", "circle", "square", "diamond"))
-        _set(self, size=_number(self.size, "marker size (mm)", 0.0))
+        _set(self, size=_length_mm(self.size, "marker size (mm)"))
 
 
 @dataclass(frozen=True, eq=False)

@@ -117,3 +117,15 @@ def test_curve_degrees_are_bounded():
     with pytest.raises(ConfigError, match="B-spline degree"):
         BSpline(np.zeros((100, 2)), degree=picture.MAX_DEGREE + 1)
     Bezier(np.zeros((3 * 1000 + 1, 2)), degree=3)  # long paths of low degree are fine
+
+
+def test_lengths_in_millimetres_and_text_are_bounded():
+    from pixelpen.display import picture
+
+    with pytest.raises(ConfigError, match="line width"):  # the raster engine refused a 1e12 mm wide stroke late
+        Style(width=picture.MAX_LENGTH_MM * 2)
+    with pytest.raises(ConfigError, match="marker size"):
+        Marker([[0, 0]], size=picture.MAX_LENGTH_MM * 2)
+    with pytest.raises(ConfigError, match="longer than"):
+        Text((0, 0), "W" * (picture.MAX_TEXT + 1))
+    assert Style(width=picture.MAX_LENGTH_MM).width == picture.MAX_LENGTH_MM
