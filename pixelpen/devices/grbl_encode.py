@@ -163,7 +163,10 @@ def parse_status(line: str) -> GrblStatus:
         if not colon:
             raise ParseError("status field without ':'", source="grbl status report", token=part)
         if key in ("MPos", "WPos", "WCO"):
-            fields[key.lower()] = _numbers(value, key)
+            nums = _numbers(value, key)
+            if not 2 <= len(nums) <= 6:
+                raise ParseError(f"{key} needs one number per axis (2 to 6)", source="grbl status report", token=part)
+            fields[key.lower()] = nums
         elif key == "Bf":
             nums = _numbers(value, key, int)
             if len(nums) != 2:

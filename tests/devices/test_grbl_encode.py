@@ -207,7 +207,8 @@ def test_reply_numbers_are_ascii_digits_only():
         with pytest.raises(ParseError):
             parse_code(bad)
     for bad in ("<Hold:\u00b2|MPos:0,0,0>", "<Idle|MPos:\u0661,0,0>", "<Idle|Bf:15,\uff11>", "<Idle|MPos:1e3,0,0>",
-                "<Idle|MPos:inf,0,0>", "<Idle|MPos:nan,0,0>", "<Idle|MPos:" + "9" * 40 + ",0,0>"):
+                "<Idle|MPos:inf,0,0>", "<Idle|MPos:nan,0,0>", "<Idle|MPos:" + "9" * 40 + ",0,0>", "<Idle|MPos:1.0>",
+                "<Idle|WPos:1,2,3,4,5,6,7>", "<Idle|MPos:0,0,0|WCO:5>"):
         with pytest.raises(ParseError):
             parse_status(bad)
     assert parse_welcome("Grbl \u0661.1h ['$' for help]") is None
