@@ -582,3 +582,21 @@ def test_power_loss_asks_and_homing_lets_it_go_on_without_losing_a_segment():
     plotter.close()
     account = ink_account(intended(RESUME_DRAWING), drawn(dev))
     assert account.lost == 0 and account.stray == 0, account  # strokes since the last confirmation are redrawn
+
+
+def test_manual_pen_home_and_motors_off():
+    """``pixelpen pen ...``: servo S values as the profile says, G0 home without homing switches, $SLP for motors off."""
+    dev, clock = new_sim()
+    plotter = sim_plotter(dev, clock)
+    plotter.pen_down()
+    assert dev.paper.pen_is_down  # M3 S50: below the inverted servo's threshold 275, the pen touches
+    plotter.toggle_pen()
+    assert not dev.paper.pen_is_down
+    plotter.plot(drawing_mm([[[20, 20], [30, 25]]]))
+    plotter.go_home()
+    assert np.allclose(dev.machine_position()[:2], [0.0, 0.0]) and not dev.paper.pen_is_down
+    plotter.motors_off()
+    assert dev.state == "Sleep"  # commands.md $SLP: steppers, spindle and coolant off until a reset
+    plotter.close()
+    with pytest.raises(ProtocolError, match=r"alarm-locked"):  # woken by the reset: it must be homed first
+        sim_plotter(dev, clock)
