@@ -17,6 +17,18 @@ until the motion system is idle, which confirms everything sent.
 
 Pause: the PRG button (``QG`` bit 5, or ``QB`` on firmware before 2.6.2), polled at most every 50 ms
 between strokes, pauses the plot with the pen up; a second press resumes it.
+
+Motor power.  Without V+ the motors stand still while the board goes on counting steps, so the carriage is
+no longer where the counters say.  ``QC`` is read at connect (as pyaxidraw does) and after every stroke (plus
+the ``QG`` bit 6 latch, armed with ``CU,60``, on firmware 3.x); a stroke is confirmed only once a good
+reading taken after it ran came back.  A reading below ``VPLUS_MIN_RAW`` (plotink's 250 counts, about 7.7 V)
+stops the plot (Disconnected) with the position lost: the resume asks for the carriage to go home and a
+confirmation.  A refused motion command stops the FIFO at once (``ES``) and marks its stroke damaged.
+
+After a fault (``_where``): the board runs its FIFO out (``QM``), then ``QS`` gives the carriage in steps,
+``QG``/``QP`` the pen, ``QE`` whether the motors stayed on at 1/16 (off, or a rebooted board: position lost),
+``QC`` the supply.  An interrupted job leaves the motors on (as a pyaxidraw pause does) so a later session can
+still read the position from the counters.
 """
 
 from __future__ import annotations

@@ -16,8 +16,25 @@ bytes of unacknowledged lines (:class:`~pixelpen.devices.grbl_encode.CharacterCo
 line and waits for its ``ok`` (simple, but starves the planner on short segments).  While waiting, a
 quiet line is probed with the real-time ``?``: a machine in Run, Jog or Hold is waited for (a hold is the
 operator's pause; ``~`` or the cycle-start button resumes it), one that answers nothing raises LinkTimeout.
-A line lost on the wire shows as an idle GRBL with acknowledgements missing and raises LinkTimeout too,
-but it cannot be located: an ``ok`` carries no line number, so the strokes around it may be incomplete.
+A line lost on the wire shows as an idle GRBL with acknowledgements missing and raises LinkTimeout too.
+
+Trust.  GRBL has no line checksum, and a byte >= 0x80 is taken as an unknown real-time command and dropped,
+so a garbled byte can leave a shorter but valid line (``X12.3`` -> ``X1.3``, ``M3 S500`` -> ``M3 S50``).  Every
+status report during a plot (one at each confirmation, at most 5 Hz between strokes) is checked against the
+path sent (:class:`~pixelpen.devices.grbl_encode.PathTrack`): off the path, or with the pen up along a drawn
+leg (down along a travel), the driver feeds hold at once, marks the strokes in flight damaged and raises
+LinkError.  An ``error:N`` also holds at once (the lines behind a refused one would draw a shortcut) and marks
+its stroke damaged.  A wrong target inside a stroke draws its wrong leg before any report can show it.
+
+After a fault (``_where``, on the fresh link): GRBL is left to run what it received (Idle and silent for
+longer than a pen dwell, or a finished hold), a half line is flushed by the ``$G`` query it spoils, ``$G``
+tells a drawing move (G1) from a travel (G0), ``$$`` the step size (the position tolerance), and the status
+report the position (work coordinates) and the pen (spindle output or Z).  A welcome banner (power, reset,
+the Arduino's auto-reset on opening the port), an alarm that loses position, ``$SLP`` or a restart seen
+during the plot mean the position is lost: the resume asks for ``$H`` (``go_home()`` with $22=1) or a check.
+
+Limits: ``SETTLE_LIMIT_S`` (120 s) for GRBL to finish after a reconnect, ``HOMING_LIMIT_S`` (120 s) for ``$H``,
+``TRACK_TOLERANCE_MM`` (0.1 mm) off the path before a report counts as a garbled line; module constants.
 """
 
 from __future__ import annotations
