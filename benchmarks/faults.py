@@ -4,7 +4,8 @@ For each family (hp7475a, grbl, axidraw) and each fault kind (drop, stall, corru
 error, pause) a random drawing is plotted on a named simulator (``sim:FAMILY?speed=fast&id=...``) with
 the fault in the URL (``drop_after=N``, ``stall_after=N``, ``corrupt_at=N``, ``power_loss_after=N``,
 ``pause_after=N``; N uniform over the bytes of the uninterrupted plot).  After the fault the operator's
-part is played (power back on, the cable fixed: the resume uses the URL without the fault) and the plot
+part is played (power back on, the cable fixed: the resume uses the URL without the fault; after a
+PositionUnknown on GRBL and AxiDraw the machine is homed with ``go_home()`` / ``pixelpen pen home``) and the plot
 is resumed — through ``resume_after_fault()`` (path ``api``) or through ``pixelpen plot --resume`` run
 in process with a state file (path ``cli``; ``--no-optimize``, so that the reference plot and the
 interrupted one plan the same strokes).  A resume that answers PositionUnknown counts as
@@ -168,6 +169,13 @@ def write_svg(dl: DisplayList, path: Path) -> None:
     path.write_text("\n".join(lines), encoding="utf-8")
 
 
+def paper_of(ident: str) -> DisplayList:
+    """The named simulator's sheet as a DisplayList (HP-GL: plotter units; GRBL, EBB: their Paper in mm)."""
+    device = named_simulator(ident)
+    paper = getattr(device, "paper", None)
+    return paper.display_list() if hasattr(paper, "display_list") else device.display_list()
+
+
 def recover(family: str, kind: str, ident: str) -> None:
     """The operator's part after a fault: power back on."""
     if kind != "power":
@@ -177,6 +185,10 @@ def recover(family: str, kind: str, ident: str) -> None:
         device.inject("power-restore")
     elif family != "grbl":  # a GRBL board reboots by itself when its power comes back
         device.inject("reset")
+
+
+REHOMES = ("grbl", "axidraw")
+"""Families whose lost position the operator restores by homing before confirming (HP-GL homes at power-up)."""
 
 
 def release(family: str, ident: str) -> None:
@@ -237,7 +249,7 @@ def reference_api(family: str, dl: DisplayList, ident: str) -> tuple[DisplayList
         sent = d.link.port.sim_port.stats().bytes_sent
     finally:
         d.close()
-    paper = named_simulator(ident).display_list()
+    paper = paper_of(ident)
     forget_simulator(ident)
     return paper, sent
 
@@ -263,6 +275,8 @@ def run_api(family: str, kind: str, at: int, dl: DisplayList, ref: DisplayList, 
                 except PositionUnknown as exc:
                     out.asked = confirmed = True
                     out.faults.append(str(exc))
+                    if family in REHOMES:  # the operator homes the machine, then confirms
+                        d.go_home()
                 except (PlotInterrupted, ProtocolError) as exc:
                     out.faults.append(str(exc))
             else:
@@ -270,7 +284,7 @@ def run_api(family: str, kind: str, at: int, dl: DisplayList, ref: DisplayList, 
     finally:
         with contextlib.suppress(Exception):
             d.close()
-    out.tally = compare(ref, named_simulator(ident).display_list())
+    out.tally = compare(ref, paper_of(ident))
     return out
 
 
@@ -294,11 +308,15 @@ def run_cli(family: str, kind: str, at: int, svg: Path, ref: DisplayList, ident:
             if "--confirm-position" in text and not extra:
                 out.asked = True
                 extra = ["--confirm-position"]
+                if family in REHOMES:  # the operator homes the machine, then confirms
+                    home, said = _main(["pen", "home", "--to", url(family, ident)])
+                    if home != 0:
+                        raise PixelpenError(f"pixelpen pen home exit {home}: {_said(said)[-300:]}")
             elif code != 3:
                 raise PixelpenError(f"resume exit {code}: {text.strip()[-300:]}")
         else:
             raise PixelpenError(f"not finished after {MAX_RESUMES} resumes")
-    out.tally = compare(ref, named_simulator(ident).display_list())
+    out.tally = compare(ref, paper_of(ident))
     return out
 
 
@@ -310,7 +328,7 @@ def reference_cli(family: str, svg: Path, ident: str, state: Path) -> tuple[Disp
         raise PixelpenError(f"reference plot exit {code}: {text.strip()[-300:]}")
     device = named_simulator(ident)
     device_bytes.append(getattr(device, "stats").bytes_received)
-    paper = device.display_list()
+    paper = paper_of(ident)
     forget_simulator(ident)
     return paper, device_bytes[0]
 

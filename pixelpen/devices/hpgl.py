@@ -47,8 +47,9 @@ what it was drawing are lost: the position is reported lost).  At each sync poin
 must be the end of the last stroke sent before it; another position is a fault (a corrupted
 coordinate or a skipped instruction).
 
-Confirmation and errors: after every ``sync_strokes`` strokes or ``sync_bytes`` bytes (at pen-up) the
-driver sends ``PU;OA;OE;`` and ``ESC.E``.  OA and OE are buffered output instructions, answered when
+Confirmation and errors: with ``escb`` an ESC.B answer confirms every stroke whose last byte lies
+``CONFIRM_MARGIN`` bytes before what the plotter has taken from its buffer; after every
+``sync_strokes`` strokes or ``sync_bytes`` bytes (at pen-up) the driver sends ``PU;OA;OE;`` and ``ESC.E``.  OA and OE are buffered output instructions, answered when
 execution reaches them, so their answers confirm every stroke before them; the answers are read as
 they arrive, never waited for while there is data to send.  A non-zero OE (HP-GL error) or ESC.E
 (RS-232 error) raises :class:`~pixelpen.errors.ProtocolError` with the code, its meaning and the
@@ -121,8 +122,13 @@ MAX_POLL_S = 0.25
 """Longest gap between ESC.B queries while waiting; the plotter still holds buffer-size minus reserve bytes."""
 PAUSE_CHECK_S = 1.0
 """Seconds without progress after which the driver asks ESC.O whether the plotter is paused."""
+CONFIRM_MARGIN = 2 * enc.MAX_INSTRUCTION
+"""Bytes the plotter must have taken from its buffer beyond a stroke's last byte before ESC.B confirms the stroke
+(the instruction being drawn and one read ahead; the simulator reads one instruction at a time)."""
 SETTLE_S = 2.0
 """Seconds ESC.B must stay unchanged, beyond one instruction's drawing time, before the plotter counts as settled."""
+QUIET_S = 0.2
+"""Seconds the answers of the settle queries are given to arrive before the position is asked."""
 SAFE_WAIT_S = 10.0
 """Longest wait for the safe-stop sequence to be executed before closing."""
 DISCOVERY_TIMEOUT_S = 0.5
@@ -206,6 +212,10 @@ class _Wire:
     strokes_sent: int = 0
     last_point: tuple[int, int] | None = None
     """End of the last stroke sent (where the next sync point's OA must find the pen)."""
+    size: int | None = None
+    """The plotter's buffer size (ESC.B on the empty buffer after the connect handshake; escb only)."""
+    ends: deque[tuple[int, int]] = field(default_factory=deque)
+    """(HP-GL bytes written up to a stroke's end, strokes done then) not yet confirmed by ESC.B."""
     since_sync_strokes: int = 0
     since_sync_bytes: int = 0
     written: int = 0
@@ -388,6 +398,8 @@ class HPGLDisplay(PlotterDisplay):
         if self.handshake == "escb":
             self._ask("B")
         self._wait(lambda: not w.queries, "waiting for ESC.E / ESC.B answers")
+        if w.free is not None:
+            w.size = w.free[0]  # everything before OI was executed: the buffer is empty
         if self.handshake == "escb" and self._room() < enc.MAX_INSTRUCTION:
             free = w.free[0] if w.free else 0
             raise ConfigError(
@@ -411,6 +423,8 @@ class HPGLDisplay(PlotterDisplay):
         self._send(instructions)
         w.strokes_sent = index + 1
         w.last_point = (int(points[-1, 0]), int(points[-1, 1]))
+        if w.size is not None:
+            w.ends.append((w.written, index + 1))
         w.since_sync_strokes += 1
         w.since_sync_bytes += sum(len(i) for i in instructions)
         if w.since_sync_strokes >= self.sync_strokes or w.since_sync_bytes >= self.sync_bytes:
@@ -464,9 +478,15 @@ class HPGLDisplay(PlotterDisplay):
         self._wire = _Wire(progress_at=self.clock.now(), connecting=True)
         self._write(enc.PLOTTER_ON, graphics=False)
         self._settle(SETTLE_S + self._instruction_time_s())
+        link.read(4096, timeout=QUIET_S)  # answers still on their way (late ones of the settle queries)
+        link.reset_input()
         self._write(enc.ABORT_GRAPHICS + enc.WHERE_REQUEST, graphics=False)
-        status = self._answer(_NUMBER, "OS")
-        x, y, pen = (int(v) for v in self._answer(_OA, "OA").split(","))
+        status = None
+        while not _OA.fullmatch(text := self._answer(None, "OS;OA;")):
+            status = text if _NUMBER.fullmatch(text) else None  # OS answers just before OA; a late number first
+        if status is None:
+            raise LinkError(f"{self._name()}: OA answered {text!r} without the OS answer before it")
+        x, y, pen = (int(v) for v in text.split(","))
         if int(status) & enc.STATUS_INITIALISED:
             return DeviceWhere(
                 (x, y), bool(pen), position_lost=True,
@@ -787,6 +807,9 @@ class HPGLDisplay(PlotterDisplay):
             w.mark = mark
             w.free = (value, q.written)
             w.free_answers += 1
+            if w.size is not None:  # the plotter took every byte before mark - size from its buffer
+                while w.ends and w.ends[0][0] + CONFIRM_MARGIN <= mark - w.size:
+                    self._confirm(w.ends.popleft()[1])
         elif q.kind == "E":
             if value not in IO_ERRORS:
                 raise LinkError(f"{self._name()}: ESC.E answered {value}, not an RS-232 error number")

@@ -834,3 +834,21 @@ def test_model_classes_state_what_the_simulators_answer():
         assert rig.display.model_reply == cls.ident
         assert isinstance(rig.display, HPGLDisplay)
         rig.display.close()
+
+
+def test_escb_answers_confirm_strokes_the_plotter_has_drawn_between_sync_points():
+    dl = drawing(n=12, seed=9)
+    per_stroke = [len(dl.stroke(i)) - 1 for i in range(len(dl))]
+    seen = []
+    rig = None
+
+    def progress(p):
+        seen.append((p.strokes_done, len(rig.device.segments()[0]), rig.display._wire.syncs.__len__()))
+
+    rig = Rig(options="sync_strokes=100&sync_bytes=100000", on_progress=progress)
+    rig.display.plot(dl)
+    rig.display.close()
+    early = [s for s in seen if s[0] < len(dl)]
+    assert len(early) >= 3  # confirmed as the plotter took the bytes, long before the one sync point at the end
+    for done, inked, _ in seen:  # never ahead of the paper: every confirmed stroke is fully inked
+        assert inked >= sum(per_stroke[:done])
