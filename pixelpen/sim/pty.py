@@ -15,7 +15,8 @@ master side: the program sees the hang-up (EIO) an unplugged USB adapter causes.
 
 The bridge keeps no slave descriptor of its own, so it sees the program open and close the port (the
 master reports a hang-up while no slave is open).  While nobody has the port open the device's output
-goes nowhere, as on a cable with nothing at its end.  Each open raises DTR: a device with
+goes nowhere, as on a cable with nothing at its end (what it says the moment a program opens the port
+reaches the program).  Each open raises DTR: a device with
 ``resets_on_dtr`` (GRBL on an Arduino) reboots and greets the program with its banner.  Each close
 saves the paper to ``out`` when one was given.
 """
@@ -153,10 +154,12 @@ class PtyBridge:
         to_program = bytearray()
         fast_forward = False  # simulated clock: the program has been quiet, so jump from event to event
         while not self._stop.is_set():
-            if not self._program_present():  # nobody at the end of the cable yet (or any more)
+            pending = b"" if self._host_open else port.take_pending()  # taken first: nothing said meanwhile is lost
+            if not self._program_present():  # nobody at the end of the cable: what the device says is gone
                 to_program.clear()
                 self._stop.wait(_MAX_IDLE)
                 continue
+            to_program += pending
             incoming = port.read(65536, 0.0)
             if incoming:
                 to_program += incoming

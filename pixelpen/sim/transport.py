@@ -422,17 +422,23 @@ class SimPort:
                 except OSError as exc:
                     raise ConfigError(f"out={self.out}: cannot write the paper: {exc.strerror or exc}") from None
 
-    def host_opened(self) -> None:
-        """A program opened the port: what the device said while nobody listened is gone, and DTR rises,
-        so a device with ``resets_on_dtr`` (an Arduino's auto-reset) reboots."""
+    def take_pending(self) -> bytes:
+        """Everything the device said that the host has not read, arrived or still on the line, at once."""
         with self._lock:
             self._run_until(self.clock.now())
-            self.device.take_output()
-            self._rx_line.clear()
+            self._collect()
+            out = bytes(self._inbuf) + bytes(self._rx_line)
             self._inbuf.clear()
+            self._rx_line.clear()
+            return out
+
+    def host_opened(self) -> None:
+        """A program opened the port and raised DTR: a device with ``resets_on_dtr`` (an Arduino) reboots."""
+        with self._lock:
+            self._run_until(self.clock.now())
             if getattr(self.device, "resets_on_dtr", False):
                 self.device.inject("reset")
-            self._dev_next = self.device.next_event_time()
+                self._dev_next = self.device.next_event_time()
 
     # -- waiting ----------------------------------------------------------------------------
 
