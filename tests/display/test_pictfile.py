@@ -164,7 +164,7 @@ def _depth_reference(raw: bytes, limit: int):
     return None
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=100, deadline=None)
 @given(
     parts=st.lists(st.one_of(
         st.sampled_from(["[", "]", "{", "}", ",", "1"]),
