@@ -31,7 +31,13 @@ the interrupted stroke.  A position that matches nothing, matches several differ
 drawing (a closed stroke seen with the pen up at its start/end, a path that revisits a point), or
 that the device lost (power loss, reset) raises :class:`PositionUnknown` instead of guessing; a
 resume with ``position_confirmed=True`` then continues from the earliest possible point (the last
-confirmed stroke when nothing is known): it may redraw, it never loses.
+confirmed stroke when nothing is known): it may redraw, it never loses.  A device error in known strokes
+(``_mark_damaged``) has those strokes drawn again whole before the plot goes on from where it stopped.
+
+Limits: the strokes in doubt are those sent since the last confirmation (bounded by the family's
+confirmation interval); :func:`locate` costs one pass over their points.  A display opened with an
+unfinished state file asks the device where it stopped before its handshake (HP-GL: at least
+``hpgl.SETTLE_S`` seconds).
 """
 
 from __future__ import annotations

@@ -306,3 +306,18 @@ def test_fault_campaign_loses_nothing_and_resumes_drops_and_stalls_exactly(famil
             assert row["doubled"] == 0 and row["stray"] == 0, (kind, row)
         if kind == "power":  # it cannot know: every such plot asked before going on
             assert row["asked"] == row["interrupted"], row
+
+
+def test_resuming_another_drawing_is_refused_naming_the_state_file_once(tmp_path):
+    state = tmp_path / "plot.json"
+    d = FakePlotter(budget=3000.0, state_file=state)
+    d.open()
+    with pytest.raises(PlotInterrupted):
+        d.plot(_job(seed=4))
+    other = FakePlotter(state_file=state)
+    other.open()
+    with pytest.raises(ConfigError) as info:
+        other.plot(_job(seed=5), resume=True)
+    text = str(info.value)
+    assert text.count(str(state)) == 1 and text.count("plot.json") == 1
+    assert "belongs to another drawing" in text
