@@ -162,7 +162,9 @@ def locate(
     ``before`` is the pen position before the window's first stroke (the end of the stroke before it), or None.
     ``lifts(s)``: the device may rest with the pen lifted at stroke s's end (False where lifting and travelling
     to the next stroke are one instruction); ``down_at_start``: it may rest with the pen down at a stroke's
-    first point before drawing (False where lowering and drawing are one instruction).
+    first point before drawing (False where lowering and drawing are one instruction).  A pen reported up
+    rests only between strokes (the base lifts it nowhere else); a device that lifts by itself inside a
+    stroke must report ``pen_down=None``.
     """
     if where.position is None:
         return []
@@ -170,10 +172,12 @@ def locate(
     tol = float(where.tolerance)
     found: list[ResumePoint] = []
     up_ok, down_ok = where.pen_down is not True, where.pen_down is not False
-    prev = before
+    prev, prev_index = before, None
     for index, pts in window:
         p = np.asarray(pts, float)
-        if prev is not None and up_ok and _near_segment(q, prev, p[0], tol) is not None:
+        t = _near_segment(q, prev, p[0], tol) if prev is not None and up_ok else None
+        if t is not None and not (prev_index is not None and not lifts(prev_index)
+                                  and np.hypot(*(q - prev)) <= tol and np.hypot(*(q - p[0])) > tol):
             found.append(ResumePoint(index))  # travelling to the stroke's start, or there with the pen still up
         if len(p) == 1:
             if np.hypot(*(q - p[0])) <= tol:
@@ -189,16 +193,16 @@ def locate(
                 length = float(np.hypot(*(p[j + 1] - p[j])))
                 if t * length >= length - tol:
                     last = j + 1 == len(p) - 1
-                    if last and not down_ok and not lifts(index):
-                        continue  # the pen cannot rest lifted here: it would have gone on to the next stroke
+                    if not down_ok and not (last and lifts(index)):
+                        continue  # the pen is lifted only between strokes, where the family says it may rest
                     found.append(ResumePoint(index + 1) if last else ResumePoint(index, j + 1))
                 elif t * length <= tol:
-                    if j == 0 and not up_ok and not down_at_start:
-                        continue  # the pen cannot rest down on a stroke's start before drawing
+                    if (j == 0 and not up_ok and not down_at_start) or (j > 0 and not down_ok):
+                        continue  # not down on a start before drawing (if the family says so), not up inside
                     found.append(ResumePoint(index, j))
-                else:
+                elif down_ok:
                     found.append(ResumePoint(index, j, (float(q[0]), float(q[1]))))
-        prev = p[-1]
+        prev, prev_index = p[-1], index
     return _distinct(found, tol)
 
 

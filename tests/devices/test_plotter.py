@@ -60,7 +60,10 @@ def test_a_closed_stroke_seen_pen_up_at_its_start_has_two_readings():
     loop = np.array([[0, 0], [10, 0], [10, 10], [0, 0]])
     found = locate([(3, loop)], where(0, 0, False), np.array([50, 50]))
     assert found == [ResumePoint(3), ResumePoint(4)]  # not started, or done: a resume must not guess
-    assert locate([(3, loop)], where(10, 0, False), None) == [ResumePoint(3, 1)]  # elsewhere it is clear
+    assert locate([(3, loop)], where(10, 0, True), None) == [ResumePoint(3, 1)]  # elsewhere it is clear
+    # the base lifts the pen only between strokes: lifted inside one is no place it can be (unless it cannot tell)
+    assert locate([(3, loop)], where(10, 0, False), None) == []
+    assert locate([(3, loop)], where(10, 0, None), None) == [ResumePoint(3, 1)]
 
 
 def test_a_device_that_lifts_only_with_its_travel_reads_a_closed_stroke_once():
@@ -72,6 +75,13 @@ def test_a_device_that_lifts_only_with_its_travel_reads_a_closed_stroke_once():
     assert locate([(3, loop)], where(0, 0, True), np.array([50, 50]), **never) == [ResumePoint(4)]
     synced = dict(lifts=lambda s: s == 3, down_at_start=False)
     assert locate([(3, loop)], where(0, 0, False), np.array([50, 50]), **synced) == [ResumePoint(3), ResumePoint(4)]
+
+
+def test_a_lift_only_with_travel_leaves_no_rest_at_a_stroke_end():
+    # HP-GL: after stroke 5 comes PUx,y (lift and travel), so pen up at stroke 5's end is not a resting place
+    assert locate(WINDOW, where(10, 10, False), BEFORE, lifts=lambda s: False) == []
+    assert locate(WINDOW, where(15, 5, False), BEFORE, lifts=lambda s: False) == [ResumePoint(6)]  # mid travel
+    assert locate(WINDOW, where(10, 10, False), BEFORE, lifts=lambda s: s == 5) == [ResumePoint(6)]
 
 
 def test_a_path_through_its_own_line_is_ambiguous_where_it_crosses():
