@@ -27,8 +27,8 @@ LinkError.  An ``error:N`` also holds at once (the lines behind a refused one wo
 its stroke damaged.  A wrong target inside a stroke draws its wrong leg before any report can show it.
 
 After a fault (``_where``, on the fresh link): GRBL is left to run what it received (Idle and silent for
-longer than a pen dwell, or a finished hold), a half line is flushed by the ``$G`` query it spoils, ``$G``
-tells a drawing move (G1) from a travel (G0), ``$$`` the step size (the position tolerance), and the status
+longer than a pen dwell, or a finished hold), a half line is flushed by the ``$$`` query it spoils, ``$$``
+gives the step size (the position tolerance), and the status
 report the position (work coordinates) and the pen (spindle output or Z).  A welcome banner (power, reset,
 the Arduino's auto-reset on opening the port), an alarm that loses position, ``$SLP`` or a restart seen
 during the plot mean the position is lost: the resume asks for ``$H`` (``go_home()`` with $22=1) or a check.
@@ -67,7 +67,6 @@ from .grbl_encode import (
     PenMotion,
     number,
     parse_code,
-    parse_modes,
     parse_status,
     parse_welcome,
     stroke_lines,
@@ -146,17 +145,18 @@ def _buffer(text: str) -> int:
 
 @dataclass(frozen=True)
 class _Tag:
-    """What a line's ``ok`` tells: the stroke reached its vertex ``vertex`` with the pen down; ``confirms``: the stroke is
-    done (the lift's dwell) and the track may drop the legs before point number ``confirms``."""
+    """What a line's ``ok`` tells: stroke ``stroke`` reached its vertex ``vertex`` with the pen down; stroke ``done`` is
+    on paper (its lift's dwell ran) and the track may drop the legs before point number ``track``."""
 
     stroke: int
     vertex: int | None
     """None for the travel to the stroke's start (the pen is not down yet)."""
-    confirms: int | None = None
+    done: int | None = None
+    track: int | None = None
 
 
 def _device_where(position: tuple[float, float] | None, pen_down: bool | None, **fields: Any) -> DeviceWhere:
-    """A DeviceWhere with the optional fields the base knows (``drawing``/``reached`` are proposed, see the notes)."""
+    """A DeviceWhere with the optional fields the base knows (``reached`` is proposed, see the notes)."""
     known = {f.name for f in dataclasses.fields(DeviceWhere)}
     return DeviceWhere(position, pen_down, **{k: v for k, v in fields.items() if k in known})
 
@@ -214,6 +214,10 @@ class GrblPlotter(PlotterDisplay):
         self._wco = np.zeros(3)
         self._lost: str | None = None
         self._reached: tuple[int, int] | None = None
+        self._lift_pending: tuple[int, int] | None = None
+        """(stroke, its last track point) of a servo pen left down for the next travel to lift."""
+        # where the pen can rest (the base's locate): a servo pen's moves share lines with the motion (stroke_lines)
+        self.lifts_after_each_stroke = self.rests_pen_down_at_start = not self.pen_motion.joins
         self._held = False
         self._status_asked = -math.inf
         self._idle_polls = 0
@@ -274,6 +278,7 @@ class GrblPlotter(PlotterDisplay):
         """Wake GRBL, let it finish what it had, soft-reset it to a clean line buffer, check version and alarm."""
         link = self._link()
         self._tracking = False
+        self._lift_pending = None  # the pen-up lines below lift it
         self.counter.clear()
         self.last_status = None
         self._idle_polls = 0
@@ -307,21 +312,38 @@ class GrblPlotter(PlotterDisplay):
         self._tracking = True
 
     def _send_stroke(self, index: int, points: np.ndarray, pen: int) -> None:
-        """Stream the stroke's lines; the last one (the lift's dwell) confirms it, each motion extends the track."""
+        """Stream the stroke's lines; the line with its lift (and dwell) confirms it, each motion extends the track.
+
+        A servo pen's lift rides on the next stroke's travel (or goes alone in ``_drain``), a Z pen's ends the
+        stroke (:func:`~pixelpen.devices.grbl_encode.stroke_lines`).
+        """
         pts = np.asarray(points).reshape(-1, 2)
-        lines = stroke_lines(pts, self.coordinate_format, self.pen_motion, self.feed)
-        n_down = len(self.pen_motion.down_lines())
-        self.track.append(tuple(pts[0].tolist()), False)
-        self._send_line(lines[0], _Tag(index, None))
-        for line in lines[1:1 + n_down]:
-            self._send_line(line, _Tag(index, 0))
-        for k in range(1, len(pts)):
-            self.track.append(tuple(pts[k].tolist()), True)
-            self._send_line(lines[n_down + k], _Tag(index, k))
-        end = len(pts) - 1
-        for line in lines[1 + n_down + end:-1]:
-            self._send_line(line, _Tag(index, end))
-        self._send_line(lines[-1], _Tag(index, end, confirms=self.track.append(tuple(pts[-1].tolist()), False)))
+        joins = self.pen_motion.joins
+        lifting, self._lift_pending = self._lift_pending, None
+        lines = stroke_lines(pts, self.coordinate_format, self.pen_motion, self.feed, lift_first=lifting is not None)
+        travel = self.track.append(tuple(pts[0].tolist()), False)
+        done = lifting[0] if lifting else None
+        self._send_line(lines[0], _Tag(index, None, done, lifting[1] if lifting else None))
+        if joins:
+            vertices = range(1, len(pts)) if len(pts) > 1 else range(0, 1)
+        else:
+            down = len(self.pen_motion.down_lines())
+            for line in lines[1:1 + down]:
+                self._send_line(line, _Tag(index, 0))
+            vertices = range(1, len(pts))
+        first = 1 if joins else 1 + len(self.pen_motion.down_lines())
+        for line, k in zip(lines[first:], vertices):
+            if k:
+                self.track.append(tuple(pts[k].tolist()), True)
+            self._send_line(line, _Tag(index, k))
+        end = self.track.append(tuple(pts[-1].tolist()), False) if len(pts) > 1 else travel
+        if joins:
+            self._lift_pending = (index, end)
+            return
+        up = self.pen_motion.up_lines()
+        for line in lines[len(lines) - len(up):-1]:
+            self._send_line(line, _Tag(index, len(pts) - 1))
+        self._send_line(lines[-1], _Tag(index, len(pts) - 1, index, end))
 
     def _poll(self) -> None:
         link = self._link()
@@ -331,6 +353,15 @@ class GrblPlotter(PlotterDisplay):
                 self._dispatch(line)
 
     def _drain(self) -> None:
+        """Lift a pen left down for the next travel (the device may now rest lifted there), then wait for every ok."""
+        if self._lift_pending is not None:
+            index, end = self._lift_pending
+            self._lift_pending = None
+            self._lifted_in_place(index)
+            self._send_line(" ".join(self.pen_motion.up_lines()), _Tag(index, None, index, end))
+        self._wait_acks()
+
+    def _wait_acks(self) -> None:
         while len(self.counter):
             self._wait_reply()
 
@@ -363,6 +394,9 @@ class GrblPlotter(PlotterDisplay):
                     self._wait_until_still(STOP_WAIT_S, holding=True)
                 self.soft_reset()
                 status = self.query_status()
+            if self._lift_pending is not None:
+                self._lifted_in_place(self._lift_pending[0])
+                self._lift_pending = None
             if status.state == "Alarm":
                 log.warning("grbl: alarm-locked after stopping; the pen is left as the reset left it (spindle off)")
                 return
@@ -382,6 +416,7 @@ class GrblPlotter(PlotterDisplay):
         """
         link = self._link()
         self._tracking = False
+        self._lift_pending = None
         self.counter.clear()
         link.reset_input()
         link.write(REALTIME_STATUS)
@@ -401,21 +436,18 @@ class GrblPlotter(PlotterDisplay):
             self._stale = False
         if lost or status.state in ("Alarm", "Sleep"):
             return DeviceWhere(None, None, position_lost=True, detail=lost or f"GRBL is in {status.state} state")
-        drawing: bool | None = None
         if status.held:  # no line is parsed during a hold: end it as _connect would, position kept when at rest
             self.soft_reset()
             self._settle()
             status = self.query_status()
             if status.state == "Alarm":
                 return DeviceWhere(None, None, position_lost=True, detail="GRBL raised an alarm on the reset that ended its hold")
-        else:
-            drawing = self._parser_modes().get("G") == 1.0
         settings = self._settings()
         status = self.query_status()
         steps = min(settings.get(100, math.inf), settings.get(101, math.inf))
         tolerance_mm = 0.0015 + (0.5 * math.sqrt(2.0) / steps if math.isfinite(steps) and steps > 0 else 0.0)
         return _device_where(self._work_units(status), self._pen_down_of(status),
-                             tolerance=max(0.5, tolerance_mm / self.profile.unit_mm), drawing=drawing, reached=reached,
+                             tolerance=max(0.5, tolerance_mm / self.profile.unit_mm), reached=reached,
                              detail=f"GRBL {status.state} at {self._work_units(status)} units")
 
     def _pen_position(self) -> tuple[float, float] | None:
@@ -507,13 +539,13 @@ class GrblPlotter(PlotterDisplay):
         """
         wait = wait or self.stream == "wait"
         if wait:
-            self._drain()
+            self._wait_acks()
         while not self.counter.fits(line):
             self._wait_reply()
         self._link().write(line.encode("ascii") + b"\n")
         self.counter.sent(line, tag)
         if wait:
-            self._drain()
+            self._wait_acks()
 
     def _wait_reply(self) -> None:
         """Handle one line from GRBL; on silence probe with ``?`` and keep waiting while it works or holds."""
@@ -547,9 +579,9 @@ class GrblPlotter(PlotterDisplay):
             if isinstance(tag, _Tag):
                 if tag.vertex is not None:
                     self._reached = (tag.stroke, tag.vertex)
-                if tag.confirms is not None:
-                    self._confirm(tag.stroke + 1)
-                    self.track.done_until(tag.confirms)
+                if tag.done is not None:
+                    self._confirm(tag.done + 1)
+                    self.track.done_until(tag.track)  # type: ignore[arg-type]
                     self._link().write(REALTIME_STATUS)  # verify the position at every confirmation point
         elif line.startswith("error:"):
             code = parse_code(line)
@@ -682,13 +714,6 @@ class GrblPlotter(PlotterDisplay):
             if now >= deadline:
                 raise LinkTimeout(f"grbl: still {status.state} {SETTLE_LIMIT_S}s after reconnecting")
             self.clock.sleep(STATUS_INTERVAL_S)
-
-    def _parser_modes(self) -> dict[str, float]:
-        """``$G``: the parser's modal state (motion mode of the last line run, spindle, F, S)."""
-        for line in self._system_query("$G"):
-            if line.startswith("[GC:"):
-                return parse_modes(line)
-        raise ParseError("$G gave no [GC:...] line", source="grbl $G")
 
     def _settings(self) -> dict[int, float]:
         """``$$`` as numbers ({100: 80.0, ...}); settings that do not parse are left out."""

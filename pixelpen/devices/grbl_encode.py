@@ -31,7 +31,6 @@ __all__ = [
     "PenMotion",
     "number",
     "parse_code",
-    "parse_modes",
     "parse_status",
     "parse_welcome",
     "stroke_lines",
@@ -103,7 +102,6 @@ MAX_DIGITS = 12
 _WELCOME = re.compile(r"^Grbl ([0-9]{1,3})\.([0-9]{1,3})([a-z]?)\s*\[.*\]$", re.ASCII)
 _UINT = re.compile(rf"[0-9]{{1,{MAX_DIGITS}}}", re.ASCII)
 _DECIMAL = re.compile(rf"-?(?:[0-9]{{1,{MAX_DIGITS}}}(?:\.[0-9]{{0,{MAX_DIGITS}}})?|\.[0-9]{{1,{MAX_DIGITS}}})", re.ASCII)
-_MODE_WORD = re.compile(rf"([GMTFS])({_DECIMAL.pattern})", re.ASCII)
 
 
 @dataclass(frozen=True)
@@ -201,32 +199,6 @@ def parse_code(line: str) -> int:
     return int(text)
 
 
-def parse_modes(line: str) -> dict[str, float]:
-    """``$G``'s ``[GC:G1 G54 G17 G21 G90 G94 M3 M9 T0 F3000 S50]`` -> the last G/M word of each letter, T, F, S.
-
-    Keys: ``G`` the motion mode (first G word), ``M`` the spindle state (3, 4 or 5), ``T``, ``F``, ``S``.
-    """
-    text = line.strip()
-    if not (text.startswith("[GC:") and text.endswith("]")):
-        raise ParseError("a parser state report is '[GC:...]'", source="grbl $G", token=text)
-    modes: dict[str, float] = {}
-    for word in text[4:-1].split():
-        m = _MODE_WORD.fullmatch(word)
-        if not m:
-            raise ParseError("parser state word is not a letter and a number", source="grbl $G", token=word)
-        letter, value = m[1], float(m[2])
-        if letter == "G":
-            modes.setdefault("G", value)  # the motion mode comes first (interface.md)
-        elif letter == "M":
-            if value in (3, 4, 5):
-                modes["M"] = value
-        else:
-            modes[letter] = value
-    if not {"G", "M", "F", "S"} <= modes.keys():
-        raise ParseError("parser state lacks the motion mode, spindle, F or S", source="grbl $G", token=text)
-    return modes
-
-
 def parse_welcome(line: str) -> tuple[int, int, str] | None:
     """``Grbl 1.1h ['$' for help]`` -> (1, 1, 'h'); None for any other line."""
     m = _WELCOME.match(line.strip())
@@ -310,6 +282,12 @@ class PenMotion:
             move = "M5" if self.up is None else f"M3 S{number(self.up)}"
         return [move, f"G4 P{number(self.dwell_up)}"]
 
+    @property
+    def joins(self) -> bool:
+        """True for a servo pen: its moves and dwells share a line with the motion after them (GRBL runs a line's
+        spindle word, then its ``G4``, then its motion), so the pen cannot rest between them."""
+        return self.mode == "servo"
+
     def down_lines(self) -> list[str]:
         """Lines that lower the pen and wait for it."""
         if self.mode == "z":
@@ -328,24 +306,29 @@ class PenMotion:
         return float(m[1])
 
 
-def stroke_lines(points: np.ndarray, fmt: CoordinateFormat, pen: PenMotion, feed: float) -> list[str]:
+def stroke_lines(points: np.ndarray, fmt: CoordinateFormat, pen: PenMotion, feed: float, lift_first: bool = False) -> list[str]:
     """G-code of one stroke: travel to its start, pen down, ``G1`` along it at ``feed`` mm/min, pen up.
 
     ``points`` are integer device units (N, 2), N >= 1; a one-point stroke is a dot (pen down and up).
-    The ``F`` word rides on the stroke's first ``G1``.
+    The ``F`` word rides on the stroke's first ``G1``.  A joining pen (servo, :attr:`PenMotion.joins`) puts its
+    moves on the motion lines: ``lift_first`` prefixes the travel with the previous stroke's lift, the drop
+    leads the first ``G1``, and the stroke ends with the pen down (its lift rides on the next travel, or is
+    sent alone with :meth:`PenMotion.up_lines`).  Each line then runs whole or not at all, so GRBL never
+    rests with the pen down at a stroke's start, nor lifted at its end before the next travel.
     """
     pts = np.asarray(points).reshape(-1, 2)
     if len(pts) == 0:
         raise ConfigError("a stroke needs at least one point")
     xs, ys = fmt.format(pts[:, 0]), fmt.format(pts[:, 1])
     xy = np.char.add(np.char.add("X", xs), np.char.add(" Y", ys))
-    lines = [f"G0 {xy[0]}", *pen.down_lines()]
-    if len(pts) > 1:
-        draws = np.char.add("G1 ", xy[1:]).tolist()
+    draws = np.char.add("G1 ", xy[1:]).tolist()
+    if draws:
         draws[0] += f" F{number(feed)}"
-        lines += draws
-    lines += pen.up_lines()
-    return lines
+    if not pen.joins:
+        return [f"G0 {xy[0]}", *pen.down_lines(), *draws, *pen.up_lines()]
+    lift = " ".join(pen.up_lines()) + " " if lift_first else ""
+    drop = " ".join(pen.down_lines())
+    return [f"{lift}G0 {xy[0]}", *([f"{drop} {draws[0]}", *draws[1:]] if draws else [drop])]
 
 
 class CharacterCounter:

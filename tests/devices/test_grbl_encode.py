@@ -17,7 +17,6 @@ from pixelpen.devices.grbl_encode import (
     PenMotion,
     PathTrack,
     parse_code,
-    parse_modes,
     parse_status,
     parse_welcome,
     stroke_lines,
@@ -66,24 +65,25 @@ def test_bad_unit_is_refused(bad):
 
 # -- strokes ---------------------------------------------------------------------------------------
 def test_unit_square_gcode():
-    """A 10 mm square: travel G0, servo down + dwell, G1 moves with F on the first, servo up + dwell (plotters.md §3)."""
+    """A 10 mm square: travel G0; servo down + dwell on the first G1 (with F); the lift is left to the next travel."""
     square = np.array([[0, 0], [10000, 0], [10000, 10000], [0, 10000], [0, 0]])
     assert stroke_lines(square, CoordinateFormat(0.001), SERVO, 3000.0) == [
         "G0 X0.000 Y0.000",
-        "M3 S50", "G4 P0.15",
-        "G1 X10.000 Y0.000 F3000",
+        "M3 S50 G4 P0.15 G1 X10.000 Y0.000 F3000",
         "G1 X10.000 Y10.000",
         "G1 X0.000 Y10.000",
         "G1 X0.000 Y0.000",
-        "M3 S500", "G4 P0.15",
     ]
+    assert stroke_lines(square[:2], CoordinateFormat(0.001), SERVO, 3000.0, lift_first=True) == [
+        "M3 S500 G4 P0.15 G0 X0.000 Y0.000", "M3 S50 G4 P0.15 G1 X10.000 Y0.000 F3000"]
 
 
 def test_pen_lift_variants():
     fmt = CoordinateFormat(0.001)
     dot = np.array([[1500, 2500]])
-    assert stroke_lines(dot, fmt, PenMotion("servo", None, 90.0, 0.2, 0.1), 1200.5) == [
-        "G0 X1.500 Y2.500", "M3 S90", "G4 P0.1", "M5", "G4 P0.2"]
+    assert stroke_lines(dot, fmt, PenMotion("servo", None, 90.0, 0.2, 0.1), 1200.5, lift_first=True) == [
+        "M5 G4 P0.2 G0 X1.500 Y2.500", "M3 S90 G4 P0.1"]
+    # a Z pen's moves are motions themselves: they keep lines of their own, the lift ends the stroke
     assert stroke_lines(np.array([[0, 0], [1000, 0]]), fmt, PenMotion("z", 2.0, -0.5, 0.0, 0.0), 600.0) == [
         "G0 X0.000 Y0.000", "G1 Z-0.5 F600", "G4 P0", "G1 X1.000 Y0.000 F600", "G0 Z2", "G4 P0"]
 
@@ -212,17 +212,6 @@ def test_reply_numbers_are_ascii_digits_only():
         with pytest.raises(ParseError):
             parse_status(bad)
     assert parse_welcome("Grbl \u0661.1h ['$' for help]") is None
-
-
-def test_parser_state_report():
-    # commands.md $G example: [GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]
-    modes = parse_modes("[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]")
-    assert modes == {"G": 0.0, "M": 5.0, "T": 0.0, "F": 0.0, "S": 0.0}
-    assert parse_modes("[GC:G1 G54 G17 G21 G90 G94 M3 M9 T0 F3000 S50]")["G"] == 1.0
-    assert parse_modes("[GC:G38.2 G54 G17 G21 G90 G94 M4 M8 T2 F10.5 S1000]")["M"] == 4.0
-    for bad in ("GC:G0 M5 F0 S0", "[GC:G0 M5 F0]", "[GC:G0 M5 F0 S\u00b2]", "[GC:G0 M5 F0 S0 X]", "[GC:]"):
-        with pytest.raises(ParseError):
-            parse_modes(bad)
 
 
 def test_path_track_accepts_the_path_and_refuses_excursions():

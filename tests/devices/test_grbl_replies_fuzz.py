@@ -7,7 +7,7 @@ import pytest
 
 from pixelpen.clock import SimulatedClock
 from pixelpen.devices.grbl import GrblPlotter
-from pixelpen.devices.grbl_encode import parse_code, parse_modes, parse_status, parse_welcome
+from pixelpen.devices.grbl_encode import parse_code, parse_status, parse_welcome
 from pixelpen.errors import PixelpenError
 from pixelpen.vector.displaylist import DisplayList
 from tests.devices.test_grbl import MM, PROFILE, FakeGrbl
@@ -23,7 +23,7 @@ LINES = [
     b"[GC:G1 G54 G17 G21 G90 G94 M3 M9 T0 F3000 S50]", b"[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]",
     b"$100=80.000", b">G21:ok",
 ]
-"""Reply lines from gnea/grbl doc/markdown/interface.md and commands.md (status, acks, alarms, $G, $$)."""
+"""Reply lines from gnea/grbl doc/markdown/interface.md and commands.md (status, acks, alarms, messages, $$)."""
 
 
 def _text(data: bytes) -> str:
@@ -35,7 +35,7 @@ def parse_any_line(data: bytes) -> None:
     """Every pure parser on the mutated line."""
     line = _text(data)
     parse_welcome(line)
-    for parser in (parse_status, parse_code, parse_modes):
+    for parser in (parse_status, parse_code):
         try:
             parser(line)
         except PixelpenError:  # the clean refusal; anything else escapes to the campaign as a crash
