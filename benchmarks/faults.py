@@ -40,7 +40,7 @@ import numpy as np
 import pixelpen
 from pixelpen import cli
 from pixelpen.devices.plotter import PlotInterrupted, PositionUnknown
-from pixelpen.errors import PixelpenError, ProtocolError
+from pixelpen.errors import LinkError, PixelpenError, ProtocolError
 from pixelpen.sim.base import forget_simulator, named_simulator
 from pixelpen.vector.displaylist import DisplayList
 
@@ -277,7 +277,7 @@ def run_api(family: str, kind: str, at: int, dl: DisplayList, ref: DisplayList, 
                     out.faults.append(str(exc))
                     if family in REHOMES:  # the operator homes the machine, then confirms
                         d.go_home()
-                except (PlotInterrupted, ProtocolError) as exc:
+                except (PlotInterrupted, ProtocolError, LinkError) as exc:  # a reconnect that failed is tried again
                     out.faults.append(str(exc))
             else:
                 raise PixelpenError(f"not finished after {MAX_RESUMES} resumes")
