@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 import pixelpen
 from pixelpen.clock import SimulatedClock
 from pixelpen.devices.axidraw import AxiDrawPlotter
-from pixelpen.devices.plotter import PlotInterrupted, PositionUnknown
+from pixelpen.devices.plotter import DeviceWhere, PlotInterrupted, PlotterDisplay, PositionUnknown
 from pixelpen.drivers.link import Link
 from pixelpen.drivers.serial import SerialLink
 from pixelpen.errors import ConfigError, LinkError, ProtocolError, URLError
@@ -17,7 +19,7 @@ from pixelpen.sim.plotter import Paper
 from pixelpen.urls import parse_url
 from pixelpen.vector.displaylist import DisplayList
 from pixelpen.vector.profiles import load_profile
-from tests.devices.test_grbl import CLOSED_STROKE, HINTS, OPEN_STROKES, InkAccount, ink_account, needs_hints
+from tests.devices.test_grbl import CLOSED_STROKE, OPEN_STROKES, InkAccount, ink_account
 
 PROFILE = load_profile("axidraw_v3")
 STEPS = 80  # device units (motor steps at 16x) per millimetre
@@ -393,6 +395,12 @@ def test_button_pauses_at_pen_up_and_a_second_press_resumes():
 
 
 # -- resuming: compared as segment sets with the intended drawing -------------------------------------------
+HINTS = "reached" in {f.name for f in dataclasses.fields(DeviceWhere)} and hasattr(PlotterDisplay, "_pen_position")
+needs_hints = pytest.mark.skipif(not HINTS, reason="an EBB rests at every command boundary: telling a closed stroke's "
+                                 "start from its end, and the first travel, need DeviceWhere.reached and the base's use "
+                                 "of _pen_position (requested in notes/resume-interface-feedback.md)")
+
+
 def drawing_mm(strokes) -> DisplayList:
     return DisplayList.from_polylines([np.array(p, float) * STEPS for p in strokes], unit_mm=PROFILE.unit_mm)
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import re
 from dataclasses import dataclass
 
@@ -12,7 +11,7 @@ import pytest
 import pixelpen
 from pixelpen.clock import SimulatedClock
 from pixelpen.devices.grbl import GrblPlotter
-from pixelpen.devices.plotter import DeviceWhere, PlotInterrupted, PositionUnknown
+from pixelpen.devices.plotter import PlotInterrupted, PositionUnknown
 from pixelpen.drivers.link import Link
 from pixelpen.drivers.serial import SerialLink
 from pixelpen.errors import ConfigError, LinkTimeout, ProtocolError, URLError
@@ -500,9 +499,6 @@ def drawing_mm(strokes) -> DisplayList:
 
 RESUME_DRAWING = drawing_mm([*OPEN_STROKES[:3], CLOSED_STROKE, *OPEN_STROKES[3:]])
 """Open polylines, a closed square and a few acute corners, 6 strokes."""
-HINTS = {"drawing", "reached"} <= {f.name for f in dataclasses.fields(DeviceWhere)}
-needs_hints = pytest.mark.skipif(not HINTS, reason="closed strokes need DeviceWhere.drawing/reached in the base "
-                                 "(requested in notes/resume-interface-feedback.md): without them the resume asks")
 
 
 def intended(dl: DisplayList) -> list[np.ndarray]:
