@@ -138,7 +138,7 @@ def _coverage(spans: list[tuple[float, float]], length: float) -> tuple[float, f
 # -- drawings and devices -----------------------------------------------------------------------------
 
 
-def drawing(family: str, rng: np.random.Generator) -> DisplayList:
+def drawing(family: str, rng: np.random.Generator, strokes: int = STROKES) -> DisplayList:
     """A random drawing in the family's device units: open polylines and a few closed ones, no dots."""
     d = pixelpen.open(f"sim:{family}?speed=fast")
     try:
@@ -148,13 +148,13 @@ def drawing(family: str, rng: np.random.Generator) -> DisplayList:
     finally:
         d.close()
     polys = []
-    for i in range(STROKES):
+    for i in range(strokes):
         n = int(rng.integers(3 if i % 5 == 4 else 2, 7))
         pts = np.column_stack([rng.uniform(0.05, 0.95, n) * w, rng.uniform(0.05, 0.95, n) * h]).round()
         if i % 5 == 4:
             pts = np.vstack([pts, pts[:1]])  # closed
         polys.append(pts)
-    return DisplayList.from_polylines(polys, pens=[1 + i % pens for i in range(STROKES)] if pens > 1 else 1, unit_mm=unit)
+    return DisplayList.from_polylines(polys, pens=[1 + i % pens for i in range(strokes)] if pens > 1 else 1, unit_mm=unit)
 
 
 def write_svg(dl: DisplayList, path: Path) -> None:
@@ -355,7 +355,7 @@ Row = tuple[str, str, str]
 
 
 def campaign(families=FAMILIES, paths=PATHS, runs: int = 100, seed: int = 2026,
-             log: Callable[[str], None] = lambda s: None) -> dict[Row, Counter]:
+             log: Callable[[str], None] = lambda s: None, strokes: int = STROKES) -> dict[Row, Counter]:
     """Run ``runs`` scenarios per family and path (kinds in turn); counters per (family, path, kind)."""
     table: dict[Row, Counter] = defaultdict(Counter)
     rng = np.random.default_rng(seed)
@@ -368,7 +368,7 @@ def campaign(families=FAMILIES, paths=PATHS, runs: int = 100, seed: int = 2026,
                     if path == "cli" and kind == "pause":
                         kind = KINDS[(run + 1) % len(KINDS)]  # a CLI pause needs the operator's key: api only
                     row = table[(family, path, kind)]
-                    dl = drawing(family, rng)
+                    dl = drawing(family, rng, strokes)
                     ident = f"faults-{family}-{path}-{run}"
                     svg, state = Path(tmp, f"{ident}.svg"), Path(tmp, f"{ident}.state.json")
                     try:
@@ -418,9 +418,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--family", nargs="+", default=list(FAMILIES), choices=FAMILIES)
     ap.add_argument("--path", nargs="+", default=list(PATHS), choices=PATHS)
     ap.add_argument("--seed", type=int, default=2026)
+    ap.add_argument("--strokes", type=int, default=STROKES, help=f"strokes per random drawing (default {STROKES})")
     ap.add_argument("-v", "--verbose", action="store_true", help="print every scenario that was not clean")
     args = ap.parse_args(argv)
-    table = campaign(args.family, args.path, args.runs, args.seed, log=print if args.verbose else (lambda s: None))
+    table = campaign(args.family, args.path, args.runs, args.seed, log=print if args.verbose else (lambda s: None),
+                     strokes=args.strokes)
     print(format_table(table))
     return 0
 
