@@ -355,7 +355,8 @@ Row = tuple[str, str, str]
 
 
 def campaign(families=FAMILIES, paths=PATHS, runs: int = 100, seed: int = 2026,
-             log: Callable[[str], None] = lambda s: None, strokes: int = STROKES) -> dict[Row, Counter]:
+             log: Callable[[str], None] = lambda s: None, strokes: int = STROKES,
+             each: Callable[[dict[Row, Counter]], None] = lambda table: None) -> dict[Row, Counter]:
     """Run ``runs`` scenarios per family and path (kinds in turn); counters per (family, path, kind)."""
     table: dict[Row, Counter] = defaultdict(Counter)
     rng = np.random.default_rng(seed)
@@ -397,6 +398,7 @@ def campaign(families=FAMILIES, paths=PATHS, runs: int = 100, seed: int = 2026,
                     row["asked"] += out.asked
                     row["failed"] += out.failed is not None
                     n_runs += 1
+                    each(table)
                     if out.failed or out.tally.lost or out.tally.doubled or out.tally.stray:
                         log(f"{family} {path} {kind} at={locals().get('at')}: {out}")
     return table
@@ -420,9 +422,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=2026)
     ap.add_argument("--strokes", type=int, default=STROKES, help=f"strokes per random drawing (default {STROKES})")
     ap.add_argument("-v", "--verbose", action="store_true", help="print every scenario that was not clean")
+    ap.add_argument("--table", help="file the table so far is written to after every scenario")
     args = ap.parse_args(argv)
     table = campaign(args.family, args.path, args.runs, args.seed, log=print if args.verbose else (lambda s: None),
-                     strokes=args.strokes)
+                     strokes=args.strokes,
+                     each=(lambda t: Path(args.table).write_text(format_table(t) + "\n")) if args.table else (lambda t: None))
     print(format_table(table))
     return 0
 
