@@ -322,15 +322,13 @@ def run_cli(family: str, kind: str, at: int, svg: Path, ref: DisplayList, ident:
 
 def reference_cli(family: str, svg: Path, ident: str, state: Path) -> tuple[DisplayList, int]:
     """The uninterrupted CLI plot's paper and its host bytes (read from the simulator's counters)."""
-    device_bytes = []
     code, text = _main(["plot", str(svg), "--to", url(family, ident), "--state", str(state), "--no-optimize"])
     if code != 0:
-        raise PixelpenError(f"reference plot exit {code}: {text.strip()[-300:]}")
-    device = named_simulator(ident)
-    device_bytes.append(getattr(device, "stats").bytes_received)
+        raise PixelpenError(f"reference plot exit {code}: {_said(text)[-300:]}")
+    received = named_simulator(ident).stats.bytes_received
     paper = paper_of(ident)
     forget_simulator(ident)
-    return paper, device_bytes[0]
+    return paper, received
 
 
 def _said(text: str) -> str:
@@ -363,7 +361,6 @@ def campaign(families=FAMILIES, paths=PATHS, runs: int = 100, seed: int = 2026,
     with tempfile.TemporaryDirectory() as tmp:
         for family in families:
             for path in paths:
-                n_runs = 0
                 for run in range(runs):
                     kind = KINDS[run % len(KINDS)]
                     if path == "cli" and kind == "pause":
@@ -397,7 +394,6 @@ def campaign(families=FAMILIES, paths=PATHS, runs: int = 100, seed: int = 2026,
                     row["stray"] += out.tally.stray
                     row["asked"] += out.asked
                     row["failed"] += out.failed is not None
-                    n_runs += 1
                     each(table)
                     if out.failed or out.tally.lost or out.tally.doubled or out.tally.stray:
                         log(f"{family} {path} {kind} at={locals().get('at')}: {out}")
