@@ -43,6 +43,7 @@ from pixelpen.devices.plotter import PlotInterrupted, PositionUnknown
 from pixelpen.errors import LinkError, PixelpenError, ProtocolError
 from pixelpen.sim.base import forget_simulator, named_simulator
 from pixelpen.vector.displaylist import DisplayList
+from pixelpen.vector.simplify import simplify
 
 FAMILIES = ("hp7475a", "grbl", "axidraw")
 KINDS = ("drop", "stall", "corrupt", "power", "device_error", "pause")
@@ -83,9 +84,13 @@ def segments_of(dl: DisplayList) -> tuple[np.ndarray, np.ndarray]:
 
 
 def compare(ref: DisplayList, drawn: DisplayList, tol: float = TOL_MM) -> Tally:
-    """Lost, doubled and stray segments of ``drawn`` against ``ref`` (both from a simulator's paper)."""
-    rseg, rpen = segments_of(ref)
-    dseg, dpen = segments_of(drawn)
+    """Lost, doubled and stray segments of ``drawn`` against ``ref`` (both from a simulator's paper).
+
+    Both sheets are first simplified to within ``tol / 4`` (a simulator that inks a move as the points it
+    sampled along it, as the EBB one does, splits a line wherever its timing fell; the lines are the same).
+    """
+    rseg, rpen = segments_of(simplify(ref, tol / 4 / ref.unit_mm))
+    dseg, dpen = segments_of(simplify(drawn, tol / 4 / drawn.unit_mm))
     length = np.hypot(rseg[:, 2] - rseg[:, 0], rseg[:, 3] - rseg[:, 1])
     pieces: dict[int, list[tuple[float, float]]] = defaultdict(list)
     tally = Tally()
