@@ -2055,7 +2055,7 @@ def _parse_pens(value: str, stalls: int) -> tuple[str, ...]:
     return tuple(out)
 
 
-def create(model: str, *, clock: Clock | None = None, **options: str) -> HPGLPlotter:
+def create(model: str, /, *, clock: Clock | None = None, **options: str) -> HPGLPlotter:
     """Build the simulator of ``model`` (a key of MODELS) from URL options given as strings.
 
     Options: ``paper`` (a4, a3, letter/a, tabloid/b as the model has them), ``pens`` (comma-separated

@@ -619,6 +619,8 @@ def open_sim_port(
     An explicit ``clock`` wins over ``speed``.
     """
     transport, device_options = split_options(options, source or f"sim://{model}")
+    if "clock" in device_options:
+        raise URLError(f"{source or model}: unknown option 'clock' (set the simulator's time with speed=fast|real)")
     if device is None:
         device = create_simulator(model, clock=clock or transport.make_clock(), **device_options)
     elif device_options:

@@ -332,3 +332,19 @@ def test_an_unwritable_out_file_is_a_clear_error(tmp_path):
     port = SimPort(create_simulator("grbl", clock=clock), clock=clock, out=str(tmp_path / "no" / "such" / "dir.png"))
     with pytest.raises(ConfigError, match="cannot write the paper"):
         port.close()
+
+
+@pytest.mark.parametrize("url", ["sim:hp7475a?model=x", "sim://hp7475a?model=x", "sim:hp7475a?clock=1", "sim://grbl?clock=1"])
+def test_options_named_like_factory_parameters_are_unknown_options(url):
+    import pixelpen
+    from pixelpen.errors import URLError
+
+    with pytest.raises(URLError, match="unknown option"):
+        if url.startswith("sim://"):
+            import serial
+
+            import pixelpen.sim.urlhandler  # noqa: F401 - registers sim://
+
+            serial.serial_for_url(url, timeout=1).close()
+        else:
+            pixelpen.open(url).close()
