@@ -60,7 +60,7 @@ from ..display.kinds import VectorDisplay
 from ..drivers.link import Link
 from ..drivers.serial import SerialLink
 from ..errors import ConfigError, LinkError, ParseError, PixelpenError, ProtocolError, URLError
-from ..urls import DeviceURL, Options, format_url
+from ..urls import DeviceURL, Options, check_path, format_url
 from ..vector.displaylist import DisplayList
 from ..vector.motion import estimate_time
 from ..vector.profiles import DeviceProfile, load_profile
@@ -368,7 +368,7 @@ class PlotterDisplay(VectorDisplay):
         self.timeout = timeout if timeout is not None else (link.timeout_s if link else 8.0)
         self.clock = clock or REAL_CLOCK
         self._clock_given = clock is not None
-        self.state_file = Path(state_file) if state_file else None
+        self.state_file = check_path(state_file, "state_file") if state_file else None
         self._link_factory = link_factory
         self.on_progress = on_progress
         self.on_pen_change = on_pen_change
@@ -393,6 +393,8 @@ class PlotterDisplay(VectorDisplay):
         self._where_found: DeviceWhere | None = None
         """What ``_where()`` said on the last fresh link opened for a resume."""
         self._paused_now = False
+        self._left_as_set = False
+        """The last thing done was a manual action: closing leaves the pen and carriage where the user put them."""
         self._stopped_at: DeviceWhere | None = None
         """Where an interrupted job's device stopped, asked before the safe stop parked it."""
         self._damaged: range | None = None
@@ -421,7 +423,8 @@ class PlotterDisplay(VectorDisplay):
         return cls(
             port, profile=profile, paper=options.get("paper", str, None), baudrate=options.get("baud", int, None),
             flow=options.get("flow", _flow, None), timeout=options.get("timeout", float, None),
-            state_file=options.get("state", str, None), **cls.family_options(options, profile), **kwargs,  # type: ignore[arg-type]
+            state_file=kwargs.pop("state_file", None) or options.get("state", str, None),  # type: ignore[arg-type]
+            **cls.family_options(options, profile), **kwargs,  # type: ignore[arg-type]
         )
 
     @classmethod
@@ -461,7 +464,7 @@ class PlotterDisplay(VectorDisplay):
         if link is None:
             return
         try:
-            if not link.closed:
+            if not link.closed and not self._left_as_set:
                 self._make_safe_on(link)
         finally:
             link.close()
@@ -524,6 +527,7 @@ class PlotterDisplay(VectorDisplay):
         """
         if self.link is None:
             raise PixelpenError(f"{self.profile.name} is not open")
+        self._left_as_set = False
         pts = self._device_points(dl)
         start = self._start_job(dl, resume, pts, position_confirmed)
         self._head = None
@@ -794,6 +798,7 @@ class PlotterDisplay(VectorDisplay):
     def _manual(self, what: str) -> "PlotterDisplay":
         if self.link is None:
             raise PixelpenError(f"{self.profile.name} is not open ({what})")
+        self._left_as_set = True
         return self
 
     def _change_pen(self, pen: int) -> None:

@@ -331,3 +331,14 @@ def test_resuming_another_drawing_is_refused_naming_the_state_file_once(tmp_path
     text = str(info.value)
     assert text.count(str(state)) == 1 and text.count("plot.json") == 1
     assert "belongs to another drawing" in text
+
+
+def test_a_state_file_given_as_keyword_and_a_bad_state_name_are_clear(tmp_path):
+    import pixelpen
+    from pixelpen.errors import ConfigError
+
+    state = tmp_path / "job.json"
+    with pixelpen.open("sim:hp7475a?speed=fast", state_file=state) as display:
+        assert display.state_file == state
+    with pytest.raises(ConfigError, match="state"):
+        pixelpen.open("sim:hp7475a?speed=fast&state=a%00b")
