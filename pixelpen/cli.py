@@ -129,12 +129,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     logger.addHandler(handler)
     try:
         return int(args.func(args) or 0)
-    except PixelpenError as exc:
-        print(f"pixelpen {args.command}: error: {exc}", file=sys.stderr)
-        return 2
     except BrokenPipeError:  # output piped into `head` and the like: stop quietly
         sys.stderr.close()
         return 0
+    except (PixelpenError, OSError) as exc:  # pixelpen's, file and port errors: one line, exit status 2
+        print(f"pixelpen {args.command}: error: {exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print(f"pixelpen {args.command}: interrupted; devices were left safe", file=sys.stderr)
         return 130

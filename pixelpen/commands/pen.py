@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..errors import ConfigError, PixelpenError
+from ..errors import ConfigError
 from .plot import plotter_for
 
 ACTIONS = {
@@ -36,15 +36,6 @@ def run_pen(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_pen(args: argparse.Namespace) -> int:
-    """Run ``pixelpen pen``; pixelpen and port errors print one line and give exit status 2."""
-    try:
-        return run_pen(args)
-    except (PixelpenError, OSError) as exc:
-        print(f"pixelpen pen: error: {exc}", file=sys.stderr)
-        return 2
-
-
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``pixelpen pen`` to the ``pixelpen`` parser."""
     p = subparsers.add_parser(
@@ -55,4 +46,4 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("action", choices=list(ACTIONS), metavar="ACTION", help=", ".join(ACTIONS))
     p.add_argument("--to", required=True, metavar="URL", help="plotter URL: axidraw:auto, grbl:/dev/ttyUSB0, "
                    "sim:axidraw?id=NAME ... (default: the configuration file's)")
-    p.set_defaults(func=cmd_pen)
+    p.set_defaults(func=run_pen)

@@ -832,15 +832,6 @@ def run_plot(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_plot(args: argparse.Namespace) -> int:
-    """Run ``pixelpen plot``; pixelpen and file errors print one line and give exit status 2."""
-    try:
-        return run_plot(args)
-    except (PixelpenError, OSError) as exc:
-        print(f"pixelpen plot: error: {exc}", file=sys.stderr)
-        return 2
-
-
 def _non_negative_int(text: str) -> int:
     try:
         value = int(text)
@@ -938,7 +929,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="reconnect and resume up to N times after a link fault (default 2)")
     p.add_argument("--tolerance", type=_number(0.0, False), default=0.05, metavar="MM",
                    help="SVG curve flattening tolerance in mm (default 0.05)")
-    p.set_defaults(func=cmd_plot)
+    p.set_defaults(func=run_plot)
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -191,15 +191,6 @@ def _counters(device: WireDevice) -> str:
     return ", ".join(f"{k}={v:.3f}" if isinstance(v, float) else f"{k}={v}" for k, v in asdict(stats).items())
 
 
-def cmd_sim(args: argparse.Namespace) -> int:
-    """Run ``pixelpen sim``: pixelpen and file errors print one line and give exit status 2."""
-    try:
-        return run_sim(args)
-    except (PixelpenError, OSError) as exc:
-        print(f"pixelpen sim: error: {exc}", file=sys.stderr)
-        return 2
-
-
 def run_sim(args: argparse.Namespace) -> int:
     """The ``sim`` command's work (see the module docstring)."""
     if args.pty == (args.replay is not None):
@@ -245,4 +236,4 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="real time, or simulated time (default: fast for --replay, real for --pty)")
     p.add_argument("--option", action="append", metavar="KEY=VALUE",
                    help="simulator or line option, e.g. paper=a3, baud=19200, flow=xonxoff (repeatable)")
-    p.set_defaults(func=cmd_sim)
+    p.set_defaults(func=run_sim)

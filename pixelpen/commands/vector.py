@@ -10,26 +10,11 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
-from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import ConfigError, PixelpenError
+from ..errors import ConfigError
 from ..vector.displaylist import DisplayList
-
-
-def _guarded(name: str, run: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
-    """Wrap a command so that pixelpen and file errors print one line to stderr and give exit status 2."""
-
-    def func(args: argparse.Namespace) -> int:
-        try:
-            return run(args)
-        except (PixelpenError, OSError) as exc:
-            print(f"pixelpen {name}: error: {exc}", file=sys.stderr)
-            return 2
-
-    func.__doc__ = run.__doc__
-    return func
 
 
 def _positive(text: str) -> float:
@@ -194,7 +179,7 @@ def add_optimize(subparsers: argparse._SubParsersAction) -> argparse.ArgumentPar
                    help="keep lines drawn twice in one layer and pen (other layers and pens are never deduplicated)")
     p.add_argument("--across-layers", action="store_true", help="order paths across layers, not layer by layer")
     p.add_argument("--device", default=None, metavar="PROFILE", help="device profile for the time estimates")
-    p.set_defaults(func=_guarded("optimize", run_optimize))
+    p.set_defaults(func=run_optimize)
     return p
 
 
@@ -205,7 +190,7 @@ def add_stats(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser
     p.add_argument("--device", default=None, metavar="PROFILE",
                    help="device profile name or TOML path for the time estimate (default axidraw_v3)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    p.set_defaults(func=_guarded("stats", run_stats))
+    p.set_defaults(func=run_stats)
     return p
 
 
@@ -220,7 +205,7 @@ def add_preview(subparsers: argparse._SubParsersAction) -> argparse.ArgumentPars
     p.add_argument("--device", default=None, metavar="PROFILE",
                    help="dry run on this plotter: show the sheet, its hard-clip limits and what will be cut")
     p.add_argument("--paper", default=None, metavar="NAME", help="paper of the device profile (default its own)")
-    p.set_defaults(func=_guarded("preview", run_preview))
+    p.set_defaults(func=run_preview)
     return p
 
 

@@ -1,4 +1,4 @@
-"""Tests of the vector commands (optimize, stats, preview) run in-process through their argparse functions."""
+"""Tests of the vector commands (optimize, stats, preview), run in-process through the command line."""
 
 import argparse
 import json
@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from pixelpen.commands.vector import add_optimize, add_preview, add_stats, register
+from pixelpen.cli import main
+from pixelpen.commands.vector import add_optimize, add_preview, add_stats
 from pixelpen.vector.svgimport import read_svg
 
 SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="50mm" viewBox="0 0 100 50">
@@ -21,11 +22,7 @@ SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="50mm" vie
 
 
 def run(argv):
-    parser = argparse.ArgumentParser(prog="pixelpen")
-    sub = parser.add_subparsers(dest="command", required=True)
-    register(sub)
-    args = parser.parse_args(argv)
-    return args.func(args)
+    return main(argv)
 
 
 @pytest.fixture
@@ -200,6 +197,5 @@ def test_errors_give_status_2_and_one_line(tmp_path, drawing, capsys, argv_tail,
 
 
 def test_bad_option_values_are_rejected_by_argparse(drawing, capsys):
-    with pytest.raises(SystemExit) as info:
-        run(["optimize", str(drawing), "-o", "x.svg", "--merge", "-1"])
-    assert info.value.code == 2 and "expected a number > 0" in capsys.readouterr().err
+    assert run(["optimize", str(drawing), "-o", "x.svg", "--merge", "-1"]) == 2
+    assert "expected a number > 0" in capsys.readouterr().err
