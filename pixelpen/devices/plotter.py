@@ -132,6 +132,9 @@ class DeviceWhere:
     """Device units within which the position counts as on a vertex or a segment."""
     detail: str = ""
     """What the device said, for messages."""
+    reached: tuple[int, int] | None = None
+    """(stroke, k): acknowledgements prove the device ran at least to point k of the points given to ``_send_stroke``
+    for that stroke (k = 0: the pen-up travel to points[0]); None: no such lower bound."""
 
 
 @dataclass(frozen=True)
@@ -164,7 +167,8 @@ def locate(
     to the next stroke are one instruction); ``down_at_start``: it may rest with the pen down at a stroke's
     first point before drawing (False where lowering and drawing are one instruction).  A pen reported up
     rests only between strokes (the base lifts it nowhere else); a device that lifts by itself inside a
-    stroke must report ``pen_down=None``.
+    stroke must report ``pen_down=None``.  ``where.reached`` (stroke, k) drops every place before point k of that
+    stroke (in the window's points).
     """
     if where.position is None:
         return []
@@ -203,6 +207,9 @@ def locate(
                 elif down_ok:
                     found.append(ResumePoint(index, j, (float(q[0]), float(q[1]))))
         prev, prev_index = p[-1], index
+    if where.reached is not None:
+        floor = where.reached
+        found = [r for r in found if (r.stroke, r.vertex) >= floor]
     return _distinct(found, tol)
 
 
@@ -249,6 +256,8 @@ class PlotState:
     """Unconfirmed strokes after which the pen was lifted in place (None: unknown)."""
     stopped_at: list[float] | None = None
     """[x, y, pen down 1/0/-1 unknown, tolerance]: where the device stopped, asked before the safe stop parked it."""
+    start: list[float] | None = None
+    """[stroke, x, y]: the pen position before that stroke's travel, the first stroke of the run (None: unknown)."""
     version: int = STATE_VERSION
 
     def save(self, path: Path) -> None:
@@ -296,6 +305,12 @@ class PlotState:
         ):
             raise ParseError("plot state field 'stopped_at' is not [x, y, pen -1/0/1, tolerance]", source=str(path),
                              token=state.stopped_at)
+        if state.start is not None and not (
+            isinstance(state.start, list) and len(state.start) == 3
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in state.start)
+            and isinstance(state.start[0], int) and 0 <= state.start[0] <= state.strokes
+        ):
+            raise ParseError("plot state field 'start' is not [stroke, x, y]", source=str(path), token=state.start)
         if not isinstance(state.position_lost, bool):
             raise ParseError("plot state field 'position_lost' is not true or false", source=str(path), token=state.position_lost)
         return state
@@ -386,8 +401,10 @@ class PlotterDisplay(VectorDisplay):
         self._started = 0.0
         self._sent_end = 0
         """One past the last stroke whose bytes started going out."""
-        self._head: tuple[int, np.ndarray] | None = None
-        """The first stroke of a resumed run and the remainder of it that was sent."""
+        self._head: tuple[int, np.ndarray, ResumePoint] | None = None
+        """The first stroke of a resumed run, the remainder of it that was sent, and the point it resumed at."""
+        self._run_start: tuple[int, tuple[float, float]] | None = None
+        """The first stroke of the current run and the pen position before its travel (``_pen_position()``)."""
         self._interrupted = False
         self._position_lost = False
         self._where_found: DeviceWhere | None = None
@@ -541,7 +558,7 @@ class PlotterDisplay(VectorDisplay):
                 stroke = pts[dl.offsets[i] : dl.offsets[i + 1]]
                 if i == start.stroke and (rest := start.remainder(stroke)) is not None:
                     stroke = rest
-                    self._head = (i, rest)
+                    self._head = (i, rest, start)
                 self._sent_end = i + 1
                 self._send_stroke(i, stroke, pen)
                 self._poll()
@@ -604,6 +621,7 @@ class PlotterDisplay(VectorDisplay):
                                                 detail=f"stopped at {x:g},{y:g} (asked before the last session parked it)")
             sent = len(dl) if state.sent is None else state.sent
             self._job, self._head, self._job_state = dl, None, state  # a PositionUnknown below keeps the file current
+            self._run_start = None if state.start is None else (int(state.start[0]), (state.start[1], state.start[2]))
             self.confirmed = state.confirmed
             start = self._resume_point(dl, pts, state.confirmed, sent, position_confirmed)
         elif resume:
@@ -621,6 +639,9 @@ class PlotterDisplay(VectorDisplay):
         self._started = self.clock.now()
         self.confirmed = self._redo.start if self._redo else start.stroke
         self._sent_end = self.confirmed
+        at = self._pen_position()
+        self._run_start = None if at is None else (self.confirmed, (float(at[0]), float(at[1])))
+        self._job_state.start = None if at is None else [self.confirmed, float(at[0]), float(at[1])]
         self._save_state()
         return start
 
@@ -633,9 +654,14 @@ class PlotterDisplay(VectorDisplay):
                         self.profile.name, confirmed)
             return ResumePoint(confirmed)
         window = [(i, pts[dl.offsets[i] : dl.offsets[i + 1]]) for i in range(confirmed, sent)]
-        if self._head is not None and self._head[0] == confirmed and window:
-            window[0] = self._head
-        before = pts[dl.offsets[confirmed] - 1] if confirmed > 0 else None
+        head = self._head if self._head is not None and confirmed <= self._head[0] < sent else None
+        if head is not None:
+            window[head[0] - confirmed] = (head[0], head[1])  # the points sent, the frame of the device's answer
+        run = self._run_start
+        if run is not None and run[0] == confirmed:
+            before: np.ndarray | None = np.asarray(run[1], float)
+        else:
+            before = pts[dl.offsets[confirmed] - 1] if confirmed > 0 else None
         if where is not None and where.position_lost:
             self._position_lost = True
         lost = self._position_lost or where is None or not where.settled
@@ -644,18 +670,22 @@ class PlotterDisplay(VectorDisplay):
             window, where, before, down_at_start=self.rests_pen_down_at_start,
             lifts=(lambda s: True) if self.lifts_after_each_stroke or lifts is None else lifts.__contains__,
         )
+        if head is not None:
+            found = [_in_full_stroke(r, head[0], len(pts[dl.offsets[head[0]] : dl.offsets[head[0] + 1]]) - len(head[1]), head[2])
+                     for r in found]
         damaged, self._damaged = self._damaged, None
         self._redo = range(0)
+        first = max(confirmed, damaged.start) if damaged is not None else confirmed
         if damaged is not None and len(found) == 1 and not lost:
-            first = max(confirmed, damaged.start)
-            if found[0].stroke <= first:
+            if found[0].stroke < first or found[0] == ResumePoint(first):
                 return found[0]
             if found[0].stroke < damaged.stop:
-                return ResumePoint(first)
+                return ResumePoint(first)  # inside a damaged stroke: that stroke again from its start
             self._redo = range(first, damaged.stop)
             return found[0]
-        if damaged is not None and found:
-            found = [ResumePoint(max(confirmed, damaged.start))]  # draw the damaged strokes again, then on
+        if damaged is not None and not lost and where is not None and where.position is not None and (
+                not found or found[0].stroke >= first):
+            found = [ResumePoint(first)]  # off every stroke, or several places after the damage: redraw from it on
         if len(found) == 1 and not self._position_lost:
             return found[0]
         if confirmed_by_user:
@@ -853,6 +883,10 @@ class PlotterDisplay(VectorDisplay):
         """On a fresh link before ``_connect()``: let the device settle, say where it is (only if ``reports_position``)."""
         return DeviceWhere(None, None, position_lost=True, detail=f"the {self.profile.name} driver cannot ask where it stopped")
 
+    def _pen_position(self) -> tuple[float, float] | None:
+        """Where the pen will be once everything sent has run (device units), the next travel's start; None: unknown."""
+        return None
+
     def _manual_pen(self, down: bool) -> None:
         """Move the pen down or up now and wait until it is there."""
         raise ConfigError(f"{self.profile.name}: pen {'down' if down else 'up'} is not supported by this driver")
@@ -868,6 +902,15 @@ class PlotterDisplay(VectorDisplay):
     def _manual_motors_off(self) -> None:
         """De-energise the motors now."""
         raise ConfigError(f"{self.profile.name}: motors off is not supported by this driver")
+
+
+def _in_full_stroke(r: ResumePoint, stroke: int, offset: int, head: ResumePoint) -> ResumePoint:
+    """A place located in the remainder of ``stroke`` that was sent (from ``head``, ``offset`` points short) as one in the whole stroke."""
+    if r.stroke != stroke:
+        return r
+    if r.vertex == 0 and r.at is None:
+        return head  # nothing of the remainder drawn: where the last resume started
+    return ResumePoint(stroke, r.vertex + offset, r.at)
 
 
 def _pen_word(down: bool | None) -> str:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 
 import numpy as np
 import pytest
@@ -10,7 +9,7 @@ import pytest
 import pixelpen
 from pixelpen.clock import SimulatedClock
 from pixelpen.devices.axidraw import AxiDrawPlotter
-from pixelpen.devices.plotter import DeviceWhere, PlotInterrupted, PlotterDisplay, PositionUnknown
+from pixelpen.devices.plotter import PlotInterrupted, PositionUnknown
 from pixelpen.drivers.link import Link
 from pixelpen.drivers.serial import SerialLink
 from pixelpen.errors import ConfigError, LinkError, ProtocolError, URLError
@@ -395,10 +394,6 @@ def test_button_pauses_at_pen_up_and_a_second_press_resumes():
 
 
 # -- resuming: compared as segment sets with the intended drawing -------------------------------------------
-HINTS = "reached" in {f.name for f in dataclasses.fields(DeviceWhere)} and hasattr(PlotterDisplay, "_pen_position")
-needs_hints = pytest.mark.skipif(not HINTS, reason="an EBB rests at every command boundary: telling a closed stroke's "
-                                 "start from its end, and the first travel, need DeviceWhere.reached and the base's use "
-                                 "of _pen_position (requested in notes/resume-interface-feedback.md)")
 
 
 def drawing_mm(strokes) -> DisplayList:
@@ -424,17 +419,12 @@ def fault_points(seed: int, n: int, total: int, start: int = 100) -> list[int]:
 
 
 @pytest.mark.parametrize("strokes", [pytest.param(OPEN_STROKES, id="open"),
-                                     pytest.param([*OPEN_STROKES[:3], CLOSED_STROKE, *OPEN_STROKES[3:]], id="closed",
-                                                  marks=needs_hints)])
+                                     pytest.param([*OPEN_STROKES[:3], CLOSED_STROKE, *OPEN_STROKES[3:]], id="closed")])
 @pytest.mark.parametrize("fault", ["drop_after", "stall_after"])
 def test_resume_after_a_link_fault_draws_every_segment_once(fault, strokes):
-    """Drop or stall anywhere (mid-slice, mid-travel): the resume reads the step counters and goes on exactly.
-
-    Without the base's hints the job's first travel (from home to stroke 0) is not in the doubt window, so
-    the open case starts its faults a quarter into the plot; with them every byte is a candidate.
-    """
+    """Drop or stall anywhere (mid-slice, a travel, the first one from home, a closed stroke): the resume goes on exactly."""
     total = plotted_bytes(strokes)
-    points = fault_points(3 if fault == "drop_after" else 5, 6, total, start=100 if HINTS else total // 4)
+    points = fault_points(3 if fault == "drop_after" else 5, 6, total)
     interrupted = 0
     for at in points:
         dev, clock = new_sim()

@@ -51,7 +51,8 @@ def test_locate_reads_one_place(x, y, pen, expected):
     assert locate(WINDOW, where(x, y, pen), BEFORE) == [expected]
 
 
-@pytest.mark.parametrize("x, y, pen", [(15, 5, True), (5, 0.6, True), (50, 50, False), (3, 3, None)])
+@pytest.mark.parametrize("x, y, pen", [(15, 5, True), (5, 0.6, True), (50, 50, False), (3, 3, None),
+                                      (5, 0, False), (10, 5, False)])  # pen up inside a stroke: the base never lifts it there
 def test_locate_finds_nothing_off_the_strokes_and_their_travels(x, y, pen):
     assert locate(WINDOW, where(x, y, pen), BEFORE) == []
 
@@ -90,6 +91,23 @@ def test_a_path_through_its_own_line_is_ambiguous_where_it_crosses():
     assert found == [ResumePoint(0, 0, (5.0, 0.0)), ResumePoint(0, 3, (5.0, 0.0))]
 
 
+def test_acknowledgements_rule_out_what_came_before_them():
+    loop = np.array([[0, 0], [10, 0], [10, 10], [0, 0]])
+    up_at_start = DeviceWhere((0, 0), False, reached=(3, 3))  # the move back to the start was acknowledged
+    assert locate([(3, loop)], up_at_start, np.array([50, 50])) == [ResumePoint(4)]
+    # k = 0 is only the travel: that proves nothing about the pen, so the closed stroke still has two readings
+    assert locate([(3, loop)], DeviceWhere((0, 0), False, reached=(3, 0)), np.array([50, 50])) == [ResumePoint(3), ResumePoint(4)]
+    cross = np.array([[0, 0], [10, 0], [10, 10], [5, 10], [5, -10]])
+    assert locate([(0, cross)], DeviceWhere((5, 0), True, reached=(0, 3)), None) == [ResumePoint(0, 3, (5.0, 0.0))]
+    assert locate([(0, cross)], DeviceWhere((5, 0), True, reached=(0, 1)), None) == [ResumePoint(0, 3, (5.0, 0.0))]
+    assert locate([(0, cross)], DeviceWhere((5, 0), True, reached=(0, 0)), None) == [
+        ResumePoint(0, 0, (5.0, 0.0)), ResumePoint(0, 3, (5.0, 0.0))]
+    # at a vertex it acknowledged, or past it: still there; behind everything it acknowledged: nowhere
+    assert locate(WINDOW, DeviceWhere((10, 0), True, reached=(5, 1)), BEFORE) == [ResumePoint(5, 1)]
+    assert locate(WINDOW, DeviceWhere((10, 10), True, reached=(6, 0)), BEFORE) == [ResumePoint(6)]
+    assert locate(WINDOW, DeviceWhere((-5, -5), False, reached=(5, 1)), BEFORE) == []
+
+
 def test_no_position_locates_nothing():
     assert locate(WINDOW, DeviceWhere(None, None), BEFORE) == []
 
@@ -114,7 +132,8 @@ def test_a_version_1_state_file_still_loads_with_every_unconfirmed_stroke_in_dou
 @pytest.mark.parametrize(
     "fields, message",
     [({"sent": 9}, "'sent' is out of range"), ({"sent": 1}, "'sent' is out of range"),
-     ({"position_lost": "yes"}, "'position_lost' is not true or false"), ({"version": 3}, "not a version-2")],
+     ({"position_lost": "yes"}, "'position_lost' is not true or false"), ({"version": 3}, "not a version-2"),
+     ({"start": [9, 0, 0]}, "'start' is not"), ({"start": [1.5, 0, 0]}, "'start' is not"), ({"start": [0, 1]}, "'start' is not")],
 )
 def test_bad_state_fields_are_named(tmp_path, fields, message):
     path = tmp_path / "s.json"
@@ -150,38 +169,57 @@ class NullLink(Link):
 
 
 class FakePlotter(PlotterDisplay):
-    """A device that draws what it is sent at once, until a cut after ``budget`` units of pen-down travel.
+    """A device that draws what it is sent at once, until a cut after each of ``budget`` units of pen-down travel.
 
-    At the cut it stops mid-segment (pen down) and the link fails; ``answer`` is what ``_where`` reports.
+    At a cut it stops mid-segment (pen down) and the link fails; ``_where`` reports the position and, as
+    ``reached``, the last point of the sent stroke it got to (its acknowledgements).  ``cut_travel``: the travel
+    to that stroke stops half way instead; ``skip``: that stroke's first segment is not inked and the device
+    reports the stroke damaged at the next cut.
     """
 
     reports_position = True
 
-    def __init__(self, budget=None, tell=True, **kw) -> None:
+    def __init__(self, budget=None, tell=True, *, home=(0.0, 0.0), cut_travel=None, skip=None, **kw) -> None:
         clock = SimulatedClock()
         super().__init__("fake", profile=load_profile("hp7475a"), clock=clock, link_factory=lambda: NullLink(clock), **kw)
-        self.budget, self.tell = budget, tell
+        self.budgets = [] if budget is None else [float(b) for b in np.atleast_1d(budget)]
+        self.tell, self.cut_travel, self.skip = tell, cut_travel, skip
         self.inked: list[tuple[float, float, float, float, int]] = []
-        self.pos, self.down, self.lost = (0.0, 0.0), False, False
+        self.pos, self.down, self.lost = tuple(map(float, home)), False, False
+        self.reached: tuple[int, int] | None = None
         self.unconfirmed = 0
 
     def _connect(self):
         pass
 
+    def _pen_position(self):
+        return self.pos
+
+    def _cut(self, index):
+        if self.skip is not None and index >= self.skip:
+            self._mark_damaged(range(self.skip, self.skip + 1))
+            self.skip = None
+        raise Disconnected("fake: cable pulled")
+
     def _send_stroke(self, index, points, pen):
         p = points.astype(float)
-        self.pos, self.down = tuple(p[0]), True
-        for a, b in zip(p[:-1], p[1:]):
+        if index == self.cut_travel:
+            self.cut_travel = None
+            self.pos, self.down = tuple((np.asarray(self.pos) + p[0]) / 2), False
+            self._cut(index)
+        self.pos, self.down, self.reached = tuple(p[0]), True, (index, 0)
+        for k, (a, b) in enumerate(zip(p[:-1], p[1:]), start=1):
             step = float(np.hypot(*(b - a)))
-            if self.budget is not None and step > self.budget:
-                cut = a + (b - a) * self.budget / step
+            if self.budgets and step > self.budgets[0]:
+                cut = a + (b - a) * self.budgets.pop(0) / step
                 self.inked.append((*a, *cut, pen))
-                self.pos, self.budget = tuple(cut), None
-                raise Disconnected("fake: cable pulled")
-            if self.budget is not None:
-                self.budget -= step
-            self.inked.append((*a, *b, pen))
-            self.pos = tuple(b)
+                self.pos = tuple(cut)
+                self._cut(index)
+            if self.budgets:
+                self.budgets[0] -= step
+            if not (index == self.skip and k == 1):
+                self.inked.append((*a, *b, pen))
+            self.pos, self.reached = tuple(b), (index, k)
         self.down = False
         self.unconfirmed = index + 1  # confirmed only at a drain: everything since is in doubt
 
@@ -203,7 +241,7 @@ class FakePlotter(PlotterDisplay):
     def _where(self):
         if not self.tell:
             return super()._where()
-        return DeviceWhere(self.pos, self.down, position_lost=self.lost)
+        return DeviceWhere(self.pos, self.down, position_lost=self.lost, reached=self.reached)
 
     def sheet(self) -> DisplayList:
         return DisplayList.from_polylines([np.array([s[:2], s[2:4]]) for s in self.inked],
@@ -235,6 +273,90 @@ def test_a_cut_anywhere_resumes_with_the_rest_of_the_stroke_and_nothing_twice():
         d.resume_after_fault()
         assert compare(ref, d.sheet()) == Tally(), f"cut after {budget:.0f} units"
         assert d.confirmed == len(dl)
+
+
+def test_two_cuts_in_one_stroke_resume_the_remainder_in_the_whole_stroke():
+    # the second cut is located in the remainder that was sent: its place must be read back in the whole stroke
+    dl = DisplayList.from_polylines([np.array([[100, 100], [900, 100], [900, 900], [100, 900], [100, 300]], float),
+                                     np.array([[2000, 2000], [2500, 2000]], float)], pens=1, unit_mm=0.02488)
+    ref = _reference(dl)
+    for budgets in ([300.0, 400.0], [300.0, 500.0], [800.0, 1000.0], [900.0, 50.0]):
+        d = FakePlotter(budget=budgets)
+        d.open()
+        with pytest.raises(PlotInterrupted):
+            d.plot(dl)
+        with pytest.raises(PlotInterrupted):
+            d.resume_after_fault()
+        d.resume_after_fault()
+        assert compare(ref, d.sheet()) == Tally(), f"cuts after {budgets}"
+        assert d.confirmed == len(dl)
+
+
+def test_a_stop_on_the_first_travel_is_read_from_where_the_job_started():
+    dl = _job()
+    ref = _reference(dl)
+    d = FakePlotter(home=(-400.0, 3000.0), cut_travel=0)
+    d.open()
+    with pytest.raises(PlotInterrupted):
+        d.plot(dl)
+    d.resume_after_fault()  # half way along the travel from home: nothing drawn yet, no question
+    assert compare(ref, d.sheet()) == Tally() and d.confirmed == len(dl)
+
+
+def test_the_first_travel_from_a_state_file_in_a_new_session(tmp_path):
+    dl = _job()
+    ref = _reference(dl)
+    state = tmp_path / "plot.json"
+    d = FakePlotter(home=(-400.0, 3000.0), cut_travel=0, state_file=state)
+    d.open()
+    with pytest.raises(PlotInterrupted):
+        d.plot(dl)
+    assert PlotState.load(state).start == [0, -400.0, 3000.0]
+    later = FakePlotter(state_file=state)  # a new process: the device still stands half way along the travel
+    later.pos = d.pos
+    later.open()
+    later.plot(dl, resume=True)
+    later.inked[:0] = d.inked
+    assert compare(ref, later.sheet()) == Tally() and later.confirmed == len(dl)
+
+
+def test_a_damaged_stroke_is_drawn_again_from_its_start_when_the_stop_is_inside_it():
+    dl = _job()
+    ref = _reference(dl)
+    lengths = [np.hypot(*np.diff(p, axis=0).T) for p in dl.strokes()]
+    budget = float(sum(length.sum() for length in lengths[:3]) + lengths[3][0] + lengths[3][1] / 2)
+    d = FakePlotter(budget=budget, skip=3)  # segment 0 of stroke 3 never inked; the stop is half way along segment 1
+    d.open()
+    with pytest.raises(PlotInterrupted):
+        d.plot(dl)
+    d.resume_after_fault()
+    tally = compare(ref, d.sheet())
+    assert tally.lost == 0 and tally.stray == 0 and tally.doubled > 0  # the good part of stroke 3 twice, nothing lost
+
+
+def test_a_damaged_stroke_with_the_device_off_every_stroke_resumes_at_the_damage():
+    class OffPath(FakePlotter):
+        def _cut(self, index):
+            self.pos, self.down = (6999.0, 99.0), False  # held on a corrupted leg, away from every stroke
+            super()._cut(index)
+
+    dl = _job()
+    ref = _reference(dl)
+    for damaged in (0, 2, 4):
+        d = OffPath(cut_travel=damaged + 1, skip=damaged)
+        d.open()
+        with pytest.raises(PlotInterrupted):
+            d.plot(dl)
+        d.resume_after_fault()  # known position, on no stroke: redraw from the damaged stroke on, no question
+        tally = compare(ref, d.sheet())
+        assert tally.lost == 0 and tally.stray == 0, f"damaged {damaged}"
+        assert d.confirmed == len(dl)
+    d = OffPath(cut_travel=3)  # nothing damaged: the same stop is a question, not a guess
+    d.open()
+    with pytest.raises(PlotInterrupted):
+        d.plot(dl)
+    with pytest.raises(PositionUnknown, match="on none of the strokes"):
+        d.resume_after_fault()
 
 
 def test_a_device_that_cannot_tell_makes_the_resume_ask_and_the_confirmed_resume_redraws():
