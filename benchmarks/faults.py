@@ -5,16 +5,19 @@ error, pause) a random drawing is plotted on a named simulator (``sim:FAMILY?spe
 the fault in the URL (``drop_after=N``, ``stall_after=N``, ``corrupt_at=N``, ``power_loss_after=N``,
 ``pause_after=N``; N uniform over the bytes of the uninterrupted plot).  After the fault the operator's
 part is played (power back on, the cable fixed: the resume uses the URL without the fault; after a
-PositionUnknown on GRBL and AxiDraw the machine is homed with ``go_home()`` / ``pixelpen pen home``) and the plot
-is resumed — through ``resume_after_fault()`` (path ``api``) or through ``pixelpen plot --resume`` run
-in process with a state file (path ``cli``; ``--no-optimize``, so that the reference plot and the
-interrupted one plan the same strokes).  A resume that answers PositionUnknown counts as
-``asked``; it is then resumed with ``position_confirmed=True`` (``--confirm-position``) and checked too.
+PositionUnknown on GRBL and AxiDraw the carriage is put home, :func:`rehome`: ``go_home()`` / ``pixelpen pen
+home`` while the step counters are right, after a power loss pushed home by hand with the pen up, on an
+AxiDraw after ``motors-off``) and the plot is resumed — through ``resume_after_fault()`` (path ``api``) or
+through ``pixelpen plot --resume`` run in process with a state file (path ``cli``; ``--no-optimize``, so
+that the reference plot and the interrupted one plan the same strokes).  A resume that answers
+PositionUnknown counts as ``asked``; it is then resumed with ``position_confirmed=True``
+(``--confirm-position``) and checked too.
 
-The simulator's paper is compared with the uninterrupted plot's AS SEGMENT SETS (see :func:`compare`):
-``lost`` reference segments not fully covered, ``doubled`` reference segments covered more than once
-over more than ``TOL_MM``, ``stray`` drawn pieces on no reference segment of their pen.  A scenario
-that neither finishes nor asks counts as ``failed`` (with its error).
+The simulator's paper is compared with the intended drawing AS SEGMENT SETS (see :func:`compare`; path
+``cli``: the uninterrupted plot's paper, as the CLI places the SVG on its page; either must match the
+uninterrupted plot exactly, else the scenario fails): ``lost`` intended segments not fully covered,
+``doubled`` segments covered more than once over more than ``TOL_MM``, ``stray`` drawn pieces on no
+segment of their pen.  A scenario that neither finishes nor asks counts as ``failed`` (with its error).
 
     python3 benchmarks/faults.py [--runs 100] [--family hp7475a ...] [--path api cli] [--seed 2026]
 
@@ -83,31 +86,36 @@ def segments_of(dl: DisplayList) -> tuple[np.ndarray, np.ndarray]:
     return np.hstack([pts[idx], pts[idx + 1]]), dl.pens[stroke].astype(int)
 
 
-def compare(ref: DisplayList, drawn: DisplayList, tol: float = TOL_MM) -> Tally:
-    """Lost, doubled and stray segments of ``drawn`` against ``ref`` (both from a simulator's paper).
+def compare(intended: DisplayList, drawn: DisplayList, tol: float = TOL_MM) -> Tally:
+    """Lost, doubled and stray segments of a simulator's paper ``drawn`` against the ``intended`` drawing.
 
-    Both sheets are first simplified to within ``tol / 4`` (a simulator that inks a move as the points it
-    sampled along it, as the EBB one does, splits a line wherever its timing fell; the lines are the same).
+    The paper is first simplified to within ``tol / 4`` (a simulator that inks a move as the points it sampled
+    along it, as the EBB one does, splits a line wherever its timing fell).  A drawn piece lies on a segment of
+    its pen when both its ends are within ``tol`` of it; of several (a corner, a path along itself) it is
+    credited to the nearest (largest end distance, within ``tol / 4``), then the most parallel in its drawing
+    direction, then the one with the least ink so far.
     """
-    rseg, rpen = segments_of(simplify(ref, tol / 4 / ref.unit_mm))
+    rseg, rpen = segments_of(intended)
     dseg, dpen = segments_of(simplify(drawn, tol / 4 / drawn.unit_mm))
+    keep = np.hypot(rseg[:, 2] - rseg[:, 0], rseg[:, 3] - rseg[:, 1]) > 1e-9
+    rseg, rpen = rseg[keep], rpen[keep]
     length = np.hypot(rseg[:, 2] - rseg[:, 0], rseg[:, 3] - rseg[:, 1])
+    unit = (rseg[:, 2:] - rseg[:, :2]) / length[:, None]
     pieces: dict[int, list[tuple[float, float]]] = defaultdict(list)
     tally = Tally()
     for seg, pen in zip(dseg, dpen):
-        t = _on(seg[:2], rseg, length, tol) & _on(seg[2:], rseg, length, tol) & (rpen == pen)
-        hits = np.flatnonzero(t)
+        off = np.maximum(_distance(seg[:2], rseg, length), _distance(seg[2:], rseg, length))
+        hits = np.flatnonzero((off <= tol) & (rpen == pen))
         if not len(hits):
             tally.stray += 1
             continue
-        # several reference segments hold it where the drawing runs (nearly) along itself: take one it lies on
-        # exactly, then the copy with the least ink so far, then the nearest
-        off = np.maximum(_distance(seg[:2], rseg[hits], length[hits]), _distance(seg[2:], rseg[hits], length[hits]))
-        k = int(hits[min(range(len(hits)), key=lambda i: (off[i] > 1e-6, len(pieces[hits[i]]), off[i]))])
-        a, d = rseg[k, :2], rseg[k, 2:] - rseg[k, :2]
-        t0, t1 = sorted(float((p - a) @ d) / max(length[k], 1e-12) for p in (seg[:2], seg[2:]))
-        if t1 - t0 > tol / 4 or length[k] <= tol:
-            pieces[k].append((t0, t1))
+        hits = hits[off[hits] <= off[hits].min() + tol / 4]
+        way = seg[2:] - seg[:2]
+        along = unit[hits] @ (way / max(float(np.hypot(*way)), 1e-12))
+        k = int(hits[min(range(len(hits)), key=lambda i: (-round(float(along[i]), 3), len(pieces[hits[i]])))])
+        a = rseg[k, :2]
+        t0, t1 = sorted(float((p - a) @ unit[k]) for p in (seg[:2], seg[2:]))
+        pieces[k].append((t0, t1))
     for k in range(len(rseg)):
         covered, total, gap = _coverage(sorted(pieces.get(k, [])), float(length[k]))
         tally.lost += gap > tol
@@ -120,11 +128,6 @@ def _distance(p: np.ndarray, seg: np.ndarray, length: np.ndarray) -> np.ndarray:
     a, d = seg[:, :2], seg[:, 2:] - seg[:, :2]
     t = np.clip(((p - a) * d).sum(1) / np.maximum(length * length, 1e-12), 0, 1)
     return np.hypot(*(a + t[:, None] * d - p).T)
-
-
-def _on(p: np.ndarray, seg: np.ndarray, length: np.ndarray, tol: float) -> np.ndarray:
-    """Which segments pass within ``tol`` of point p."""
-    return _distance(p, seg, length) <= tol
 
 
 def _coverage(spans: list[tuple[float, float]], length: float) -> tuple[float, float, float]:
@@ -196,6 +199,28 @@ REHOMES = ("grbl", "axidraw")
 """Families whose lost position the operator restores by homing before confirming (HP-GL homes at power-up)."""
 
 
+MANUAL = {"up": "pen_up", "home": "go_home", "motors-off": "motors_off"}
+"""``pixelpen pen ACTION`` -> the display's method."""
+
+
+def rehome(family: str, kind: str, ident: str, pen: Callable[[str], None]) -> None:
+    """After PositionUnknown: the operator puts the carriage where the driver's home is, then confirms.
+
+    ``pen(action)`` is ``pixelpen pen ACTION`` (API: the display's method).  The counters survived (every
+    fault but power): ``home``.  Power lost: GRBL with homing switches ($22=1) homes with ``$H`` (``home``);
+    without, the operator lifts the pen and pushes the carriage to the origin by hand (the simulator's
+    ``push_carriage_home``); an AxiDraw's carriage is pushed home after ``motors-off`` (as its manual says).
+    """
+    device = named_simulator(ident)
+    if kind != "power" or (family == "grbl" and device.settings.get(22)):
+        pen("home")
+        return
+    pen("up")
+    if family == "axidraw":
+        pen("motors-off")
+    device.push_carriage_home()
+
+
 def release(family: str, ident: str) -> None:
     """The operator ends a device pause (VIEW pressed again, PRG button released, cycle start)."""
     device = named_simulator(ident)
@@ -259,7 +284,7 @@ def reference_api(family: str, dl: DisplayList, ident: str) -> tuple[DisplayList
     return paper, sent
 
 
-def run_api(family: str, kind: str, at: int, dl: DisplayList, ref: DisplayList, ident: str) -> Outcome:
+def run_api(family: str, kind: str, at: int, dl: DisplayList, ident: str) -> Outcome:
     """Plot with the fault, resume through resume_after_fault(), compare."""
     out = Outcome()
     d = pixelpen.open(url(family, ident, f"{FAULT_OPTION[kind]}={at}"),
@@ -281,7 +306,7 @@ def run_api(family: str, kind: str, at: int, dl: DisplayList, ref: DisplayList, 
                     out.asked = confirmed = True
                     out.faults.append(str(exc))
                     if family in REHOMES:  # the operator homes the machine, then confirms
-                        d.go_home()
+                        rehome(family, kind, ident, lambda action: getattr(d, MANUAL[action])())
                 except (PlotInterrupted, ProtocolError, LinkError) as exc:  # a reconnect that failed is tried again
                     out.faults.append(str(exc))
             else:
@@ -289,11 +314,11 @@ def run_api(family: str, kind: str, at: int, dl: DisplayList, ref: DisplayList, 
     finally:
         with contextlib.suppress(Exception):
             d.close()
-    out.tally = compare(ref, paper_of(ident))
+    out.tally = compare(dl, paper_of(ident))
     return out
 
 
-def run_cli(family: str, kind: str, at: int, svg: Path, ref: DisplayList, ident: str, state: Path) -> Outcome:
+def run_cli(family: str, kind: str, at: int, svg: Path, dl: DisplayList, ident: str, state: Path) -> Outcome:
     """Plot with the fault through ``pixelpen plot``, then ``--resume`` (and ``--confirm-position`` if asked), compare."""
     out = Outcome()
     base = ["plot", str(svg), "--state", str(state), "--retries", "0", "--no-optimize"]
@@ -314,15 +339,20 @@ def run_cli(family: str, kind: str, at: int, svg: Path, ref: DisplayList, ident:
                 out.asked = True
                 extra = ["--confirm-position"]
                 if family in REHOMES:  # the operator homes the machine, then confirms
-                    home, said = _main(["pen", "home", "--to", url(family, ident)])
-                    if home != 0:
-                        raise PixelpenError(f"pixelpen pen home exit {home}: {_said(said)[-300:]}")
+                    rehome(family, kind, ident, lambda action: _pen(family, ident, action))
             elif code != 3:
                 raise PixelpenError(f"resume exit {code}: {text.strip()[-300:]}")
         else:
             raise PixelpenError(f"not finished after {MAX_RESUMES} resumes")
-    out.tally = compare(ref, paper_of(ident))
+    out.tally = compare(dl, paper_of(ident))
     return out
+
+
+def _pen(family: str, ident: str, action: str) -> None:
+    """``pixelpen pen ACTION --to URL`` in process."""
+    code, said = _main(["pen", action, "--to", url(family, ident)])
+    if code != 0:
+        raise PixelpenError(f"pixelpen pen {action} exit {code}: {_said(said)[-300:]}")
 
 
 def reference_cli(family: str, svg: Path, ident: str, state: Path) -> tuple[DisplayList, int]:
@@ -382,11 +412,15 @@ def campaign(families=FAMILIES, paths=PATHS, runs: int = 100, seed: int = 2026,
                                 write_svg(dl, svg)
                                 ref, total = reference_cli(family, svg, ident, state)
                                 state.unlink(missing_ok=True)
+                            # the CLI places the SVG on its page: there the intended drawing is the reference paper
+                            intended = dl if path == "api" else simplify(ref, TOL_MM / 4 / ref.unit_mm)
+                            if compare(intended, ref) != Tally():
+                                raise PixelpenError(f"the uninterrupted plot differs from the drawing: {compare(intended, ref)}")
                             at = int(rng.integers(min(60, total // 4), max(61, total - 10)))
                             if kind == "device_error":
                                 at = int(rng.integers(total // 4, max(total // 4 + 1, total - 10)))
-                            out = (run_api(family, kind, at, dl, ref, ident) if path == "api"
-                                   else run_cli(family, kind, at, svg, ref, ident, state))
+                            out = (run_api(family, kind, at, dl, ident) if path == "api"
+                                   else run_cli(family, kind, at, svg, intended, ident, state))
                     except (_Timeout, Exception) as exc:  # a campaign reports every failure, whatever it is
                         out = Outcome(failed=f"{type(exc).__name__}: {exc}")
                     finally:

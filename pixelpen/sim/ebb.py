@@ -302,6 +302,20 @@ class EbbSimulator:
         self._split_ink(self._now)
         return self._paper
 
+    def push_carriage_home(self) -> None:
+        """The operator pushes the carriage by hand to the home corner (0, 0) with the motors unpowered, pen up.
+
+        A physical act: the board does not see it, its step counters stay as they were (a motion command it
+        runs meanwhile counts steps the unpowered motors do not make).  Refused while powered motors hold
+        the carriage, or with the pen on the paper.
+        """
+        self._catch_up()
+        if self._vplus >= 6.0 and any(self._motors_enabled(self._now)):
+            raise ConfigError(f"{self.model}: the energised motors hold the carriage: switch them off (EM,0,0) first")
+        if self._contact(self._now):
+            raise ConfigError(f"{self.model}: lift the pen before pushing the carriage (it would draw)")
+        self._xy = np.zeros(2)
+
     @property
     def syntax(self) -> str:
         """Current response syntax: 'legacy' or 'future'."""

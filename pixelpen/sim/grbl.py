@@ -264,6 +264,19 @@ class GrblSimulator:
         self._catch_up()
         return self._current_mpos()
 
+    def push_carriage_home(self) -> None:
+        """The operator pushes the stopped carriage by hand to the machine origin (where ``$H`` would leave it).
+
+        A physical act, not a command: GRBL does not see it, its machine position stays what it was (after a
+        power-up that is 0, so the two agree again).  Refused while the machine moves or the pen is down.
+        """
+        self._catch_up()
+        if self._state_kind() not in ("idle", "alarm", "sleep"):
+            raise ConfigError(f"grbl: the carriage cannot be pushed while the machine is {self._state_name()}")
+        if self.paper.pen_is_down:
+            raise ConfigError("grbl: lift the pen before pushing the carriage (it would draw)")
+        self._phys_offset[:2] = -self._mpos[:2]
+
     def paper_image(self, dpi: float = 96.0) -> Canvas:
         """The paper with everything drawn so far, as an RGB Canvas."""
         return self.paper.paper_image(dpi)

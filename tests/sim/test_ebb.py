@@ -488,3 +488,21 @@ def test_end_to_end_through_the_sim_url():
         assert port.readline() == b"\rOK\r\n"
     finally:
         port.close()
+
+
+def test_pushing_the_carriage_home_needs_unpowered_motors_and_leaves_the_counters():
+    """The operator's push moves the carriage, not the step counters the board reports (QS)."""
+    rig = Rig()
+    rig.send("EM,1,1\rXM,500,800,800\r")
+    rig.until_idle()
+    with pytest.raises(ConfigError, match="energised motors hold the carriage"):
+        rig.dev.push_carriage_home()
+    rig.dev.inject("power-loss")
+    before = rig.dev.paper.strokes()
+    rig.dev.push_carriage_home()
+    assert np.allclose(rig.dev.position_mm, [0, 0]) and rig.dev.paper.strokes() == before
+    assert rig.send("QS\r") == b"1600,0\n\rOK\r\n"  # XM,500,800,800: motor 1 = A + B, motor 2 = A - B
+    rig.send("EM,0,0\rSP,0,100\r")
+    rig.until_idle()
+    with pytest.raises(ConfigError, match="lift the pen"):
+        rig.dev.push_carriage_home()

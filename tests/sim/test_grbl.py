@@ -463,3 +463,29 @@ def test_end_to_end_through_the_sim_url():
         assert port.readline() == b"ok\r\n"  # the dwell answers once the 1 s move is done
     finally:
         port.close()
+
+
+def test_pushing_the_carriage_home_by_hand_realigns_it_with_a_rebooted_controller():
+    """After a power loss GRBL reads MPos 0 where the carriage stopped; the operator's push puts it at 0 too."""
+    rig = Rig()
+    rig.send("G0X50Y20\n")
+    rig.run(0.1)
+    with pytest.raises(ConfigError, match="while the machine is Run"):
+        rig.dev.push_carriage_home()
+    rig.until_idle()
+    rig.send("M3S1000\nG4P0.1\n")
+    rig.until_idle()
+    with pytest.raises(ConfigError, match="lift the pen"):
+        rig.dev.push_carriage_home()
+    rig.dev.inject("power-loss")
+    rig.dev.take_output()
+    assert rig.status().startswith("<Idle|MPos:0.000,0.000,0.000")  # it believes 0 ...
+    rig.send("M3S1000\nG1X10F3000\nM5\n")
+    rig.until_idle()
+    assert np.allclose(rig.dev.paper.strokes()[-1][1][[0, -1]], [[50, 20], [60, 20]])  # ... the carriage was at 50,20
+    rig.dev.inject("power-loss")
+    rig.dev.take_output()
+    rig.dev.push_carriage_home()
+    rig.send("M3S1000\nG1X10F3000\nM5\n")
+    rig.until_idle()
+    assert np.allclose(rig.dev.paper.strokes()[-1][1][[0, -1]], [[0, 0], [10, 0]])  # pushed to the origin: they agree
