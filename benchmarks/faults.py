@@ -208,8 +208,9 @@ def rehome(family: str, kind: str, ident: str, pen: Callable[[str], None]) -> No
 
     ``pen(action)`` is ``pixelpen pen ACTION`` (API: the display's method).  The counters survived (every
     fault but power): ``home``.  Power lost: GRBL with homing switches ($22=1) homes with ``$H`` (``home``);
-    without, the operator lifts the pen and pushes the carriage to the origin by hand (the simulator's
-    ``push_carriage_home``); an AxiDraw's carriage is pushed home after ``motors-off`` (as its manual says).
+    without, the operator lifts the pen, pushes the carriage to the origin by hand (the simulator's
+    ``push_carriage_home``) and power-cycles the board there (a rebooted GRBL may have run lines since);
+    an AxiDraw's carriage is pushed home after ``motors-off`` (as its manual says).
     """
     device = named_simulator(ident)
     if kind != "power" or (family == "grbl" and device.settings.get(22)):
@@ -219,6 +220,8 @@ def rehome(family: str, kind: str, ident: str, pen: Callable[[str], None]) -> No
     if family == "axidraw":
         pen("motors-off")
     device.push_carriage_home()
+    if family == "grbl":  # GRBL zeroes its machine position only at power-up: switch it off and on there
+        device.inject("reset")
 
 
 def release(family: str, ident: str) -> None:

@@ -267,8 +267,8 @@ class GrblSimulator:
     def push_carriage_home(self) -> None:
         """The operator pushes the stopped carriage by hand to the machine origin (where ``$H`` would leave it).
 
-        A physical act, not a command: GRBL does not see it, its machine position stays what it was (after a
-        power-up that is 0, so the two agree again).  Refused while the machine moves or the pen is down.
+        A physical act, not a command: GRBL does not see it, its machine position stays what it was (a power-up
+        or ``inject("reset")`` there makes it 0 again).  Refused while the machine moves or the pen is down.
         """
         self._catch_up()
         if self._state_kind() not in ("idle", "alarm", "sleep"):
