@@ -213,6 +213,12 @@ class AxiDrawPlotter(PlotterDisplay):
             self.port = find_ebb_port()
         return super()._make_link()
 
+    def _rehomed(self) -> None:
+        """The carriage was pushed home after the board lost count of it: clear the step counters there (EM)."""
+        self._command("EM,1,1", queued=supports(self.version, "queued_EM"))
+        self.position = np.zeros(2, dtype=np.int64)
+        self._zeroed = True
+
     # -- device core -----------------------------------------------------------------------------
     def _connect(self) -> None:
         """Flush a half command, read ``V``, wait out leftover motion, set 16× stepping and the pen servo."""

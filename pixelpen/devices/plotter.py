@@ -690,6 +690,8 @@ class PlotterDisplay(VectorDisplay):
             return found[0]
         if confirmed_by_user:
             self._position_lost = False
+            if lost:
+                self._rehomed()
             return found[0] if found and not lost else ResumePoint(confirmed)
         if confirmed == sent:
             return ResumePoint(confirmed)  # nothing was in doubt
@@ -886,6 +888,9 @@ class PlotterDisplay(VectorDisplay):
     def _pen_position(self) -> tuple[float, float] | None:
         """Where the pen will be once everything sent has run (device units), the next travel's start; None: unknown."""
         return None
+
+    def _rehomed(self) -> None:
+        """The user re-homed the device after it lost its position: take where it stands as home (default: nothing to do)."""
 
     def _manual_pen(self, down: bool) -> None:
         """Move the pen down or up now and wait until it is there."""

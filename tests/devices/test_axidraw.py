@@ -502,3 +502,23 @@ def test_manual_pen_home_and_motors_off():
     dev.receive(b"QE\r")
     assert dev.take_output() == b"0,0\r\nOK\r\n"  # both motors off (ebb.html QE)
     plotter.close()
+
+
+def test_after_a_motor_power_loss_a_confirmed_resume_plots_from_the_pushed_home():
+    """Pen up, supply off, carriage pushed home, supply on, confirmed: the stale step counters are not trusted."""
+    strokes = OPEN_STROKES
+    dev, clock = new_sim()
+    plotter = sim_plotter(dev, clock, url_extra=f"&power_loss_after={plotted_bytes(strokes) // 2}")
+    with pytest.raises(PlotInterrupted, match="motor power"):
+        plotter.plot(drawing_mm(strokes))
+    dev.inject("power-restore")
+    with pytest.raises(PositionUnknown):
+        plotter.resume_after_fault()
+    plotter.pen_up()
+    dev.inject("power-loss")  # the operator switches the supply off to push the carriage home by hand
+    dev.push_carriage_home()  # a physical act: the board's step counters still say where it thinks it is
+    dev.inject("power-restore")
+    plotter.resume_after_fault(position_confirmed=True)
+    plotter.close()
+    account = ink_account(intended(strokes), inked(dev.paper))
+    assert (account.lost, account.stray) == (0, 0), account
