@@ -13,10 +13,12 @@ A plotter family (HPGL, GRBL, EBB) subclasses :class:`PlotterDisplay` and implem
 * ``_device_paused()`` — True while the device's own pause (button, VIEW, paper lever) holds;
 * ``_make_safe()`` — best effort, never raising: stop motion, pen up, park, motors off;
 
-and, with safe defaults in the base (see /work/notes/resume-interface.md):
+and, with safe defaults in the base:
 
 * ``_where()`` — on a fresh link, before ``_connect()``: let the device finish (or discard) what the
   old connection left, then report a :class:`DeviceWhere` (default: position unknown);
+* ``_rehomed()`` — after a lost position the user re-homed and confirmed: take where the device stands as
+  home (default: nothing; the EBB clears its step counters);
 * ``_manual_pen(down)``, ``_manual_pen_state()``, ``_manual_home()``, ``_manual_motors_off()`` —
   immediate manual control behind :meth:`PlotterDisplay.pen_up` and friends (default: ConfigError).
 
