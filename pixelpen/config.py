@@ -25,20 +25,17 @@ from __future__ import annotations
 import argparse
 import difflib
 import os
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from .errors import ParseError, quote_token
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised on Python 3.10 only
-    import tomli as tomllib
+from .errors import ParseError
+from .tomltext import read_toml
 
 MAX_CONFIG_BYTES = 1 << 20
 """Largest configuration file read (1 MiB); a larger one is a ParseError."""
+MAX_CONFIG_DEPTH = 32
+"""Deepest nesting of arrays and inline tables read (options need 1); deeper is a ParseError."""
 ENV_VAR = "PIXELPEN_CONFIG"
 """Environment variable naming the configuration file ('' for none)."""
 
@@ -155,13 +152,10 @@ def load_config(path: Path | None = None, *, required: bool = False) -> UserConf
     if len(data) > MAX_CONFIG_BYTES:
         raise ParseError(f"a configuration file is at most {MAX_CONFIG_BYTES} bytes", source=source)
     try:
-        table = tomllib.loads(data.decode("utf-8"))
+        text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ParseError("not UTF-8 text", source=source, offset=exc.start) from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ParseError(f"not valid TOML: {exc}", source=source) from None
-    except (RecursionError, ValueError, OverflowError, MemoryError) as exc:
-        raise ParseError(f"not valid TOML: {type(exc).__name__}: {quote_token(str(exc))}", source=source) from None
+    table = read_toml(text, source, max_depth=MAX_CONFIG_DEPTH)
     config = UserConfig(source)
     for key, value in table.items():
         if isinstance(value, dict):

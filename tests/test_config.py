@@ -1,5 +1,6 @@
 """Tests of the user configuration file: where it is, what it sets, and the errors for bad files."""
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -94,7 +95,8 @@ def test_a_bad_file_is_one_error_line_naming_the_file_and_the_key(tmp_path, conf
     path = config(text)
     assert main(["plot", drawing(tmp_path), "--to", "sim:grbl"]) == 2
     (line,) = capsys.readouterr().err.strip().splitlines()
-    assert line.startswith(f"pixelpen: error in the configuration file: {path}: ") and needle in line, line
+    assert re.match(rf"pixelpen: error in the configuration file: {re.escape(str(path))}(, line \d+(, column \d+)?)?: ", line), line
+    assert needle in line, line
 
 
 def test_bounded_reading(tmp_path, monkeypatch):

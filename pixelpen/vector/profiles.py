@@ -15,22 +15,16 @@ TOML integers longer than Python's 4300-digit limit and files nested too deep ar
 
 from __future__ import annotations
 
-import math
 import re
-import sys
 from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
 from ..errors import ConfigError, ParseError, quote_token
+from ..tomltext import read_toml
 from ..urls import check_path
 from .motion import MotionLimits
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised on Python 3.10 only
-    import tomli as tomllib
 
 MAX_BYTES = 1 << 20
 """Bytes of a profile or vpype configuration file."""
@@ -375,50 +369,10 @@ def _profile(data: dict, source: str) -> DeviceProfile:
     )
 
 
-_TOML_TOKEN = re.compile(
-    r'"""[\s\S]*?"""'  # multi-line basic string
-    r"|'''[\s\S]*?'''"  # multi-line literal string
-    r'|"(?:[^"\\\n]|\\.)*"'  # basic string
-    r"|'[^'\n]*'"  # literal string
-    r"|#[^\n]*"  # comment
-    r"|[\[\]{}]"  # what nests
-)
-
-
-def _check_depth(text: str, source: str) -> None:
-    """ParseError at the first array or inline table nested more than MAX_DEPTH deep (strings and comments skipped)."""
-    depth = 0
-    for token in _TOML_TOKEN.finditer(text):
-        bracket = token[0]
-        if bracket in ("[", "{"):
-            depth += 1
-            if depth > MAX_DEPTH:
-                line = text.count("\n", 0, token.start()) + 1
-                column = token.start() - text.rfind("\n", 0, token.start())
-                raise ParseError(f"arrays or tables nested more than {MAX_DEPTH} deep", source=source, line=line,
-                                 column=column)
-        elif bracket in ("]", "}"):
-            depth = max(depth - 1, 0)
-
-
 def _read_toml(text: str, source: str) -> dict:
     if len(text) > MAX_BYTES:
         raise ParseError(f"file of {len(text)} characters is larger than the {MAX_BYTES} allowed", source=source)
-    _check_depth(text, source)
-    try:
-        return tomllib.loads(text)
-    except (ValueError, RecursionError) as exc:
-        if not isinstance(exc, tomllib.TOMLDecodeError):  # int() past 4300 digits, or nesting the scan missed
-            long = re.search(r"[0-9_]{4300,}", text)
-            line = None if long is None else text.count("\n", 0, long.start()) + 1
-            raise ParseError(f"malformed TOML: {str(exc)[:200]}", source=source, line=line) from None
-        msg = str(exc)
-        where = re.search(r"\(at line (\d+), column (\d+)\)", msg)
-        if where:
-            msg = msg[: where.start()].strip()
-            line, column = int(where[1]), int(where[2])
-            raise ParseError(f"malformed TOML: {msg}", source=source, line=line, column=column) from None
-        raise ParseError(f"malformed TOML: {msg}", source=source) from None
+    return read_toml(text, source, max_depth=MAX_DEPTH)
 
 
 def _read_file(path: Path) -> dict:
