@@ -6,13 +6,17 @@ pictures are built from the primitives in ``pixelpen.display.picture``.
 
 from __future__ import annotations
 
-from .display.base import Display
-from .display.picture import (
+from pixelpen import _moved
+
+from pixelpen.display.base import Display
+from pixelpen.display.picture import (
     Arc, Bezier, BSpline, Circle, Ellipse, Fill, Image, Marker, Picture, Polygon, Polyline, Rectangle, Segment, Style,
     Text,
 )
-from .display.registry import known_schemes, open_display as open
-from .errors import ConfigError, LinkError, ParseError, PixelpenError, ProtocolError, URLError
+from pixelpen.display.registry import known_schemes, open_display as open
+from pixelpen.errors import ConfigError, LinkError, ParseError, PixelpenError, ProtocolError, URLError
+
+_moved.install()
 
 __version__ = "0.1.0"
 

@@ -14,9 +14,9 @@ import logging
 import sys
 from typing import Any, Sequence
 
-from . import __version__
-from .config import drop_configured, load_config
-from .errors import PixelpenError
+from pixelpen import __version__
+from pixelpen.config import drop_configured, load_config
+from pixelpen.errors import PixelpenError
 
 SHOWN_CHARS = 80
 """Characters of a repeated warning quoted in the count of its repeats."""
@@ -48,7 +48,7 @@ def _did_you_mean(word: str, choices: Sequence[str]) -> str:
 
 def build_parser() -> Parser:
     """The parser with every subcommand registered (``parser.commands`` maps names to their parsers)."""
-    from .commands import core, pen, plot, sim, vector
+    from pixelpen.commands import core, pen, plot, sim, vector
 
     parser = Parser(prog="pixelpen", description="Draw on plotters, panels and files; simulate them.")
     parser.add_argument("--version", action="version", version=f"pixelpen {__version__}")

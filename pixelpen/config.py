@@ -29,8 +29,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from .errors import ParseError
-from .tomltext import read_toml
+from pixelpen.errors import ParseError
+from pixelpen.tomltext import read_toml
 
 MAX_CONFIG_BYTES = 1 << 20
 """Largest configuration file read (1 MiB); a larger one is a ParseError."""

@@ -34,7 +34,7 @@ import pytest
 if TYPE_CHECKING:
     import numpy as np
 
-    from .sim.base import WireDevice
+    from pixelpen.sim.base import WireDevice
 
 DEFAULT_MODEL = "hp7475a"
 """The model ``sim_plotter`` and ``sim_port`` simulate unless parametrised."""
@@ -45,8 +45,8 @@ class SimPlotter:
     """A simulated device for one test: the URL to hand the application, and the device behind it."""
 
     def __init__(self, model: str, options: dict[str, str] | None = None, *, port: bool = False) -> None:
-        from .sim.base import simulator_models
-        from .urls import format_url
+        from pixelpen.sim.base import simulator_models
+        from pixelpen.urls import format_url
 
         known = simulator_models()
         if model.lower() not in known:
@@ -72,7 +72,7 @@ class SimPlotter:
     @property
     def opened(self) -> bool:
         """True once the application has opened the URL (the device exists)."""
-        from .sim.base import named_simulator
+        from pixelpen.sim.base import named_simulator
 
         try:
             named_simulator(self.id)
@@ -83,7 +83,7 @@ class SimPlotter:
     @property
     def device(self) -> WireDevice:
         """The simulated device the application opened (its paper, logs, counters and state)."""
-        from .sim.base import named_simulator
+        from pixelpen.sim.base import named_simulator
 
         try:
             return named_simulator(self.id)
@@ -127,7 +127,7 @@ class _Session:
         return plotter
 
     def finish(self) -> None:
-        from .sim.base import forget_simulator
+        from pixelpen.sim.base import forget_simulator
 
         paper_dir = self.request.config.getoption("pixelpen_paper_dir")
         try:
@@ -152,7 +152,7 @@ def _parse_param(param: object) -> tuple[str, dict[str, str]]:
         options = {k: str(v) for k, v in param.items()}
         return options.pop("model", DEFAULT_MODEL), options
     if isinstance(param, str):
-        from .urls import parse_url
+        from pixelpen.urls import parse_url
 
         model, _, query = param.partition("?")
         return model, dict(parse_url(f"sim:{model}?{query}").options) if query else {}
@@ -168,7 +168,7 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 def pytest_configure(config: pytest.Config) -> None:
     """Register the ``sim://`` pyserial URL handler for the applications under test."""
-    import pixelpen.sim.urlhandler  # noqa: F401  (makes serial.serial_for_url("sim://...") work)
+    import pixelpen.sim.transports.urlhandler  # noqa: F401  (makes serial.serial_for_url("sim://...") work)
 
 
 @pytest.fixture

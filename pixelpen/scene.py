@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import geometry as geo
-from .display.base import Display
-from .display.picture import (
+from pixelpen import geometry as geo
+from pixelpen.display.base import Display
+from pixelpen.display.picture import (
     Arc, Bezier, BSpline, Circle, Ellipse, Fill, Image, Marker, Picture, Polygon, Polyline, Rectangle, Segment, Style,
     Text,
 )

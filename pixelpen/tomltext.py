@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 import sys
 
-from .errors import ParseError
+from pixelpen.errors import ParseError
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import Callable, Iterable, Mapping, TypeVar
 from urllib.parse import quote, unquote
 
-from .errors import ConfigError, URLError, quote_token
+from pixelpen.errors import ConfigError, URLError, quote_token
 
 T = TypeVar("T")
 

@@ -13,7 +13,7 @@ def no_user_config(monkeypatch):
 
 
 def warn_twice(args):
-    log = logging.getLogger("pixelpen.vector.build")
+    log = logging.getLogger("pixelpen.display.vectorize")
     for _ in range(12):
         log.warning("1 image shape(s) skipped: a vector device cannot draw raster images")
     logging.getLogger("pixelpen.commands.core").warning("another warning")
@@ -42,7 +42,7 @@ def test_v_adds_details_and_vv_shows_every_record_with_its_logger(noisy, capsys)
     assert "a progress detail" in capsys.readouterr().err.splitlines()
     assert main(["-vv", "devices"]) == 0
     err = capsys.readouterr().err.splitlines()
-    assert err.count("WARNING pixelpen.vector.build: 1 image shape(s) skipped: a vector device cannot draw "
+    assert err.count("WARNING pixelpen.display.vectorize: 1 image shape(s) skipped: a vector device cannot draw "
                      "raster images") == 12
     assert "INFO pixelpen.commands.core: a progress detail" in err
 

@@ -45,15 +45,15 @@ from typing import IO, TYPE_CHECKING
 
 import numpy as np
 
-from .. import geometry as geo
-from ..display.registry import display_class, open_display
-from ..errors import ConfigError, LinkError, ParseError, PixelpenError
-from ..urls import PAPER_MM, format_url, parse_size, parse_url, to_mm
-from ..vector.displaylist import DisplayList
+from pixelpen import geometry as geo
+from pixelpen.display.registry import display_class, open_display
+from pixelpen.errors import ConfigError, LinkError, ParseError, PixelpenError
+from pixelpen.urls import PAPER_MM, format_url, parse_size, parse_url, to_mm
+from pixelpen.vector.displaylist import DisplayList
 
 if TYPE_CHECKING:  # the drivers, optimiser and file readers are imported when a plot runs, not at start-up
-    from ..devices.plotter import PlotInterrupted, PlotProgress, PlotterDisplay
-    from ..vector.optimize import OptimizeReport
+    from pixelpen.devices.plotters.base import PlotInterrupted, PlotProgress, PlotterDisplay
+    from pixelpen.vector.optimize import OptimizeReport
 
 log = logging.getLogger(__name__)
 
@@ -208,9 +208,9 @@ class Placement:
 
 def _svg_drawing(path: str, display: PlotterDisplay, layers: Sequence[str] | None, tolerance: float) -> DisplayList:
     """An SVG as a display list in the display's device units, unclipped and as its page lies on the sheet."""
-    from ..display.picture import parse_colour
-    from ..vector.build import nearest_pen
-    from ..vector.svgimport import read_svg
+    from pixelpen.display.picture import parse_colour
+    from pixelpen.display.vectorize import nearest_pen
+    from pixelpen.vector.svgimport import read_svg
 
     dl = _select_layers(read_svg(path, tolerance=tolerance), layers, path)
     points = geo.apply(sheet_to_device(display), dl.points) if len(dl.points) else dl.points
@@ -225,9 +225,9 @@ def _svg_drawing(path: str, display: PlotterDisplay, layers: Sequence[str] | Non
 
 def _picture_drawing(path: str, display: PlotterDisplay, layers: Sequence[str] | None, tolerance: float) -> DisplayList:
     """A picture file as a display list in the display's device units, unclipped (its window fills the paper)."""
-    from ..display.flatten import flatten_picture
-    from ..display.pictfile import load_picture
-    from ..vector.build import PenLayerMap, build_display_list
+    from pixelpen.display.flatten import flatten_picture
+    from pixelpen.display.pictfile import load_picture
+    from pixelpen.display.vectorize import PenLayerMap, build_display_list
 
     picture = load_picture(path)
     if picture.window:
@@ -332,7 +332,7 @@ def home_of(display: PlotterDisplay) -> tuple[float, float]:
 def optimise_for(dl: DisplayList, display: PlotterDisplay, time_budget: float | None, *,
                  dedupe: bool = True) -> tuple[DisplayList, OptimizeReport]:
     """Deduplicate (within each layer and pen), merge ends within MERGE_MM and order the strokes by pen-up time."""
-    from ..vector.optimize import OptimizeReport, optimize
+    from pixelpen.vector.optimize import OptimizeReport, optimize
 
     report = OptimizeReport()
     result = optimize(dl, merge=MERGE_MM / dl.unit_mm, home=home_of(display), time_budget=time_budget,
@@ -545,7 +545,7 @@ def _stdin_keys(on_toggle: Callable[[bool], None]) -> KeyControl | None:
 
 def plotter_for(url: str, **kwargs: object) -> PlotterDisplay:
     """The (unopened) plotter display a URL names; ConfigError for a URL of another kind of display."""
-    from ..devices.plotter import PlotterDisplay
+    from pixelpen.devices.plotters.base import PlotterDisplay
 
     parsed = parse_url(url)
     scheme = parsed.target.partition("?")[0] if parsed.scheme == "sim" else parsed.scheme
@@ -594,7 +594,7 @@ def resumable_drawing(state: Path, source_fp: str) -> DisplayList:
     It refuses a missing state file (a mistyped ``--state``), a drawing missing beside it, and a state made
     for another drawing (another file, layers, layout or plotter).
     """
-    from ..devices.plotter import PlotState, fingerprint
+    from pixelpen.devices.plotters.base import PlotState, fingerprint
 
     if not state.is_file():
         raise ConfigError(f"nothing to resume: there is no plot state file {state} (give the --state an "
@@ -617,7 +617,7 @@ def _fault_text(failure: PlotInterrupted) -> str:
 
 def _retry(display: PlotterDisplay, first: PlotInterrupted, retries: int, bar: ProgressBar) -> PlotInterrupted | None:
     """Resume an interrupted plot in process up to ``retries`` times; the last interruption if all fail."""
-    from ..devices.plotter import PlotInterrupted
+    from pixelpen.devices.plotters.base import PlotInterrupted
 
     failure = first
     for attempt in range(1, retries + 1):
@@ -660,7 +660,7 @@ class PauseMessages:
 
 def _estimate(dl: DisplayList, display: PlotterDisplay) -> str:
     """The plot's lengths, lifts, pen changes and estimated time, in words."""
-    from ..vector.motion import estimate_time
+    from pixelpen.vector.motion import estimate_time
 
     try:
         t = estimate_time(dl, display.profile, home=home_of(display))
@@ -683,7 +683,7 @@ def _check_sheet(path: str, drawing: str) -> None:
 
 def write_sheet(path: str, dl: DisplayList, display: PlotterDisplay, placement: Placement) -> None:
     """Draw the sheet as it will come out (page, plotter limits, margin box, strokes) into an SVG or PNG."""
-    from ..vector.preview import render_preview
+    from pixelpen.vector.preview import render_preview
 
     to_sheet = geo.invert(sheet_to_device(display))
     strokes = [geo.apply(to_sheet, s) for s in dl.strokes()]
@@ -756,7 +756,7 @@ def _with_state(args: argparse.Namespace) -> tuple[str, Path]:
 
 def run_plot(args: argparse.Namespace) -> int:
     """Plot FILE on the plotter at --to (see the module docstring); the exit status."""
-    from ..devices.plotter import PlotInterrupted, PositionUnknown, fingerprint
+    from pixelpen.devices.plotters.base import PlotInterrupted, PositionUnknown, fingerprint
 
     if args.confirm_position and not args.resume:
         raise ConfigError("--confirm-position goes with --resume (after a plot stopped without knowing where)")
@@ -941,9 +941,9 @@ def plot_demo(out: Path, *, models: Sequence[str] = DEMO_MODELS) -> list[Path]:
 
     A model whose driver or simulator cannot be loaded is skipped with a logged warning.
     """
-    from ..devices.plotter import PlotterDisplay
-    from ..scene import draw_reference
-    from ..sim.base import forget_simulator, named_simulator, simulator_models
+    from pixelpen.devices.plotters.base import PlotterDisplay
+    from pixelpen.scene import draw_reference
+    from pixelpen.sim.base import forget_simulator, named_simulator, simulator_models
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -4,7 +4,7 @@
 line on stdout), so any plotting program can open it like a serial port; Ctrl-C stops it and the paper is
 written (SIGTERM stops it the same way).  The line runs at the device's own speed unless ``baud`` says
 otherwise: an EBB is USB CDC (no baud pacing), GRBL 115200, HP plotters 9600.  ``pixelpen sim MODEL --replay FILE`` feeds a raw byte file (an HP-GL file, a G-code file, EBB
-commands) to the simulator through a :class:`~pixelpen.sim.transport.SimPort` at the line's speed, in
+commands) to the simulator through a :class:`~pixelpen.sim.transports.port.SimPort` at the line's speed, in
 simulated time by default, then writes what the paper shows and prints the device's errors and counters.
 
 A replayed file carries no flow control of its own, so the port is paced by the device's own readiness
@@ -27,10 +27,10 @@ import threading
 from dataclasses import asdict, dataclass, field, is_dataclass, replace
 from pathlib import Path
 
-from ..clock import REAL_CLOCK, SimulatedClock
-from ..errors import ConfigError, PixelpenError, URLError
-from ..sim.base import WireDevice, create_simulator, simulator_models
-from ..sim.transport import LinkStats, SimPort, TransportOptions, line_baud, split_options
+from pixelpen.clock import REAL_CLOCK, SimulatedClock
+from pixelpen.errors import ConfigError, PixelpenError, URLError
+from pixelpen.sim.base import WireDevice, create_simulator, simulator_models
+from pixelpen.sim.transports.port import LinkStats, SimPort, TransportOptions, line_baud, split_options
 
 log = logging.getLogger(__name__)
 
@@ -162,7 +162,7 @@ def _stop_on_sigterm(signum: int, frame: object) -> None:
 
 def run_pty(device: WireDevice, transport: TransportOptions, stop: threading.Event | None = None) -> None:
     """Serve ``device`` on a pty (path printed on stdout) until Ctrl-C, SIGTERM or ``stop`` is set."""
-    from ..sim.pty import PtyBridge
+    from pixelpen.sim.transports.pty import PtyBridge
 
     with PtyBridge(device, flow=transport.flow, baud=transport.baud, faults=transport.faults,
                    tx_buffer=transport.tx_buffer, clock=device.clock, out=transport.out) as bridge:

@@ -13,8 +13,8 @@ import sys
 
 import numpy as np
 
-from ..errors import ConfigError
-from ..vector.displaylist import DisplayList
+from pixelpen.errors import ConfigError
+from pixelpen.vector.displaylist import DisplayList
 
 
 def _positive(text: str) -> float:
@@ -29,13 +29,13 @@ def _positive(text: str) -> float:
 
 def run_optimize(args: argparse.Namespace) -> int:
     """Read an SVG, optimise its plotting order, write the result and print what changed to stderr."""
-    from ..vector.optimize import OptimizeReport, optimize
-    from ..vector.stats import format_stats, plot_stats
-    from ..vector.svgimport import read_svg, write_svg
+    from pixelpen.vector.optimize import OptimizeReport, optimize
+    from pixelpen.vector.stats import format_stats, plot_stats
+    from pixelpen.vector.svgimport import read_svg, write_svg
 
     profile = None
     if args.device is not None:
-        from ..vector.profiles import load_profile
+        from pixelpen.profiles.model import load_profile
 
         profile = load_profile(args.device)
     dl = read_svg(args.input, tolerance=args.tolerance)
@@ -58,8 +58,8 @@ def run_optimize(args: argparse.Namespace) -> int:
 
 def run_stats(args: argparse.Namespace) -> int:
     """Print plot statistics of an SVG: distances, lifts, pen changes and time, per layer."""
-    from ..vector.stats import format_stats, plot_stats, stats_json
-    from ..vector.svgimport import read_svg
+    from pixelpen.vector.stats import format_stats, plot_stats, stats_json
+    from pixelpen.vector.svgimport import read_svg
 
     stats = plot_stats(read_svg(args.input, tolerance=args.tolerance), args.device)
     print(stats_json(stats) if args.json else format_stats(stats))
@@ -68,8 +68,8 @@ def run_stats(args: argparse.Namespace) -> int:
 
 def run_preview(args: argparse.Namespace) -> int:
     """Render an SVG's plot as a PNG or SVG preview with pen-up travel; with ``--device``, on the plotter's sheet."""
-    from ..vector.preview import render_preview
-    from ..vector.svgimport import read_svg
+    from pixelpen.vector.preview import render_preview
+    from pixelpen.vector.svgimport import read_svg
 
     if args.device is not None:
         for line in _device_preview(args):
@@ -90,7 +90,7 @@ PREVIEW_SCHEMES = {"ebb": "axidraw", "grbl": "grbl", "hpgl": "hp7475a"}
 
 def _outside(dl: DisplayList, size: tuple[float, float]) -> DisplayList:
     """The parts of the strokes outside the rectangle 0..W x 0..H (device units): clipped to four bands around it."""
-    from .. import geometry as geo
+    from pixelpen import geometry as geo
 
     if not len(dl):
         return dl
@@ -110,12 +110,12 @@ def _outside(dl: DisplayList, size: tuple[float, float]) -> DisplayList:
 
 def _device_preview(args: argparse.Namespace) -> list[str]:
     """Draw the sheet, the hard-clip limits and the drawing on them (cut parts in a warning colour); say what is cut."""
-    from .. import geometry as geo
-    from ..display.registry import display_class
-    from ..urls import format_url
-    from ..vector.preview import CUT_COLOUR, render_preview
-    from ..vector.profiles import load_profile
-    from .plot import CUT_REPORT_MM, SHEET_COLOURS, Layout, clip_to_device, load_drawing, plotter_for, sheet_to_device
+    from pixelpen import geometry as geo
+    from pixelpen.display.registry import display_class
+    from pixelpen.urls import format_url
+    from pixelpen.vector.preview import CUT_COLOUR, render_preview
+    from pixelpen.profiles.model import load_profile
+    from pixelpen.commands.plot import CUT_REPORT_MM, SHEET_COLOURS, Layout, clip_to_device, load_drawing, plotter_for, sheet_to_device
 
     profile = load_profile(args.device)
     try:

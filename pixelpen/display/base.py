@@ -11,12 +11,12 @@ import logging
 from abc import ABC, abstractmethod
 from typing import ClassVar, Iterable, Literal
 
-from .. import geometry as geo
-from ..errors import ConfigError, PixelpenError
-from ..urls import DeviceURL, Options
-from .capabilities import Capabilities
-from .flatten import DeviceShape, flatten_picture
-from .picture import PRIMITIVE_TYPES, Picture, Primitive, Segment
+from pixelpen import geometry as geo
+from pixelpen.errors import ConfigError, PixelpenError
+from pixelpen.urls import DeviceURL, Options
+from pixelpen.display.capabilities import Capabilities
+from pixelpen.display.flatten import DeviceShape, flatten_picture
+from pixelpen.display.picture import PRIMITIVE_TYPES, Picture, Primitive, Segment
 
 log = logging.getLogger(__name__)
 

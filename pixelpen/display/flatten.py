@@ -14,9 +14,9 @@ from typing import Iterator, Literal
 
 import numpy as np
 
-from .. import geometry as geo
-from ..errors import InvalidArgument
-from .picture import (
+from pixelpen import geometry as geo
+from pixelpen.errors import InvalidArgument
+from pixelpen.display.picture import (
     Arc, Bezier, BSpline, Circle, Ellipse, Image, Marker, Picture, Polygon, Polyline, Primitive, Rectangle, Style, Text,
 )
 
@@ -139,7 +139,7 @@ def _world_paths(prim: Primitive, tol: float) -> tuple[list[np.ndarray], bool]:
     if isinstance(prim, BSpline):
         return [geo.flatten_bspline(prim.control_points, prim.degree, prim.knots, tolerance=tol)], False
     if isinstance(prim, Text):
-        from ..vector.font import text_strokes
+        from pixelpen.vector.font import text_strokes
 
         strokes = text_strokes(
             prim.text, position=prim.position, height=prim.height, angle=prim.angle,

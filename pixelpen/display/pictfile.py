@@ -41,9 +41,9 @@ from typing import Any, Callable, TypeVar
 import numpy as np
 from PIL import Image as PILImage
 
-from ..errors import ConfigError, ParseError, PixelpenError, quote_token
-from ..urls import check_path
-from .picture import (
+from pixelpen.errors import ConfigError, ParseError, PixelpenError, quote_token
+from pixelpen.urls import check_path
+from pixelpen.display.picture import (
     Arc, Bezier, BSpline, Circle, Ellipse, Fill, Image, Marker, Picture, Polygon, Polyline, Primitive, Rectangle,
     Segment, Style, Text, colour_hex,
 )

@@ -19,8 +19,8 @@ from typing import Iterator, Literal, Union
 
 import numpy as np
 
-from .. import geometry as geo
-from ..errors import ConfigError, InvalidArgumentType, quote_token
+from pixelpen import geometry as geo
+from pixelpen.errors import ConfigError, InvalidArgumentType, quote_token
 
 FillStyle = Literal["hollow", "solid", "hatch", "crosshatch", "pattern"]
 Align = Literal["left", "center", "right"]

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import geometry as geo
-from ..raster.canvas import Canvas
-from ..vector.build import device_angle
-from ..vector.hatch import hatch
-from .flatten import DeviceShape
-from .picture import Fill, Image
+from pixelpen import geometry as geo
+from pixelpen.raster.canvas import Canvas
+from pixelpen.display.vectorize import device_angle
+from pixelpen.geometry.hatch import hatch
+from pixelpen.display.flatten import DeviceShape
+from pixelpen.display.picture import Fill, Image
 
 DEFAULT_HATCH_MM = 1.0
 """Hatch spacing on raster displays when the fill gives none."""

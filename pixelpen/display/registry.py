@@ -13,11 +13,11 @@ import pkgutil
 from importlib import metadata
 from typing import TYPE_CHECKING, Callable, TypeVar
 
-from ..errors import URLError
-from ..urls import DeviceURL, parse_url
+from pixelpen.errors import URLError
+from pixelpen.urls import DeviceURL, parse_url
 
 if TYPE_CHECKING:
-    from .base import Display
+    from pixelpen.display.base import Display
 
 log = logging.getLogger(__name__)
 
@@ -47,11 +47,11 @@ def _load() -> None:
     if _loaded:
         return
     _loaded = True
-    from .. import devices
+    from pixelpen import devices
 
-    for info in pkgutil.iter_modules(devices.__path__):
-        if not info.name.startswith("_"):
-            importlib.import_module(f"{devices.__name__}.{info.name}")
+    for info in pkgutil.walk_packages(devices.__path__, f"{devices.__name__}."):
+        if not info.name.rpartition(".")[2].startswith("_"):
+            importlib.import_module(info.name)
     for entry in metadata.entry_points(group="pixelpen.displays"):
         try:
             register_display(entry.name)(entry.load())

@@ -14,8 +14,8 @@ from typing import Any, Callable, Final
 
 from serial.tools import list_ports
 
-from ..errors import ConfigError, LinkError, ParseError
-from .link import Link
+from pixelpen.errors import ConfigError, LinkError, ParseError
+from pixelpen.drivers.stream import Link
 
 _log = logging.getLogger(__name__)
 
@@ -235,7 +235,7 @@ def _probe_serial(dev: DiscoveredDevice, timeout: float, opener: Callable[..., L
 
 
 def _probe_usb_printer(dev: DiscoveredDevice, timeout: float, backend: Any) -> DiscoveredDevice:
-    from .usbprinter import UsbPrinterLink
+    from pixelpen.drivers.usbprinter import UsbPrinterLink
 
     try:
         with UsbPrinterLink(dev.vid, dev.pid, backend=backend, timeout=timeout, write_timeout=timeout) as link:
@@ -260,7 +260,7 @@ def discover(
     """
     serial_ports = list_serial_ports()
     if probe:
-        from .serial import SerialLink
+        from pixelpen.drivers.serial import SerialLink
 
         serial_ports = [_probe_serial(d, timeout, SerialLink) for d in serial_ports]
     shown = {(d.vid, d.pid) for d in serial_ports if d.vid is not None}

@@ -12,7 +12,7 @@ Flow control (``flow``):
   replies, which suits the text protocols (HP-GL, G-code) that use this handshake.
 * ``"none"``: bytes go out regardless of the device's state.
 
-Importing this module registers the ``sim://`` URL handler (:mod:`pixelpen.sim.urlhandler`), so
+Importing this module registers the ``sim://`` URL handler (:mod:`pixelpen.sim.transports.urlhandler`), so
 ``SerialLink("sim://hp7475a?paper=a4")`` talks to the simulator through the same code path as to a
 real plotter.  With no ``clock`` given, a ``sim://`` link adopts the simulator's clock, so timeouts of
 a ``speed=fast`` simulation pass in simulated time; a given ``clock`` is handed to the simulator.
@@ -25,10 +25,10 @@ from typing import Any
 import serial
 from serial.tools import list_ports
 
-from ..clock import Clock
-from ..errors import Disconnected, LinkError, LinkTimeout, PixelpenError
-from ..sim import urlhandler as _sim_urlhandler  # noqa: F401  (registers sim://)
-from .link import Link
+from pixelpen.clock import Clock
+from pixelpen.errors import Disconnected, LinkError, LinkTimeout, PixelpenError
+from pixelpen.sim.transports import urlhandler as _sim_urlhandler  # noqa: F401  (registers sim://)
+from pixelpen.drivers.stream import Link
 
 FLOWS = ("none", "rtscts", "xonxoff")
 

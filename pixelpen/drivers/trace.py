@@ -40,10 +40,10 @@ from dataclasses import dataclass, field
 from typing import IO, Final, Iterable, Mapping
 from urllib.parse import quote, unquote
 
-from ..clock import Clock, SimulatedClock
-from ..errors import ConfigError, LinkError, ParseError, TraceMismatch
-from ..urls import check_path
-from .link import Link, printable
+from pixelpen.clock import Clock, SimulatedClock
+from pixelpen.errors import ConfigError, LinkError, ParseError, TraceMismatch
+from pixelpen.urls import check_path
+from pixelpen.drivers.stream import Link, printable
 
 TRACE_MAGIC: Final = "#pixelpen-trace"
 TRACE_VERSION: Final = 1

@@ -22,9 +22,9 @@ from typing import Any
 import usb.core
 import usb.util
 
-from ..clock import Clock
-from ..errors import Disconnected, LinkError, LinkTimeout, ParseError
-from .link import Link
+from pixelpen.clock import Clock
+from pixelpen.errors import Disconnected, LinkError, LinkTimeout, ParseError
+from pixelpen.drivers.stream import Link
 
 PRINTER_CLASS = 7
 GET_DEVICE_ID = 0

@@ -4,7 +4,7 @@ Bad arguments raise ``InvalidArgument`` (a PixelpenError and a ValueError) or ``
 (a PixelpenError and a TypeError), so callers may catch either family.
 """
 
-from .clip import (
+from pixelpen.geometry.clip import (
     BOTTOM,
     LEFT,
     RIGHT,
@@ -18,7 +18,7 @@ from .clip import (
     clip_segments_convex,
     outcodes,
 )
-from .curves import (
+from pixelpen.geometry.curves import (
     BEZIER_BASIS,
     BSPLINE_BASIS,
     DEFAULT_TOLERANCE,
@@ -35,8 +35,8 @@ from .curves import (
     open_uniform_knots,
     uniform_knots,
 )
-from .dashes import as_pattern, dash_polylines
-from .transforms import (
+from pixelpen.geometry.dashes import as_pattern, dash_polylines
+from pixelpen.geometry.transforms import (
     apply,
     as_matrix,
     as_number,
@@ -52,7 +52,7 @@ from .transforms import (
     shear,
     translate,
 )
-from .viewing import Rect, ViewingPipeline, as_rect, window_to_viewport
+from pixelpen.geometry.viewing import Rect, ViewingPipeline, as_rect, window_to_viewport
 
 __all__ = [
     "BEZIER_BASIS", "BOTTOM", "BSPLINE_BASIS", "DEFAULT_TOLERANCE", "LEFT", "RIGHT", "Rect", "TOP",

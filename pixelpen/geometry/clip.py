@@ -10,9 +10,9 @@ from typing import Literal, Sequence
 
 import numpy as np
 
-from ..errors import InvalidArgument
-from .transforms import ArrayLike, as_points, split_rows
-from .viewing import as_rect
+from pixelpen.errors import InvalidArgument
+from pixelpen.geometry.transforms import ArrayLike, as_points, split_rows
+from pixelpen.geometry.viewing import as_rect
 
 LEFT, RIGHT, BOTTOM, TOP = 1, 2, 4, 8
 """Cohen–Sutherland outcode bits, in Hearn & Baker's order."""

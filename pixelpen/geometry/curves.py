@@ -15,8 +15,8 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import InvalidArgument
-from .transforms import ArrayLike, as_number, as_points, split_rows
+from pixelpen.errors import InvalidArgument
+from pixelpen.geometry.transforms import ArrayLike, as_number, as_points, split_rows
 
 DEFAULT_TOLERANCE = 0.1
 """Default flattening tolerance (units of the points)."""

@@ -6,8 +6,8 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import InvalidArgument
-from .transforms import ArrayLike, as_number, as_points, split_rows
+from pixelpen.errors import InvalidArgument
+from pixelpen.geometry.transforms import ArrayLike, as_number, as_points, split_rows
 
 MAX_DASHES = 5_000_000
 """Dash pieces one call may produce before the pattern is called too fine (read at call time: assign to override)."""

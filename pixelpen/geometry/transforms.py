@@ -7,7 +7,7 @@ from typing import Sequence, Union
 
 import numpy as np
 
-from ..errors import InvalidArgument, InvalidArgumentType
+from pixelpen.errors import InvalidArgument, InvalidArgumentType
 
 ArrayLike = Union[np.ndarray, Sequence]
 

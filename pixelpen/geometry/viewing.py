@@ -7,8 +7,8 @@ from typing import Any, Literal, Sequence
 
 import numpy as np
 
-from ..errors import InvalidArgument, InvalidArgumentType
-from .transforms import ArrayLike, as_number, as_pair, apply, compose, invert, rotate, scale_factor, translate
+from pixelpen.errors import InvalidArgument, InvalidArgumentType
+from pixelpen.geometry.transforms import ArrayLike, as_number, as_pair, apply, compose, invert, rotate, scale_factor, translate
 
 Rect = tuple[float, float, float, float]
 Align = Literal["center", "lower-left"]

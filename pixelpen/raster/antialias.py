@@ -17,8 +17,8 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ConfigError
-from .lines import COORD_LIMIT, ragged
+from pixelpen.errors import ConfigError
+from pixelpen.raster.lines import COORD_LIMIT, ragged
 
 
 def wu_line(x0: float, y0: float, x1: float, y1: float) -> tuple[np.ndarray, np.ndarray]:

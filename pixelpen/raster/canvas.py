@@ -28,12 +28,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 from PIL import Image
 
-from ..errors import ConfigError
-from . import antialias as wu
-from . import circles, fill, lines, polygons
-from .colour import rgb565_to_rgb888
-from .damage import DEFAULT_MERGE_COST, DamageTracker, Rect, tile_damage
-from .palette import Palette
+from pixelpen.errors import ConfigError
+from pixelpen.raster import antialias as wu
+from pixelpen.raster import circles, fill, lines, polygons
+from pixelpen.raster.colour import rgb565_to_rgb888
+from pixelpen.raster.damage import DEFAULT_MERGE_COST, DamageTracker, Rect, tile_damage
+from pixelpen.raster.palette import Palette
 
 MODES: dict[str, tuple[type, int]] = {
     "1": (np.uint8, 1), "L": (np.uint8, 1), "P": (np.uint8, 1), "RGB565": (np.uint16, 1),

@@ -25,8 +25,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ConfigError
-from .lines import COORD_LIMIT, int_args, as_int_array, ragged
+from pixelpen.errors import ConfigError
+from pixelpen.raster.lines import COORD_LIMIT, int_args, as_int_array, ragged
 
 RADIUS_LIMIT = (1 << 15) - 1
 """Largest radius accepted (circles and ellipses): keeps the exact integer checks inside int64."""

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ConfigError
+from pixelpen.errors import ConfigError
 
 LUMA_WEIGHTS: dict[str, tuple[int, int, int, int]] = {
     "bt601": (299, 587, 114, 1000),

@@ -17,7 +17,7 @@ from typing import Iterable, NamedTuple
 
 import numpy as np
 
-from ..errors import ConfigError
+from pixelpen.errors import ConfigError
 
 DEFAULT_MERGE_COST = 128.0
 """Default per-window overhead in bytes: a CASET/RASET/RAMWR window (11 bytes) plus bus turnaround."""

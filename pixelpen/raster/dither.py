@@ -20,10 +20,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 from PIL import Image
 
-from ..errors import ConfigError
-from .colour import luma
-from .formats import as_uint8_image
-from .palette import Palette
+from pixelpen.errors import ConfigError
+from pixelpen.raster.colour import luma
+from pixelpen.raster.formats import as_uint8_image
+from pixelpen.raster.palette import Palette
 
 DEPTHS: dict[str, tuple[int, ...]] = {
     "mono": (2,),

@@ -36,8 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ConfigError, ParseError
-from .colour import CHUNK_PIXELS, rgb565_to_rgb888, rgb888_to_rgb565
+from pixelpen.errors import ConfigError, ParseError
+from pixelpen.raster.colour import CHUNK_PIXELS, rgb565_to_rgb888, rgb888_to_rgb565
 
 Region = tuple[int, int, int, int]
 """A window ``(x0, y0, x1, y1)``, half-open like a numpy slice: columns x0..x1-1, rows y0..y1-1."""

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import ndimage, sparse
 
-from ..errors import ConfigError
+from pixelpen.errors import ConfigError
 
 EDGE_MODES = ("nearest", "reflect", "mirror", "wrap", "constant")
 """Edge handling for filters (scipy.ndimage names): nearest repeats the edge pixel (default); reflect

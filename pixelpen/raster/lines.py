@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ConfigError
+from pixelpen.errors import ConfigError
 
 COORD_LIMIT = 1 << 29
 """Largest absolute endpoint coordinate accepted: keeps every intermediate product inside int64."""

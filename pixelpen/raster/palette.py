@@ -8,8 +8,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from PIL import Image
 
-from ..errors import ConfigError
-from .formats import as_rgb_image
+from pixelpen.errors import ConfigError
+from pixelpen.raster.formats import as_rgb_image
 
 _BLOCK_ELEMENTS = 1 << 16
 """Distances computed per step in nearest-colour mapping (pixels x entries): 256 KiB, stays in L2 cache

@@ -27,8 +27,8 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ConfigError
-from .lines import ragged
+from pixelpen.errors import ConfigError
+from pixelpen.raster.lines import ragged
 
 SUBPIXEL = 256
 """Sub-pixel grid vertices are snapped to (8 bits)."""

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Callable, Protocol, runtime_checkable
 
-from ..clock import Clock
-from ..errors import URLError
+from pixelpen.clock import Clock
+from pixelpen.errors import URLError
 
 
 @runtime_checkable
@@ -107,8 +107,8 @@ def _load_builtin() -> None:
     import importlib
     import pkgutil
 
-    from .. import sim
+    from pixelpen.sim import plotters
 
-    for info in pkgutil.iter_modules(sim.__path__):
-        if info.name not in ("base",) and not info.name.startswith("_"):
-            importlib.import_module(f"{sim.__name__}.{info.name}")
+    for info in pkgutil.walk_packages(plotters.__path__, f"{plotters.__name__}."):
+        if not info.name.rpartition(".")[2].startswith("_"):
+            importlib.import_module(info.name)

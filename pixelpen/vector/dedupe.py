@@ -12,9 +12,9 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..errors import ConfigError
-from .displaylist import DisplayList
-from .merge import group_ids
+from pixelpen.errors import ConfigError
+from pixelpen.vector.displaylist import DisplayList
+from pixelpen.vector.merge import group_ids
 
 __all__ = ["remove_duplicates", "deduplicate", "DuplicateRemoval", "filter_min_length", "stroke_lengths"]
 

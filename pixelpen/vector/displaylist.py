@@ -9,7 +9,7 @@ from typing import Iterable, Iterator, Sequence
 
 import numpy as np
 
-from ..errors import ConfigError
+from pixelpen.errors import ConfigError
 
 
 @dataclass

@@ -11,7 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..errors import ConfigError, ParseError
+from pixelpen.errors import ConfigError, ParseError
 
 log = logging.getLogger(__name__)
 

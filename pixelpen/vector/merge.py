@@ -8,8 +8,8 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..errors import ConfigError
-from .displaylist import DisplayList
+from pixelpen.errors import ConfigError
+from pixelpen.vector.displaylist import DisplayList
 
 __all__ = ["merge_paths", "link_ends", "walk_chains", "join_chains", "group_ids"]
 

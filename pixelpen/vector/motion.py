@@ -8,11 +8,11 @@ from typing import TYPE_CHECKING, Union
 
 import numpy as np
 
-from ..errors import ConfigError
-from .displaylist import DisplayList
+from pixelpen.errors import ConfigError
+from pixelpen.vector.displaylist import DisplayList
 
 if TYPE_CHECKING:
-    from .profiles import DeviceProfile
+    from pixelpen.profiles.model import DeviceProfile
 
 __all__ = ["MotionLimits", "Plan", "PlotTime", "plan", "estimate_time", "junction_speeds"]
 
@@ -186,7 +186,7 @@ def estimate_time(
     one lift; every change of pen between consecutive strokes costs the profile's pen change time.
     """
     if isinstance(profile, str):
-        from .profiles import load_profile
+        from pixelpen.profiles.model import load_profile
 
         profile = load_profile(profile)
     scale = float(dl.unit_mm)

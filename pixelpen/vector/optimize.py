@@ -6,14 +6,14 @@ import dataclasses
 import time
 from typing import TYPE_CHECKING
 
-from .dedupe import DuplicateRemoval, deduplicate, filter_min_length, remove_duplicates
-from .displaylist import DisplayList
-from .merge import merge_paths
-from .order import auto_budget, order_paths
-from .simplify import simplify as simplify_strokes
+from pixelpen.vector.dedupe import DuplicateRemoval, deduplicate, filter_min_length, remove_duplicates
+from pixelpen.vector.displaylist import DisplayList
+from pixelpen.vector.merge import merge_paths
+from pixelpen.vector.order import auto_budget, order_paths
+from pixelpen.vector.simplify import simplify as simplify_strokes
 
 if TYPE_CHECKING:
-    from .profiles import DeviceProfile
+    from pixelpen.profiles.model import DeviceProfile
 
 __all__ = [
     "optimize", "OptimizeReport", "merge_paths", "order_paths", "simplify_strokes", "remove_duplicates",

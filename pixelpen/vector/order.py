@@ -16,12 +16,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..errors import ConfigError
-from .displaylist import DisplayList
-from .merge import link_ends, walk_chains
+from pixelpen.errors import ConfigError
+from pixelpen.vector.displaylist import DisplayList
+from pixelpen.vector.merge import link_ends, walk_chains
 
 if TYPE_CHECKING:
-    from .profiles import DeviceProfile
+    from pixelpen.profiles.model import DeviceProfile
 
 __all__ = ["order_paths", "stroke_groups", "auto_budget"]
 

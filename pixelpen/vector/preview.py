@@ -14,9 +14,9 @@ from typing import Sequence
 import numpy as np
 from PIL import Image, ImageDraw
 
-from ..display.picture import parse_colour
-from ..errors import ConfigError
-from .displaylist import DisplayList
+from pixelpen.display.picture import parse_colour
+from pixelpen.errors import ConfigError
+from pixelpen.vector.displaylist import DisplayList
 
 DEFAULT_SIZE_PX = 1000
 """Longest side of a preview when no size is given."""

@@ -7,8 +7,8 @@ import math
 
 import numpy as np
 
-from ..errors import ConfigError
-from .displaylist import DisplayList
+from pixelpen.errors import ConfigError
+from pixelpen.vector.displaylist import DisplayList
 
 __all__ = ["simplify", "simplify_mask"]
 

@@ -8,9 +8,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
-from .dedupe import stroke_lengths
-from .displaylist import DisplayList
+from pixelpen.errors import ConfigError
+from pixelpen.vector.dedupe import stroke_lengths
+from pixelpen.vector.displaylist import DisplayList
 
 log = logging.getLogger(__name__)
 
@@ -25,10 +25,10 @@ def _resolve_profile(profile: Any) -> Any:
     if profile is not None and not isinstance(profile, str):
         return profile
     try:
-        from .profiles import load_profile
+        from pixelpen.profiles.model import load_profile
     except ImportError:
         if profile is not None:
-            raise ConfigError(f"cannot load device profile {profile!r}: pixelpen.vector.profiles is not available") from None
+            raise ConfigError(f"cannot load device profile {profile!r}: pixelpen.profiles.model is not available") from None
         return None
     if profile is not None:
         return load_profile(profile)
@@ -79,7 +79,7 @@ def _split(dl: DisplayList, prof: Any, home: tuple[float, float], return_home: b
     }
     times: list[dict[str, float] | None] = [None] * k
     if prof is not None:
-        from .motion import plan
+        from pixelpen.vector.motion import plan
 
         blocks = plan(dl.points * dl.unit_mm, prof.pen_down, dl.offsets)
         down_s = np.bincount(idx[blocks.stroke], weights=blocks.duration, minlength=k) if len(blocks) else np.zeros(k)

@@ -38,8 +38,8 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 import svgelements as se
 
-from ..errors import ConfigError, ParseError
-from .displaylist import DisplayList
+from pixelpen.errors import ConfigError, ParseError
+from pixelpen.vector.displaylist import DisplayList
 
 log = logging.getLogger(__name__)
 

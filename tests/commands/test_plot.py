@@ -18,7 +18,7 @@ import pytest
 
 from pixelpen.cli import main
 from pixelpen.commands import plot as plotcmd
-from pixelpen.devices.plotter import PlotProgress
+from pixelpen.devices.plotters.base import PlotProgress
 from pixelpen.display.pictfile import save_picture
 from pixelpen.display.picture import Picture, Polyline, Style
 from pixelpen.sim.base import forget_simulator, named_simulator

@@ -14,7 +14,7 @@ from PIL import Image
 from pixelpen.cli import main
 from pixelpen.commands import sim as simcmd
 from pixelpen.errors import URLError
-from pixelpen.sim.transport import SimPort, TransportOptions
+from pixelpen.sim.transports.port import SimPort, TransportOptions
 
 
 def zigzag_hpgl(n: int) -> bytes:
@@ -191,9 +191,9 @@ def test_pty_command_writes_the_paper_on_sigterm(tmp_path):
 
 def test_grbl_simulator_defaults_are_the_machine_the_driver_plots_for():
     # one machine description: what the GRBL driver asks a sim:grbl for equals what pixelpen sim grbl builds
-    from pixelpen.devices.grbl import GrblPlotter
+    from pixelpen.devices.plotters.grbl import GrblPlotter
     from pixelpen.urls import parse_url
-    from pixelpen.vector.profiles import load_profile
+    from pixelpen.profiles.model import load_profile
 
     profile = load_profile("grbl")
     wanted = GrblPlotter.simulator_options({}, GrblPlotter.options_of(parse_url("grbl:x")), profile)

@@ -56,7 +56,7 @@ def test_stats_table_and_json(drawing, capsys):
 
 
 def test_stats_with_a_device_profile(drawing, capsys):
-    pytest.importorskip("pixelpen.vector.profiles")
+    pytest.importorskip("pixelpen.profiles.model")
     assert run(["stats", str(drawing), "--device", "axidraw_v3", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["total"]["time"]["total_s"] > 0
     assert run(["stats", str(drawing), "--device", "no-such-device"]) == 2

@@ -22,7 +22,7 @@ from pixelpen.drivers.discovery import (
 from pixelpen.drivers.serial import SerialLink
 from pixelpen.errors import ConfigError
 from pixelpen.sim import base
-from pixelpen.sim.usbbackend import PrinterClassBackend
+from pixelpen.sim.transports.usbbackend import PrinterClassBackend
 from tests.sim.fakes import EchoDevice, ScriptedDevice
 
 HPGL = {b"OI;": b"7475A\r"}

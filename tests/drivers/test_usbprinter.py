@@ -14,8 +14,8 @@ from pixelpen.drivers.usbprinter import (
     parse_device_id_string,
 )
 from pixelpen.errors import Disconnected, LinkError, LinkTimeout, ParseError
-from pixelpen.sim.transport import Faults
-from pixelpen.sim.usbbackend import PrinterClassBackend
+from pixelpen.sim.transports.port import Faults
+from pixelpen.sim.transports.usbbackend import PrinterClassBackend
 from tests.sim.fakes import EchoDevice
 
 # 40 characters of ID + 2 length bytes = 42 = 0x002A

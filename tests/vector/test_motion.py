@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from pixelpen.errors import ConfigError
 from pixelpen.vector.displaylist import DisplayList
 from pixelpen.vector.motion import MotionLimits, estimate_time, junction_speeds, plan
-from pixelpen.vector.profiles import DeviceProfile
+from pixelpen.profiles.model import DeviceProfile
 
 SAXI_DOWN = MotionLimits(speed=50.0, accel=200.0, cornering=0.127)
 

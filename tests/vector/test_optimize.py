@@ -14,7 +14,7 @@ from pixelpen.vector.motion import estimate_time
 from pixelpen.vector.dedupe import DuplicateRemoval, remove_duplicates
 from pixelpen.vector.optimize import OptimizeReport, optimize
 from pixelpen.vector.order import auto_budget
-from pixelpen.vector.profiles import load_profile
+from pixelpen.profiles.model import load_profile
 
 
 def canonical_segments(dl: DisplayList) -> list[tuple[float, float, float, float]]:

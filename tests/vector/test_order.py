@@ -11,7 +11,7 @@ from pixelpen.errors import ConfigError
 from pixelpen.vector.displaylist import DisplayList
 from pixelpen.vector.motion import estimate_time
 from pixelpen.vector.order import order_paths, stroke_groups
-from pixelpen.vector.profiles import load_profile
+from pixelpen.profiles.model import load_profile
 from tests.vector.test_optimize import canonical_segments, display_lists, dots, grouped
 
 

@@ -78,7 +78,7 @@ def test_per_layer_figures_are_each_layers_share_of_the_plot():
 
 
 def test_layer_times_add_up_to_the_motion_model_total():
-    profiles = pytest.importorskip("pixelpen.vector.profiles")
+    profiles = pytest.importorskip("pixelpen.profiles.model")
     from pixelpen.vector.motion import estimate_time
 
     prof = profiles.load_profile("axidraw_v3")
@@ -98,7 +98,7 @@ def test_layer_times_add_up_to_the_motion_model_total():
 
 
 def test_time_from_a_profile_matches_trapezoid_motion():
-    profiles = pytest.importorskip("pixelpen.vector.profiles")
+    profiles = pytest.importorskip("pixelpen.profiles.model")
     prof = profiles.load_profile("axidraw_v3")
     dl = DisplayList.from_polylines([np.array([[10, 0], [10, 40]])], unit_mm=1.0)
     s = plot_stats(dl, prof, return_home=True)
@@ -114,7 +114,7 @@ def test_time_from_a_profile_matches_trapezoid_motion():
 
 
 def test_default_profile_is_used_when_it_exists():
-    profiles = pytest.importorskip("pixelpen.vector.profiles")
+    profiles = pytest.importorskip("pixelpen.profiles.model")
     if "axidraw_v3" not in profiles.builtin_profiles():
         pytest.skip("no axidraw_v3 profile")
     s = plot_stats(drawing())
@@ -123,7 +123,7 @@ def test_default_profile_is_used_when_it_exists():
 
 
 def test_unknown_profile_is_a_config_error():
-    pytest.importorskip("pixelpen.vector.profiles")
+    pytest.importorskip("pixelpen.profiles.model")
     with pytest.raises(ConfigError):
         plot_stats(drawing(), "no-such-plotter")
 

@@ -1,0 +1,1 @@
+"""File displays: PNG images and SVG drawings written like any other device."""

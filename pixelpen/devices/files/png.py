@@ -1,0 +1,76 @@
+"""The ``png:`` file display: a raster display drawn by the raster engine and saved as PNG.
+
+Limits (class attributes of :class:`PngFileDisplay`, read at call time): ``MAX_PIXELS`` (width x height,
+default 100 million: a 300 MB RGB framebuffer), ``MAX_DPI`` (100,000); the file name must suit the file
+system (:func:`pixelpen.urls.check_path`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from pixelpen.display.capabilities import Capabilities
+from pixelpen.display.kinds import RasterDisplay
+from pixelpen.display.registry import register_display
+from pixelpen.raster.canvas import Canvas
+from pixelpen.errors import ConfigError, URLError
+from pixelpen.urls import DeviceURL, check_path, parse_size
+
+_MODES = {"1": "mono", "L": "grey", "P": "indexed", "RGB565": "rgb565", "RGB": "rgb888", "RGBA": "rgba"}
+
+
+@register_display("png")
+class PngFileDisplay(RasterDisplay):
+    """Draws into a framebuffer and writes it to ``PATH`` (``png:PATH?size=800x600&dpi=96``)."""
+
+    url_options = {
+        "size": "image size in pixels, WxH; default 800x600",
+        "dpi": "pixels per inch, sets the millimetre size of a pixel; default 96",
+        "mode": "pixel mode: 1, L, P, RGB565, RGB or RGBA; default RGB",
+        "background": "background colour, a name or #rrggbb; default white",
+    }
+    MAX_PIXELS = 100_000_000
+    """Pixels of the image (width x height)."""
+    MAX_DPI = 100_000.0
+    """Pixels per inch."""
+
+    def __init__(
+        self, path: str | Path, *, size: tuple[int, int] = (800, 600), dpi: float = 96.0, mode: str = "RGB",
+        background: object = "white",
+    ) -> None:
+        if mode not in _MODES:
+            raise ConfigError(f"png mode must be one of {', '.join(_MODES)}, got {mode!r}")
+        path = check_path(path, "png file name (the URL target)")
+        width, height = size
+        if not (isinstance(width, int) and isinstance(height, int) and width > 0 and height > 0):
+            raise ConfigError(f"png size must be whole pixels > 0, got {size!r}")
+        if width * height > self.MAX_PIXELS:
+            raise ConfigError(f"png size {width}x{height} is more than PngFileDisplay.MAX_PIXELS = {self.MAX_PIXELS} pixels")
+        if not 0 < dpi <= self.MAX_DPI:
+            raise ConfigError(f"png dpi must be > 0 and at most {self.MAX_DPI:g}, got {dpi!r}")
+        caps = Capabilities(
+            model="png", category="file", kind="raster", size=(float(size[0]), float(size[1])), unit_mm=25.4 / dpi,
+            colour_model=_MODES[mode], y_down=True, can_erase=True, tolerance=0.25, limits={"file": str(path)},
+        )
+        super().__init__(caps, mode=mode, background=background, deferral="flush")
+        self.path = Path(path)
+
+    @classmethod
+    def from_url(cls, url: DeviceURL, **kwargs: object) -> "PngFileDisplay":
+        opts = cls.options_of(url)
+        w, h, unit = opts.get("size", parse_size, (800.0, 600.0, "px"))
+        if unit != "px" or w != int(w) or h != int(h):
+            raise URLError(f"{url}: png size is whole pixels, WxH (e.g. 800x600), got {url.options['size']!r}")
+        return cls(
+            url.target, size=(int(w), int(h)), dpi=opts.get("dpi", float, 96.0), mode=opts.get("mode", str, "RGB"),
+            background=opts.get("background", str, "white"),
+        )
+
+    def _open_device(self) -> None:
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+
+    def _close_device(self) -> None:
+        self.canvas.save(self.path)
+
+    def _show(self, canvas: Canvas) -> None:
+        canvas.save(self.path)

@@ -1,0 +1,939 @@
+"""What every pen plotter shares: the link, stroke-by-stroke plotting with confirmed progress,
+pause at pen-up, pen changes, resume after faults (in process or from a state file), and safe stops.
+
+A plotter family (HPGL, GRBL, EBB) subclasses :class:`PlotterDisplay` and implements the device core:
+
+* ``_connect()`` — handshake and initialise the device on ``self.link`` (called on every (re)connect);
+* ``_send_stroke(index, points, pen)`` — encode one stroke (integer device units, pen down along it,
+  pen up at its end) and stream it with the family's flow control; it may block while the device's
+  buffer is full, and must call ``self._confirm(k)`` whenever the device confirms strokes < k done;
+* ``_poll()`` — read whatever the device has said without blocking (confirmations, errors);
+* ``_drain()`` — wait until every stroke sent is confirmed;
+* ``_select_pen(pen)`` — take pen ``pen`` (multi-pen devices; single-pen devices never get it);
+* ``_device_paused()`` — True while the device's own pause (button, VIEW, paper lever) holds;
+* ``_make_safe()`` — best effort, never raising: stop motion, pen up, park, motors off;
+
+and, with safe defaults in the base:
+
+* ``_where()`` — on a fresh link, before ``_connect()``: let the device finish (or discard) what the
+  old connection left, then report a :class:`DeviceWhere` (default: position unknown);
+* ``_rehomed()`` — after a lost position the user re-homed and confirmed: take where the device stands as
+  home (default: nothing; the EBB clears its step counters);
+* ``_manual_pen(down)``, ``_manual_pen_state()``, ``_manual_home()``, ``_manual_motors_off()`` —
+  immediate manual control behind :meth:`PlotterDisplay.pen_up` and friends (default: ConfigError).
+
+Confirmation is the device's word that a stroke is on paper (an output request answered after it,
+a status report, an idle motor query), not merely that its bytes were received.
+
+Resuming draws each stroke exactly once: strokes from the last confirmed one to the last one sent
+are in doubt; after reconnecting the base asks the device where it stopped (``_where``) and
+:func:`locate` finds that point in the strokes in doubt (pen-up travel in a straight line to a
+stroke's first point, pen down along it, pen up at its end).  The plot continues with the rest of
+the interrupted stroke.  A position that matches nothing, matches several different amounts of
+drawing (a closed stroke seen with the pen up at its start/end, a path that revisits a point), or
+that the device lost (power loss, reset) raises :class:`PositionUnknown` instead of guessing; a
+resume with ``position_confirmed=True`` then continues from the earliest possible point (the last
+confirmed stroke when nothing is known): it may redraw, it never loses.  A device error in known strokes
+(``_mark_damaged``) has those strokes drawn again whole before the plot goes on from where it stopped.
+
+Limits: the strokes in doubt are those sent since the last confirmation (bounded by the family's
+confirmation interval); :func:`locate` costs one pass over their points.  A display opened with an
+unfinished state file asks the device where it stopped before its handshake (HP-GL: at least
+``hpgl.SETTLE_S`` seconds).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import math
+import os
+from abc import abstractmethod
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Callable, ClassVar
+
+import numpy as np
+
+from pixelpen.clock import REAL_CLOCK, Clock
+from pixelpen.display.capabilities import Capabilities
+from pixelpen.display.kinds import VectorDisplay
+from pixelpen.drivers.stream import Link
+from pixelpen.drivers.serial import SerialLink
+from pixelpen.errors import ConfigError, LinkError, ParseError, PixelpenError, ProtocolError, URLError
+from pixelpen.urls import DeviceURL, Options, check_path, format_url
+from pixelpen.vector.displaylist import DisplayList
+from pixelpen.vector.motion import estimate_time
+from pixelpen.profiles.model import DeviceProfile, load_profile
+
+log = logging.getLogger(__name__)
+
+STATE_VERSION = 2
+_STATE_VERSIONS = (1, 2)
+"""State file versions read (version 1 lacks ``sent`` and ``position_lost``)."""
+
+
+@dataclass
+class PlotProgress:
+    """Where a plot stands, for progress bars: strokes and pen-down millimetres done, time and ETA."""
+
+    strokes_done: int
+    strokes_total: int
+    pen_down_mm_done: float
+    pen_down_mm_total: float
+    elapsed_s: float
+    eta_s: float
+
+    @property
+    def fraction(self) -> float:
+        """Share of the pen-down distance confirmed, 0..1."""
+        return self.pen_down_mm_done / self.pen_down_mm_total if self.pen_down_mm_total else 1.0
+
+
+class PlotInterrupted(PixelpenError):
+    """A plot stopped on a fault; ``resume_from`` is the first stroke the device did not confirm."""
+
+    def __init__(self, message: str, *, resume_from: int, state_file: Path | None, cause: BaseException | None = None) -> None:
+        self.resume_from = resume_from
+        self.state_file = state_file
+        self.cause = cause
+        where = f"; state saved to {state_file} (plot again with --resume)" if state_file else ""
+        super().__init__(f"{message}; {resume_from} strokes were confirmed{where}")
+
+
+class DeviceFault(PlotInterrupted, ProtocolError):
+    """The device reported an error during a plot: a ProtocolError (``code``, ``command``) the plot resumes from."""
+
+    def __init__(self, error: ProtocolError, *, resume_from: int, state_file: Path | None) -> None:
+        PlotInterrupted.__init__(self, f"plot stopped by a device error: {error}", resume_from=resume_from,
+                                 state_file=state_file, cause=error)
+        self.code, self.command, self.device = error.code, error.command, error.device
+
+
+class PositionUnknown(PixelpenError):
+    """Where the device stopped cannot be told; ``resume_from`` is where a confirmed resume restarts."""
+
+    def __init__(self, message: str, *, resume_from: int, strokes: range) -> None:
+        self.resume_from = resume_from
+        self.strokes = strokes
+        super().__init__(message)
+
+
+@dataclass(frozen=True)
+class DeviceWhere:
+    """What a device says after a fault: where the pen is (device units of the sent points) and whether it knows."""
+
+    position: tuple[float, float] | None
+    pen_down: bool | None
+    settled: bool = True
+    """The device will not move any more on bytes of the old connection (drained or aborted)."""
+    position_lost: bool = False
+    """The device restarted or lost steps: its position says nothing about the job."""
+    tolerance: float = 0.5
+    """Device units within which the position counts as on a vertex or a segment."""
+    detail: str = ""
+    """What the device said, for messages."""
+    reached: tuple[int, int] | None = None
+    """(stroke, k): acknowledgements prove the device ran at least to point k of the points given to ``_send_stroke``
+    for that stroke (k = 0: the pen-up travel to points[0]); None: no such lower bound."""
+
+
+@dataclass(frozen=True)
+class ResumePoint:
+    """Where drawing stopped: strokes < ``stroke`` done, stroke ``stroke`` drawn to vertex ``vertex`` (then to ``at``)."""
+
+    stroke: int
+    vertex: int = 0
+    at: tuple[float, float] | None = None
+    """A point inside segment vertex..vertex+1 where the pen stopped (None: at the vertex)."""
+
+    def remainder(self, points: np.ndarray) -> np.ndarray | None:
+        """The stroke's points still to draw (None: the whole stroke)."""
+        if self.vertex == 0 and self.at is None:
+            return None
+        if self.at is None:
+            return points[self.vertex:]
+        head = np.rint(np.asarray([self.at], float)).astype(points.dtype)
+        return np.concatenate([head, points[self.vertex + 1:]])
+
+
+def locate(
+    window: list[tuple[int, np.ndarray]], where: DeviceWhere, before: np.ndarray | None, *,
+    lifts: Callable[[int], bool] = lambda stroke: True, down_at_start: bool = True,
+) -> list[ResumePoint]:
+    """Every distinct place in the strokes ``window`` ((index, sent points) in order) the device state may be, earliest first.
+
+    ``before`` is the pen position before the window's first stroke (the end of the stroke before it), or None.
+    ``lifts(s)``: the device may rest with the pen lifted at stroke s's end (False where lifting and travelling
+    to the next stroke are one instruction); ``down_at_start``: it may rest with the pen down at a stroke's
+    first point before drawing (False where lowering and drawing are one instruction).  A pen reported up
+    rests only between strokes (the base lifts it nowhere else); a device that lifts by itself inside a
+    stroke must report ``pen_down=None``.  ``where.reached`` (stroke, k) drops every place before point k of that
+    stroke (in the window's points).
+    """
+    if where.position is None:
+        return []
+    q = np.asarray(where.position, float)
+    tol = float(where.tolerance)
+    found: list[ResumePoint] = []
+    up_ok, down_ok = where.pen_down is not True, where.pen_down is not False
+    prev, prev_index = before, None
+    for index, pts in window:
+        p = np.asarray(pts, float)
+        t = _near_segment(q, prev, p[0], tol) if prev is not None and up_ok else None
+        if t is not None and not (prev_index is not None and not lifts(prev_index)
+                                  and np.hypot(*(q - prev)) <= tol and np.hypot(*(q - p[0])) > tol):
+            found.append(ResumePoint(index))  # travelling to the stroke's start, or there with the pen still up
+        if len(p) == 1:
+            if np.hypot(*(q - p[0])) <= tol:
+                if up_ok:
+                    found.append(ResumePoint(index))
+                if down_ok or lifts(index):
+                    found.append(ResumePoint(index + 1))
+        else:
+            for j in range(len(p) - 1):
+                t = _near_segment(q, p[j], p[j + 1], tol)
+                if t is None:
+                    continue
+                length = float(np.hypot(*(p[j + 1] - p[j])))
+                if t * length >= length - tol:
+                    last = j + 1 == len(p) - 1
+                    if not down_ok and not (last and lifts(index)):
+                        continue  # the pen is lifted only between strokes, where the family says it may rest
+                    found.append(ResumePoint(index + 1) if last else ResumePoint(index, j + 1))
+                elif t * length <= tol:
+                    if (j == 0 and not up_ok and not down_at_start) or (j > 0 and not down_ok):
+                        continue  # not down on a start before drawing (if the family says so), not up inside
+                    found.append(ResumePoint(index, j))
+                elif down_ok:
+                    found.append(ResumePoint(index, j, (float(q[0]), float(q[1]))))
+        prev, prev_index = p[-1], index
+    if where.reached is not None:
+        floor = where.reached
+        found = [r for r in found if (r.stroke, r.vertex) >= floor]
+    return _distinct(found, tol)
+
+
+def _near_segment(q: np.ndarray, a: np.ndarray, b: np.ndarray, tol: float) -> float | None:
+    """Parameter t in 0..1 of the point of segment a-b nearest q, if q lies within ``tol`` of it."""
+    d = b - a
+    dd = float(d @ d)
+    t = 0.0 if dd == 0 else min(1.0, max(0.0, float((q - a) @ d) / dd))
+    return t if float(np.hypot(*(a + t * d - q))) <= tol else None
+
+
+def _distinct(points: list[ResumePoint], tol: float) -> list[ResumePoint]:
+    out: list[ResumePoint] = []
+    for r in sorted(points, key=lambda r: (r.stroke, r.vertex, r.at is not None)):
+        if not any(o.stroke == r.stroke and o.vertex == r.vertex and (o.at is None) == (r.at is None)
+                   and (o.at is None or np.hypot(o.at[0] - r.at[0], o.at[1] - r.at[1]) <= 2 * tol) for o in out):
+            out.append(r)
+    return out
+
+
+def fingerprint(dl: DisplayList) -> str:
+    """A hash of a display list's strokes and pens, to tell a state file's drawing from another."""
+    h = hashlib.sha256()
+    for arr in (np.round(dl.points, 6), dl.offsets, dl.pens):
+        h.update(np.ascontiguousarray(arr).tobytes())
+    return h.hexdigest()[:32]
+
+
+@dataclass
+class PlotState:
+    """The resumable state of a plot, saved as JSON after every confirmation."""
+
+    url: str
+    fingerprint: str
+    strokes: int
+    confirmed: int
+    sent: int | None = None
+    """One past the last stroke whose bytes went out (None: unknown, every unconfirmed stroke is in doubt)."""
+    position_lost: bool = False
+    """The device said it lost its position; a resume needs ``position_confirmed``."""
+    damaged: list[int] | None = None
+    """[start, stop) of strokes the device reported it did not draw as sent; a resume draws them again."""
+    lifts: list[int] | None = None
+    """Unconfirmed strokes after which the pen was lifted in place (None: unknown)."""
+    stopped_at: list[float] | None = None
+    """[x, y, pen down 1/0/-1 unknown, tolerance]: where the device stopped, asked before the safe stop parked it."""
+    start: list[float] | None = None
+    """[stroke, x, y]: the pen position before that stroke's travel, the first stroke of the run (None: unknown)."""
+    version: int = STATE_VERSION
+
+    def save(self, path: Path) -> None:
+        """Write the state atomically (temp file + rename), so a crash never leaves half a file."""
+        tmp = path.with_name(path.name + ".tmp")
+        with open(tmp, "w", encoding="utf-8") as fh:
+            json.dump(asdict(self), fh)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+
+    @classmethod
+    def load(cls, path: Path) -> "PlotState":
+        """Read a state file; a ParseError names the file and the field that is wrong."""
+        try:
+            data = json.loads(Path(path).read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise ParseError(f"cannot read plot state: {exc.strerror}", source=str(path)) from None
+        except json.JSONDecodeError as exc:
+            raise ParseError(f"plot state is not JSON: {exc.msg}", source=str(path), line=exc.lineno, column=exc.colno) from None
+        if not isinstance(data, dict) or data.get("version") not in _STATE_VERSIONS:
+            raise ParseError(f"not a version-{STATE_VERSION} pixelpen plot state", source=str(path))
+        try:
+            state = cls(**{**data, "version": STATE_VERSION})
+        except TypeError as exc:
+            raise ParseError(f"plot state has wrong fields: {exc}", source=str(path)) from None
+        if not (isinstance(state.strokes, int) and isinstance(state.confirmed, int) and 0 <= state.confirmed <= state.strokes):
+            raise ParseError("plot state field 'confirmed' is out of range", source=str(path), token=state.confirmed)
+        if state.sent is not None and not (isinstance(state.sent, int) and state.confirmed <= state.sent <= state.strokes):
+            raise ParseError("plot state field 'sent' is out of range", source=str(path), token=state.sent)
+        if state.damaged is not None and not (
+            isinstance(state.damaged, list) and len(state.damaged) == 2 and all(isinstance(v, int) for v in state.damaged)
+            and 0 <= state.damaged[0] <= state.damaged[1] <= state.strokes
+        ):
+            raise ParseError("plot state field 'damaged' is not a [start, stop] stroke range", source=str(path),
+                             token=state.damaged)
+        if state.lifts is not None and not (
+            isinstance(state.lifts, list) and all(isinstance(v, int) and 0 <= v < state.strokes for v in state.lifts)
+        ):
+            raise ParseError("plot state field 'lifts' is not a list of stroke numbers", source=str(path), token=state.lifts)
+        if state.stopped_at is not None and not (
+            isinstance(state.stopped_at, list) and len(state.stopped_at) == 4
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in state.stopped_at)
+            and state.stopped_at[2] in (-1, 0, 1) and state.stopped_at[3] >= 0
+        ):
+            raise ParseError("plot state field 'stopped_at' is not [x, y, pen -1/0/1, tolerance]", source=str(path),
+                             token=state.stopped_at)
+        if state.start is not None and not (
+            isinstance(state.start, list) and len(state.start) == 3
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in state.start)
+            and isinstance(state.start[0], int) and 0 <= state.start[0] <= state.strokes
+        ):
+            raise ParseError("plot state field 'start' is not [stroke, x, y]", source=str(path), token=state.start)
+        if not isinstance(state.position_lost, bool):
+            raise ParseError("plot state field 'position_lost' is not true or false", source=str(path), token=state.position_lost)
+        return state
+
+
+PenChange = Callable[[int], None]
+"""Called on single-pen devices when the next stroke needs another pen; returns when it is in."""
+ProgressCallback = Callable[[PlotProgress], None]
+PauseCallback = Callable[[bool], None]
+"""Called with True once the device has actually paused (idle, pen up), with False when it goes on."""
+
+
+class PlotterDisplay(VectorDisplay):
+    """A pen plotter reached through a Link: plots, confirms, pauses at pen-up, resumes, stops safe."""
+
+    simulated: ClassVar[bool] = True
+    profile_name: ClassVar[str] = ""
+    """Built-in profile the scheme uses unless the URL names another."""
+    family: ClassVar[str] = ""
+    """Simulator model name for ``sim:`` URLs (usually the scheme)."""
+    lifts_after_each_stroke: ClassVar[bool] = True
+    """The device may rest with the pen lifted at the end of any stroke (False: only after ``_lifted_in_place``)."""
+    rests_pen_down_at_start: ClassVar[bool] = True
+    """The device may rest with the pen lowered on a stroke's first point before drawing it."""
+    reports_position: ClassVar[bool] = False
+    """True when the family implements ``_where``; otherwise a resume restarts at the last confirmed stroke
+    (strokes drawn since are drawn again) without asking the device."""
+    url_options = {
+        "paper": "paper size known to the profile (a4, a3, letter, ...); default the profile's",
+        "baud": "serial speed; default the profile's",
+        "flow": "flow control: none, rtscts or xonxoff; default the profile's",
+        "timeout": "seconds to wait for any reply; default the profile's",
+        "profile": "a device profile TOML file instead of the built-in one",
+        "state": "file to keep the plot state in, for resuming after a fault",
+    }
+
+    def __init__(
+        self,
+        port: str,
+        *,
+        profile: DeviceProfile,
+        paper: str | None = None,
+        baudrate: int | None = None,
+        flow: str | None = None,
+        timeout: float | None = None,
+        clock: Clock | None = None,
+        state_file: str | Path | None = None,
+        link_factory: Callable[[], Link] | None = None,
+        on_progress: ProgressCallback | None = None,
+        on_pen_change: PenChange | None = None,
+        pause_requested: Callable[[], bool] | None = None,
+        on_pause: PauseCallback | None = None,
+    ) -> None:
+        self.profile = profile
+        self.paper = profile.paper(paper)
+        x0, x1 = self.paper.x_range
+        y0, y1 = self.paper.y_range
+        caps = Capabilities(
+            model=profile.name, category="output", kind="vector", size=(float(x1 - x0), float(y1 - y0)),
+            unit_mm=profile.unit_mm, colour_model="pens", y_down=not profile.y_up,
+            pens=tuple(profile.pen_colours.get(p, "#000000") for p in range(1, profile.pens + 1)),
+            can_erase=False, tolerance=max(0.5, 0.02 / profile.unit_mm),
+            limits={"x_range": (x0, x1), "y_range": (y0, y1), "paper": self.paper.name},
+        )
+        super().__init__(caps, pen_width_mm=profile.pen_width_mm, deferral="flush")
+        self.port = port
+        link = profile.link
+        self.baudrate = baudrate or (link.baudrate if link else 9600)
+        self.flow = flow or ("rtscts" if link and link.rtscts else "xonxoff" if link and link.xonxoff else "none")
+        self.timeout = timeout if timeout is not None else (link.timeout_s if link else 8.0)
+        self.clock = clock or REAL_CLOCK
+        self._clock_given = clock is not None
+        self.state_file = check_path(state_file, "state_file") if state_file else None
+        self._link_factory = link_factory
+        self.on_progress = on_progress
+        self.on_pen_change = on_pen_change
+        self.pause_requested = pause_requested
+        self.on_pause = on_pause
+        self.link: Link | None = None
+        self.pen: int | None = None
+        """Pen the device holds now (None: unknown or none)."""
+        self.confirmed = 0
+        """Strokes of the current job the device has confirmed on paper."""
+        self._job: DisplayList | None = None
+        self._job_state: PlotState | None = None
+        self._cum_mm = np.zeros(1)
+        self._estimate_s = 0.0
+        self._started = 0.0
+        self._sent_end = 0
+        """One past the last stroke whose bytes started going out."""
+        self._head: tuple[int, np.ndarray, ResumePoint] | None = None
+        """The first stroke of a resumed run, the remainder of it that was sent, and the point it resumed at."""
+        self._run_start: tuple[int, tuple[float, float]] | None = None
+        """The first stroke of the current run and the pen position before its travel (``_pen_position()``)."""
+        self._interrupted = False
+        self._position_lost = False
+        self._where_found: DeviceWhere | None = None
+        """What ``_where()`` said on the last fresh link opened for a resume."""
+        self._paused_now = False
+        self._left_as_set = False
+        """The last thing done was a manual action: closing leaves the pen and carriage where the user put them."""
+        self._stopped_at: DeviceWhere | None = None
+        """Where an interrupted job's device stopped, asked before the safe stop parked it."""
+        self._damaged: range | None = None
+        """Strokes the device reported it did not draw as sent (an error, a wrong position)."""
+        self._lifts: set[int] | None = set()
+        """Strokes after which the family lifted the pen without moving (None: unknown, any may be)."""
+        self._redo = range(0)
+        """Whole strokes a resume draws again before it continues (a damaged stretch)."""
+
+    # -- construction ------------------------------------------------------------------------
+    @classmethod
+    def from_url(cls, url: DeviceURL, **kwargs: object) -> "PlotterDisplay":
+        """``MODEL:PORT?options`` for hardware, ``sim:MODEL?options`` for the simulator."""
+        sim_opts: dict[str, str] | None = None
+        if url.scheme == "sim":
+            model = url.target
+            own = {k: v for k, v in url.options.items() if k in cls.url_options and k not in ("baud", "flow")}
+            sim_opts = {k: v for k, v in url.options.items() if k not in own or k == "paper"}
+            opts, port = DeviceURL(model, "", own, str(url)), ""
+        else:
+            opts, port = url, url.target
+        options = cls.options_of(opts)
+        profile = options.get("profile", load_profile, None) or cls.default_profile(options)
+        if sim_opts is not None:
+            port = format_url("sim", "//" + model, cls.simulator_options(sim_opts, options, profile))
+        return cls(
+            port, profile=profile, paper=options.get("paper", str, None), baudrate=options.get("baud", int, None),
+            flow=options.get("flow", _flow, None), timeout=options.get("timeout", float, None),
+            state_file=kwargs.pop("state_file", None) or options.get("state", str, None),  # type: ignore[arg-type]
+            **cls.family_options(options, profile), **kwargs,  # type: ignore[arg-type]
+        )
+
+    @classmethod
+    def default_profile(cls, options: Options) -> DeviceProfile:
+        """The built-in profile of a URL without ``profile=`` (a family with several models reads its option)."""
+        return load_profile(cls.profile_name)
+
+    @classmethod
+    def family_options(cls, options: Options, profile: DeviceProfile) -> dict[str, object]:
+        """Constructor keywords read from the family's own URL options (the base has none)."""
+        return {}
+
+    @classmethod
+    def simulator_options(cls, sim_options: dict[str, str], options: Options, profile: DeviceProfile) -> dict[str, str]:
+        """Options for the simulator of a ``sim:`` URL: as given, paper included (a family translates its own)."""
+        return sim_options
+
+    # -- life cycle ----------------------------------------------------------------------------
+    def _open_device(self) -> None:
+        self._attach(self._make_link())
+        try:
+            if self.reports_position and self._unfinished_state_file():
+                self._where_found = self._where()
+            self._connect()
+        except BaseException:
+            self.link.close()
+            self.link = None
+            raise
+
+    def _make_link(self) -> Link:
+        if self._link_factory is not None:
+            return self._link_factory()
+        return SerialLink(self.port, baudrate=self.baudrate, flow=self.flow, timeout=self.timeout)  # type: ignore[arg-type]
+
+    def _close_device(self) -> None:
+        link, self.link = self.link, None
+        if link is None:
+            return
+        try:
+            if not link.closed and not self._left_as_set:
+                self._make_safe_on(link)
+        finally:
+            link.close()
+
+    def _make_safe_on(self, link: Link) -> None:
+        self.link = link
+        try:
+            if self._interrupted and self.reports_position:
+                self._note_where_stopped()
+            self._make_safe()
+        except Exception as exc:  # leaving the device safe is best effort on a failing link
+            log.warning("could not leave %s safe: %s", self.profile.name, exc)
+        finally:
+            self.link = None
+
+    def reconnect(self) -> None:
+        """Close the link (if any), open a new one and handshake again (after an unplug or reset)."""
+        if self.link is not None:
+            try:
+                self.link.close()
+            finally:
+                self.link = None
+        self.pen = None
+        self._attach(self._make_link())
+        self._where_found = self._where() if self._interrupted and self.reports_position else None
+        self._connect()
+
+    def _unfinished_state_file(self) -> bool:
+        """True when the state file holds a job that did not finish (a resume may follow: ask the device first)."""
+        if self.state_file is None or not self.state_file.exists():
+            return False
+        try:
+            state = PlotState.load(self.state_file)
+        except ParseError:
+            return False  # plot(resume=True) reports it
+        return state.confirmed < state.strokes
+
+    def _attach(self, link: Link) -> None:
+        """Use ``link``; a display given no clock keeps time on the link's (a ``speed=fast`` simulator's)."""
+        self.link = link
+        self._paused_now = False  # a fresh link knows of no pause yet: the next one is announced again
+        if not self._clock_given:
+            self.clock = link.clock
+
+    # -- VectorDisplay hooks -------------------------------------------------------------------
+    def _plot(self, strokes: DisplayList) -> None:
+        self.plot(strokes)
+
+    def _new_sheet(self) -> None:
+        self._make_safe()
+        if self.on_pen_change is None:
+            log.warning("%s: a plotter cannot erase; put in a new sheet before the next drawing", self.profile.name)
+
+    # -- plotting ------------------------------------------------------------------------------
+    def plot(self, dl: DisplayList, *, resume: bool = False, position_confirmed: bool = False) -> None:
+        """Plot a display list in device units; with ``resume`` continue the interrupted job exactly where it stopped.
+
+        ``position_confirmed`` (after :class:`PositionUnknown`): the device was re-homed or checked; continue
+        from the earliest point it may have reached.
+        """
+        if self.link is None:
+            raise PixelpenError(f"{self.profile.name} is not open")
+        self._left_as_set = False
+        pts = self._device_points(dl)
+        start = self._start_job(dl, resume, pts, position_confirmed)
+        self._head = None
+        redo, self._redo = self._redo, range(0)
+        try:
+            for i in [*redo, *range(start.stroke, len(dl))]:
+                self._hold_while_paused()
+                pen = int(dl.pens[i])
+                if pen != self.pen:
+                    self._change_pen(pen)
+                stroke = pts[dl.offsets[i] : dl.offsets[i + 1]]
+                if i == start.stroke and (rest := start.remainder(stroke)) is not None:
+                    stroke = rest
+                    self._head = (i, rest, start)
+                self._sent_end = i + 1
+                self._send_stroke(i, stroke, pen)
+                self._poll()
+            self._drain()
+        except ProtocolError as exc:  # the device refused something: said as it is, and the job is resumable
+            self._interrupted = True
+            self._save_state(sent=self._sent_end)
+            raise DeviceFault(exc, resume_from=self.confirmed, state_file=self.state_file) from exc
+        except (LinkError, ParseError) as exc:  # a garbled reply on a live link is a link fault
+            self._poll_quietly()
+            self._interrupted = True
+            self._save_state(sent=self._sent_end)
+            raise PlotInterrupted(
+                f"plot interrupted: {exc}", resume_from=self.confirmed, state_file=self.state_file, cause=exc,
+            ) from exc
+        except KeyboardInterrupt:
+            self._make_safe()
+            raise
+        self._interrupted = False
+        self._confirm(len(dl))
+
+    def resume_after_fault(self, attempts: int = 3, wait_s: float = 1.0, *, position_confirmed: bool = False) -> None:
+        """Reconnect, ask the device where it stopped and plot the rest of the interrupted job from exactly there."""
+        if self._job is None:
+            raise PixelpenError("there is no interrupted plot to resume")
+        for attempt in range(1, attempts + 1):
+            try:
+                self.reconnect()
+                break
+            except LinkError as exc:
+                if attempt == attempts:
+                    raise
+                log.warning("reconnect %d/%d failed: %s", attempt, attempts, exc)
+                self.clock.sleep(wait_s)
+        self.plot(self._job, resume=True, position_confirmed=position_confirmed)
+
+    def _start_job(self, dl: DisplayList, resume: bool, pts: np.ndarray, position_confirmed: bool = False) -> ResumePoint:
+        fp = fingerprint(dl)
+        start = ResumePoint(0)
+        if resume and self._job is not None and fingerprint(self._job) == fp:
+            start = self._resume_point(dl, pts, self.confirmed, self._sent_end, position_confirmed)
+        elif resume and self.state_file is not None:
+            if not self.state_file.exists():
+                raise ConfigError(f"{self.state_file}: no plot state to resume (the file does not exist)")
+            state = PlotState.load(self.state_file)
+            if state.fingerprint != fp or state.strokes != len(dl):
+                raise ConfigError(f"{self.state_file}: the plot state belongs to another drawing; refusing to resume")
+            self._position_lost = self._position_lost or state.position_lost
+            if state.damaged is not None:
+                self._mark_damaged(range(*state.damaged))
+            self._lifts = None if state.lifts is None else set(state.lifts)
+            if self._where_found is None and self.reports_position:
+                self._interrupted = True
+                self.reconnect()  # the display was opened without the state file: ask the device now
+            now = self._where_found
+            if state.stopped_at is not None and now is not None and not now.position_lost:
+                # the last session asked where the device stopped before it parked it
+                x, y, pen, tol = state.stopped_at
+                self._where_found = DeviceWhere((x, y), None if pen < 0 else bool(pen), tolerance=tol,
+                                                detail=f"stopped at {x:g},{y:g} (asked before the last session parked it)")
+            sent = len(dl) if state.sent is None else state.sent
+            self._job, self._head, self._job_state = dl, None, state  # a PositionUnknown below keeps the file current
+            self._run_start = None if state.start is None else (int(state.start[0]), (state.start[1], state.start[2]))
+            self.confirmed = state.confirmed
+            start = self._resume_point(dl, pts, state.confirmed, sent, position_confirmed)
+        elif resume:
+            raise ConfigError("nothing to resume: no interrupted plot in this process and no state file")
+        else:
+            self._lifts, self._damaged, self._position_lost, self._redo = set(), None, False, range(0)
+        self._job = dl
+        self._job_state = PlotState(self.port, fp, len(dl), self._redo.start if self._redo else start.stroke)
+        seg = np.hypot(*np.diff(dl.points, axis=0).T) if len(dl.points) > 1 else np.zeros(0)
+        per_stroke = np.add.reduceat(np.append(seg, 0.0), dl.offsets[:-1]) - np.where(
+            dl.offsets[1:] < len(dl.points), np.append(seg, 0.0)[np.minimum(dl.offsets[1:] - 1, len(seg))], 0.0
+        ) if len(dl) else np.zeros(0)
+        self._cum_mm = np.concatenate([[0.0], np.cumsum(per_stroke)]) * dl.unit_mm
+        self._estimate_s = _estimate_seconds(dl, self.profile)
+        self._started = self.clock.now()
+        self.confirmed = self._redo.start if self._redo else start.stroke
+        self._sent_end = self.confirmed
+        at = self._pen_position()
+        self._run_start = None if at is None else (self.confirmed, (float(at[0]), float(at[1])))
+        self._job_state.start = None if at is None else [self.confirmed, float(at[0]), float(at[1])]
+        self._save_state()
+        return start
+
+    def _resume_point(self, dl: DisplayList, pts: np.ndarray, confirmed: int, sent: int, confirmed_by_user: bool) -> ResumePoint:
+        """Where to continue the job: located from ``_where()`` among strokes confirmed..sent, or PositionUnknown."""
+        where, self._where_found = self._where_found, None
+        self._stopped_at = None
+        if not self.reports_position:
+            log.warning("%s: resuming at stroke %d, the last confirmed one: strokes drawn since are drawn again",
+                        self.profile.name, confirmed)
+            return ResumePoint(confirmed)
+        window = [(i, pts[dl.offsets[i] : dl.offsets[i + 1]]) for i in range(confirmed, sent)]
+        head = self._head if self._head is not None and confirmed <= self._head[0] < sent else None
+        if head is not None:
+            window[head[0] - confirmed] = (head[0], head[1])  # the points sent, the frame of the device's answer
+        run = self._run_start
+        if run is not None and run[0] == confirmed:
+            before: np.ndarray | None = np.asarray(run[1], float)
+        else:
+            before = pts[dl.offsets[confirmed] - 1] if confirmed > 0 else None
+        if where is not None and where.position_lost:
+            self._position_lost = True
+        lost = self._position_lost or where is None or not where.settled
+        lifts = self._lifts
+        found = [] if lost else locate(
+            window, where, before, down_at_start=self.rests_pen_down_at_start,
+            lifts=(lambda s: True) if self.lifts_after_each_stroke or lifts is None else lifts.__contains__,
+        )
+        if head is not None:
+            found = [_in_full_stroke(r, head[0], len(pts[dl.offsets[head[0]] : dl.offsets[head[0] + 1]]) - len(head[1]), head[2])
+                     for r in found]
+        damaged, self._damaged = self._damaged, None
+        self._redo = range(0)
+        first = max(confirmed, damaged.start) if damaged is not None else confirmed
+        if damaged is not None and len(found) == 1 and not lost:
+            if found[0].stroke < first or found[0] == ResumePoint(first):
+                return found[0]
+            if found[0].stroke < damaged.stop:
+                return ResumePoint(first)  # inside a damaged stroke: that stroke again from its start
+            self._redo = range(first, damaged.stop)
+            return found[0]
+        if damaged is not None and not lost and where is not None and where.position is not None and (
+                not found or found[0].stroke >= first):
+            found = [ResumePoint(first)]  # off every stroke, or several places after the damage: redraw from it on
+        if len(found) == 1 and not self._position_lost:
+            return found[0]
+        if confirmed_by_user:
+            self._position_lost = False
+            if lost:
+                self._rehomed()
+            return found[0] if found and not lost else ResumePoint(confirmed)
+        if confirmed == sent:
+            return ResumePoint(confirmed)  # nothing was in doubt
+        strokes = range(confirmed, sent)
+        if lost:
+            why = (where.detail if where is not None and where.detail else "the device cannot tell where it stopped")
+        elif not found:
+            why = f"it stands at {where.position} (pen {_pen_word(where.pen_down)}), on none of the strokes sent since the last confirmation"
+        else:
+            why = f"its position {where.position} (pen {_pen_word(where.pen_down)}) fits {len(found)} places: " + ", ".join(
+                f"stroke {r.stroke}" + (f" after vertex {r.vertex}" if r.vertex or r.at else "") for r in found)
+        self._damaged = damaged  # still to be drawn again by the confirmed resume
+        self._stopped_at = where if where is not None and where.position is not None and not lost else None
+        self._save_state(sent=sent)
+        raise PositionUnknown(
+            f"{self.profile.name}: cannot tell which of strokes {confirmed}..{sent - 1} are on paper: {why}. "
+            f"Re-home the device or check the sheet, then resume with position_confirmed=True "
+            f"(pixelpen plot --resume --confirm-position): it continues from stroke {found[0].stroke if found else confirmed}"
+            + ("" if found else ", redrawing what was drawn since"),
+            resume_from=found[0].stroke if found else confirmed, strokes=strokes,
+        )
+
+    def _device_points(self, dl: DisplayList) -> np.ndarray:
+        """Stroke points in integer device units, offset to the paper's hard-clip origin."""
+        if not np.isclose(dl.unit_mm, self.profile.unit_mm):
+            raise ConfigError(
+                f"display list is in {dl.unit_mm} mm units but {self.profile.name} plots in {self.profile.unit_mm} mm units"
+            )
+        offset = np.array([self.paper.x_range[0], self.paper.y_range[0]], float)
+        return np.rint(dl.points + offset).astype(np.int64)
+
+    def _confirm(self, k: int) -> None:
+        """Record the device's word that strokes < k are on paper (families call this)."""
+        if self._job is None or k <= self.confirmed:
+            return
+        self.confirmed = min(k, len(self._job))
+        self._save_state()
+        if self.on_progress is not None:
+            self.on_progress(self.progress())
+
+    def progress(self) -> PlotProgress:
+        """The current job's progress, with an ETA scaled by how the device keeps to the estimate."""
+        total = len(self._job) if self._job is not None else 0
+        done_mm, total_mm = float(self._cum_mm[self.confirmed]), float(self._cum_mm[-1])
+        elapsed = self.clock.now() - self._started
+        share = done_mm / total_mm if total_mm else (self.confirmed / total if total else 1.0)
+        eta = max(0.0, self._estimate_s * (1.0 - share))
+        return PlotProgress(self.confirmed, total, done_mm, total_mm, elapsed, eta)
+
+    def _save_state(self, sent: int | None = None) -> None:
+        """Write the state file: confirmed strokes, ``sent`` when known (at a fault), the lost-position flag."""
+        if self.state_file is not None and self._job_state is not None:
+            self._job_state.confirmed = self.confirmed
+            self._job_state.sent = sent
+            self._job_state.position_lost = self._position_lost
+            self._job_state.damaged = [self._damaged.start, self._damaged.stop] if self._damaged else None
+            self._job_state.lifts = None if self._lifts is None else sorted(s for s in self._lifts if s >= self.confirmed)
+            at = self._stopped_at
+            self._job_state.stopped_at = None if at is None or at.position is None else [
+                float(at.position[0]), float(at.position[1]), -1 if at.pen_down is None else int(at.pen_down), at.tolerance]
+            self._job_state.save(self.state_file)
+
+    def _hold_while_paused(self) -> None:
+        """Wait between strokes (pen up) while the user or the device asks for a pause."""
+        announced = False
+        while (self.pause_requested is not None and self.pause_requested()) or self._device_paused():
+            if not announced:
+                self._drain()
+                log.info("%s: paused with the pen up", self.profile.name)
+                self._pause_changed(True)
+                announced = True
+            self.clock.sleep(0.05)
+        if announced:
+            log.info("%s: resumed", self.profile.name)
+            self._pause_changed(False)
+
+    def _mark_damaged(self, strokes: range) -> None:
+        """Families call this before raising for an error the device found in ``strokes`` (an instruction skipped or misread).
+
+        The resume draws those strokes again whole (never losing one; their good parts are drawn twice),
+        then continues where the device stopped.
+        """
+        if self._damaged is not None:
+            strokes = range(min(self._damaged.start, strokes.start), max(self._damaged.stop, strokes.stop))
+        self._damaged = strokes
+
+    def _note_where_stopped(self) -> None:
+        """Before the safe stop parks an interrupted job's device, ask where it stopped and keep it in the state file."""
+        try:
+            where = self._where()
+        except PixelpenError as exc:  # the link that failed the plot may be gone: the next session asks the device
+            log.debug("%s: cannot ask where the plot stopped: %s", self.profile.name, exc)
+            return
+        if where.position_lost:
+            self._position_lost = True
+        elif where.position is not None and where.settled:
+            self._stopped_at = where
+        self._save_state(sent=self._sent_end)
+
+    def _lifted_in_place(self, stroke: int) -> None:
+        """Families whose pen lift is part of the travel call this when they lift the pen in place after ``stroke``."""
+        if self._lifts is not None:
+            self._lifts.add(stroke)
+
+    def _pause_changed(self, paused: bool) -> None:
+        """Tell ``on_pause`` the device has actually paused (True) or goes on (False); families call it for their own pauses."""
+        if paused != self._paused_now:
+            self._paused_now = paused
+            if self.on_pause is not None:
+                self.on_pause(paused)
+
+    # -- manual control ------------------------------------------------------------------------
+    def pen_up(self) -> None:
+        """Raise the pen now."""
+        self._manual("pen up")._manual_pen(False)
+
+    def pen_down(self) -> None:
+        """Lower the pen now."""
+        self._manual("pen down")._manual_pen(True)
+
+    def toggle_pen(self) -> None:
+        """Raise the pen if it is down, lower it if it is up."""
+        down = self._manual("pen toggle")._manual_pen_state()
+        if down is None:
+            raise ConfigError(f"{self.profile.name}: cannot tell whether the pen is up or down; use pen up or pen down")
+        self._manual_pen(not down)
+
+    def go_home(self) -> None:
+        """Pen up and travel to the home (park) position now."""
+        self._manual("home")._manual_home()
+
+    def motors_off(self) -> None:
+        """De-energise the motors now (the carriage can then be moved by hand)."""
+        self._manual("motors off")._manual_motors_off()
+
+    def _manual(self, what: str) -> "PlotterDisplay":
+        if self.link is None:
+            raise PixelpenError(f"{self.profile.name} is not open ({what})")
+        self._left_as_set = True
+        return self
+
+    def _change_pen(self, pen: int) -> None:
+        if pen < 1:
+            raise ConfigError(f"pen numbers start at 1, got {pen}")
+        if self.profile.pens > 1:
+            if pen > self.profile.pens:
+                raise ConfigError(f"{self.profile.name} has {self.profile.pens} pens; stroke wants pen {pen}")
+            self._select_pen(pen)
+        elif self.pen is not None and self.on_pen_change is not None:
+            self._drain()
+            self._make_safe()
+            self.on_pen_change(pen)
+        self.pen = pen
+
+    def _poll_quietly(self) -> None:
+        try:
+            self._poll()
+        except Exception as exc:  # the link is already failing; keep the first error
+            log.debug("poll after fault failed: %s", exc)
+
+    # -- the family's core ---------------------------------------------------------------------
+    @abstractmethod
+    def _connect(self) -> None:
+        """Handshake and initialise the device on ``self.link``."""
+
+    @abstractmethod
+    def _send_stroke(self, index: int, points: np.ndarray, pen: int) -> None:
+        """Stream one stroke (pen down along it, up at its end) with the family's flow control."""
+
+    @abstractmethod
+    def _poll(self) -> None:
+        """Read what the device said without blocking; confirm strokes, raise its errors."""
+
+    @abstractmethod
+    def _drain(self) -> None:
+        """Wait until every stroke sent is confirmed on paper."""
+
+    @abstractmethod
+    def _select_pen(self, pen: int) -> None:
+        """Take pen ``pen`` from the carousel."""
+
+    @abstractmethod
+    def _device_paused(self) -> bool:
+        """True while the device's own pause holds (button, VIEW, paper lever)."""
+
+    @abstractmethod
+    def _make_safe(self) -> None:
+        """Stop, pen up, park, motors off — best effort on ``self.link``."""
+
+    def _where(self) -> DeviceWhere:
+        """On a fresh link before ``_connect()``: let the device settle, say where it is (only if ``reports_position``)."""
+        return DeviceWhere(None, None, position_lost=True, detail=f"the {self.profile.name} driver cannot ask where it stopped")
+
+    def _pen_position(self) -> tuple[float, float] | None:
+        """Where the pen will be once everything sent has run (device units), the next travel's start; None: unknown."""
+        return None
+
+    def _rehomed(self) -> None:
+        """The user re-homed the device after it lost its position: take where it stands as home (default: nothing to do)."""
+
+    def _manual_pen(self, down: bool) -> None:
+        """Move the pen down or up now and wait until it is there."""
+        raise ConfigError(f"{self.profile.name}: pen {'down' if down else 'up'} is not supported by this driver")
+
+    def _manual_pen_state(self) -> bool | None:
+        """Whether the pen is down now (None: the device cannot tell)."""
+        return None
+
+    def _manual_home(self) -> None:
+        """Pen up and travel home now, waiting until there."""
+        raise ConfigError(f"{self.profile.name}: home is not supported by this driver")
+
+    def _manual_motors_off(self) -> None:
+        """De-energise the motors now."""
+        raise ConfigError(f"{self.profile.name}: motors off is not supported by this driver")
+
+
+def _in_full_stroke(r: ResumePoint, stroke: int, offset: int, head: ResumePoint) -> ResumePoint:
+    """A place located in the remainder of ``stroke`` that was sent (from ``head``, ``offset`` points short) as one in the whole stroke."""
+    if r.stroke != stroke:
+        return r
+    if r.vertex == 0 and r.at is None:
+        return head  # nothing of the remainder drawn: where the last resume started
+    return ResumePoint(stroke, r.vertex + offset, r.at)
+
+
+def _pen_word(down: bool | None) -> str:
+    return "unknown" if down is None else "down" if down else "up"
+
+
+def _flow(text: str) -> str:
+    if text not in ("none", "rtscts", "xonxoff"):
+        raise ValueError("expected none, rtscts or xonxoff")
+    return text
+
+
+def _estimate_seconds(dl: DisplayList, profile: DeviceProfile) -> float:
+    """Estimated plot time of ``dl``, or 0 when the profile has no motion limits to estimate with."""
+    try:
+        return float(estimate_time(dl, profile).total)
+    except (ConfigError, URLError) as exc:
+        log.debug("no time estimate for %s: %s", profile.name, exc)
+        return 0.0

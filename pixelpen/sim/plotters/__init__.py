@@ -1,0 +1,1 @@
+"""Simulated pen plotters: the shared paper sheet and one simulator per command language."""

@@ -1,0 +1,1 @@
+"""The EiBotBoard (AxiDraw) simulator: command table, motion and parameters."""

@@ -1,0 +1,85 @@
+"""Shared plotter-simulator parts: end-stop clamping, the paper's strokes and rendering, option validation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from pixelpen.errors import URLError
+from pixelpen.sim.plotters.sheet import Paper, clamp_path, read_options
+
+LO = np.array([0.0, 0.0])
+HI = np.array([100.0, 50.0])
+
+
+def test_clamp_path_inside_is_the_straight_move():
+    path = clamp_path(np.array([10.0, 10.0]), np.array([20.0, 30.0]), LO, HI)
+    assert np.allclose(path, [[10, 10], [20, 30]])
+
+
+def test_clamp_path_rides_the_end_stop():
+    # from (90, 10) to (110, 30): x reaches 100 halfway at (100, 20), then only y moves to 30
+    path = clamp_path(np.array([90.0, 10.0]), np.array([110.0, 30.0]), LO, HI)
+    assert np.allclose(path, [[90, 10], [100, 20], [100, 30]])
+
+
+def test_clamp_path_starting_outside():
+    path = clamp_path(np.array([-10.0, 10.0]), np.array([10.0, 10.0]), LO, HI)
+    assert np.allclose(path, [[0, 10], [10, 10]])
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(-200, 200, allow_nan=False), min_size=4, max_size=4))
+def test_clamp_path_is_the_pointwise_clamp(v):
+    p0, p1 = np.array(v[:2]), np.array(v[2:])
+    path = clamp_path(p0, p1, LO, HI)
+    assert np.all(path >= LO - 1e-9) and np.all(path <= HI + 1e-9)
+    for f in np.linspace(0, 1, 11):  # every clamped point of the move lies on the polyline
+        q = np.clip(p0 + f * (p1 - p0), LO, HI)
+        seg_a, seg_b = path[:-1], path[1:]
+        d = seg_b - seg_a
+        denom = np.maximum((d * d).sum(1), 1e-30)
+        t = np.clip(((q - seg_a) * d).sum(1) / denom, 0, 1)
+        dist = np.hypot(*(seg_a + t[:, None] * d - q).T).min()
+        assert dist < 1e-6
+
+
+def test_paper_strokes_dots_and_length():
+    paper = Paper(100, 50, y_down=True)
+    paper.pen_down([1, 2])
+    paper.line_to([[1, 2], [4, 6]])
+    paper.line_to([[4, 6], [4, 10]])
+    paper.pen_up()
+    paper.pen_down([50, 25])  # touched and lifted: a dot
+    paper.pen_up()
+    paper.line_to([[0, 0], [9, 9]])  # pen up: nothing recorded
+    strokes = paper.strokes()
+    assert [len(s) for _, s in strokes] == [3, 1]
+    assert np.allclose(strokes[0][1], [[1, 2], [4, 6], [4, 10]])
+    assert paper.ink_length() == pytest.approx(5 + 4)
+    dl = paper.display_list()
+    assert len(dl) == 2 and dl.unit_mm == 1.0
+
+
+def test_paper_image_draws_ink_where_the_strokes_are():
+    pytest.importorskip("pixelpen.raster.canvas")
+    paper = Paper(100, 50, y_down=False, pen_colours={1: "red"}, pen_width_mm=0.3)
+    paper.pen_down([10, 10])
+    paper.line_to([[10, 10], [90, 10]])
+    paper.pen_up()
+    img = np.asarray(paper.paper_image(dpi=25.4).array)  # 1 px per mm
+    assert img.shape == (50, 100, 3)
+    row = 50 - 1 - 10  # y up: 10 mm from the bottom
+    assert tuple(img[row, 50]) == (255, 0, 0)
+    assert tuple(img[5, 5]) == (255, 255, 255)
+
+
+def test_read_options_names_the_bad_option_and_lists_the_known():
+    readers = {"size": (float, 1.0), "pen": (str, "servo")}
+    assert read_options("x", {"size": "2"}, readers) == {"size": 2.0, "pen": "servo"}
+    with pytest.raises(URLError, match=r"unknown option\(s\) colour.*known: pen, size"):
+        read_options("x", {"colour": "red"}, readers)
+    with pytest.raises(URLError, match=r"option size='big' is not valid"):
+        read_options("x", {"size": "big"}, readers)
