@@ -42,7 +42,7 @@ import numpy as np
 
 import pixelpen
 from pixelpen import cli
-from pixelpen.devices.plotter import PlotInterrupted, PositionUnknown
+from pixelpen.devices.plotters.base import PlotInterrupted, PositionUnknown
 from pixelpen.errors import LinkError, PixelpenError, ProtocolError
 from pixelpen.sim.base import forget_simulator, named_simulator
 from pixelpen.vector.displaylist import DisplayList

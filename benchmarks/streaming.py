@@ -38,7 +38,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import pixelpen  # noqa: E402
 from pixelpen.clock import SimulatedClock  # noqa: E402
 from pixelpen.sim.base import create_simulator, forget_simulator, named_simulator  # noqa: E402
-from pixelpen.sim.transport import SimPort  # noqa: E402
+from pixelpen.sim.transports.port import SimPort  # noqa: E402
 from pixelpen.vector.displaylist import DisplayList  # noqa: E402
 
 USB_BAUD = 12_000_000
