@@ -7,13 +7,26 @@ pictures are built from the primitives in ``pixelpen.display.picture``.
 from __future__ import annotations
 
 from pixelpen import _moved
-
 from pixelpen.display.base import Display
 from pixelpen.display.picture import (
-    Arc, Bezier, BSpline, Circle, Ellipse, Fill, Image, Marker, Picture, Polygon, Polyline, Rectangle, Segment, Style,
+    Arc,
+    Bezier,
+    BSpline,
+    Circle,
+    Ellipse,
+    Fill,
+    Image,
+    Marker,
+    Picture,
+    Polygon,
+    Polyline,
+    Rectangle,
+    Segment,
+    Style,
     Text,
 )
-from pixelpen.display.registry import known_schemes, open_display as open
+from pixelpen.display.registry import known_schemes
+from pixelpen.display.registry import open_display as open
 from pixelpen.errors import ConfigError, LinkError, ParseError, PixelpenError, ProtocolError, URLError
 
 _moved.install()
@@ -21,7 +34,28 @@ _moved.install()
 __version__ = "0.1.0"
 
 __all__ = [
-    "open", "known_schemes", "Display", "Picture", "Segment", "Style", "Fill", "Polyline", "Polygon", "Rectangle",
-    "Circle", "Ellipse", "Arc", "Bezier", "BSpline", "Marker", "Text", "Image", "PixelpenError", "ConfigError",
-    "URLError", "ParseError", "ProtocolError", "LinkError",
+    "Arc",
+    "BSpline",
+    "Bezier",
+    "Circle",
+    "ConfigError",
+    "Display",
+    "Ellipse",
+    "Fill",
+    "Image",
+    "LinkError",
+    "Marker",
+    "ParseError",
+    "Picture",
+    "PixelpenError",
+    "Polygon",
+    "Polyline",
+    "ProtocolError",
+    "Rectangle",
+    "Segment",
+    "Style",
+    "Text",
+    "URLError",
+    "known_schemes",
+    "open",
 ]

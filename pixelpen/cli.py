@@ -12,7 +12,8 @@ import argparse
 import difflib
 import logging
 import sys
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 from pixelpen import __version__
 from pixelpen.config import drop_configured, load_config

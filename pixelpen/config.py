@@ -25,9 +25,10 @@ from __future__ import annotations
 import argparse
 import difflib
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from pixelpen.errors import ParseError
 from pixelpen.tomltext import read_toml

@@ -7,7 +7,20 @@ import numpy as np
 from pixelpen import geometry as geo
 from pixelpen.display.base import Display
 from pixelpen.display.picture import (
-    Arc, Bezier, BSpline, Circle, Ellipse, Fill, Image, Marker, Picture, Polygon, Polyline, Rectangle, Segment, Style,
+    Arc,
+    Bezier,
+    BSpline,
+    Circle,
+    Ellipse,
+    Fill,
+    Image,
+    Marker,
+    Picture,
+    Polygon,
+    Polyline,
+    Rectangle,
+    Segment,
+    Style,
     Text,
 )
 

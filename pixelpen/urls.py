@@ -25,9 +25,10 @@ file names (:func:`check_path`) without NUL, at most :data:`MAX_NAME` bytes per 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterable, Mapping, TypeVar
+from typing import TypeVar
 from urllib.parse import quote, unquote
 
 from pixelpen.errors import ConfigError, URLError, quote_token

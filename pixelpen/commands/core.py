@@ -9,12 +9,12 @@ import sys
 from dataclasses import asdict
 from pathlib import Path
 
+from pixelpen.commands.plot import plot_demo
 from pixelpen.display.pictfile import load_picture
 from pixelpen.display.registry import known_schemes, open_display
 from pixelpen.drivers.discovery import DiscoveredDevice, discover
 from pixelpen.scene import draw_reference
 from pixelpen.urls import format_url
-from pixelpen.commands.plot import plot_demo
 
 _ROLE = re.compile(r":[a-z]+(?::[a-z]+)?:`(?:([^`<]*?)\s*<[^`>]*>|~(?:[\w.]*\.)?([^`]*)|([^`]*))`")
 _LITERAL = re.compile(r"``(.+?)``|`([^`]+)`|\*\*(.+?)\*\*")

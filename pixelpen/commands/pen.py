@@ -11,8 +11,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from pixelpen.errors import ConfigError
 from pixelpen.commands.plot import plotter_for
+from pixelpen.errors import ConfigError
 
 ACTIONS = {
     "up": ("pen_up", "pen up"),

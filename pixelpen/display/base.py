@@ -9,14 +9,15 @@ from __future__ import annotations
 
 import logging
 from abc import ABC, abstractmethod
-from typing import ClassVar, Iterable, Literal
+from collections.abc import Iterable
+from typing import ClassVar, Literal
 
 from pixelpen import geometry as geo
-from pixelpen.errors import ConfigError, PixelpenError
-from pixelpen.urls import DeviceURL, Options
 from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.flatten import DeviceShape, flatten_picture
 from pixelpen.display.picture import PRIMITIVE_TYPES, Picture, Primitive, Segment
+from pixelpen.errors import ConfigError, PixelpenError
+from pixelpen.urls import DeviceURL, Options
 
 log = logging.getLogger(__name__)
 
@@ -51,7 +52,7 @@ class Display(ABC):
     # -- construction from URLs -------------------------------------------------------------
     @classmethod
     @abstractmethod
-    def from_url(cls, url: DeviceURL, **kwargs: object) -> "Display":
+    def from_url(cls, url: DeviceURL, **kwargs: object) -> Display:
         """Build the display a parsed URL describes; read options with ``cls.options_of(url)``."""
 
     @classmethod
@@ -60,7 +61,7 @@ class Display(ABC):
         return Options(url, cls.url_options)
 
     # -- life cycle --------------------------------------------------------------------------
-    def open(self) -> "Display":
+    def open(self) -> Display:
         """Connect to the device (idempotent)."""
         if not self.is_open:
             self._open_device()
@@ -84,7 +85,7 @@ class Display(ABC):
             self.is_open = False
             self._close_device()
 
-    def __enter__(self) -> "Display":
+    def __enter__(self) -> Display:
         return self.open()
 
     def __exit__(self, exc_type, exc, tb) -> None:

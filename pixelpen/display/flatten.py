@@ -9,16 +9,30 @@ their size in millimetres whatever the transform; text is drawn with the stroke 
 from __future__ import annotations
 
 import logging
+from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Iterator, Literal
+from typing import Literal
 
 import numpy as np
 
 from pixelpen import geometry as geo
-from pixelpen.errors import InvalidArgument
 from pixelpen.display.picture import (
-    Arc, Bezier, BSpline, Circle, Ellipse, Image, Marker, Picture, Polygon, Polyline, Primitive, Rectangle, Style, Text,
+    Arc,
+    Bezier,
+    BSpline,
+    Circle,
+    Ellipse,
+    Image,
+    Marker,
+    Picture,
+    Polygon,
+    Polyline,
+    Primitive,
+    Rectangle,
+    Style,
+    Text,
 )
+from pixelpen.errors import InvalidArgument
 
 log = logging.getLogger(__name__)
 
@@ -42,7 +56,7 @@ class DeviceShape:
 
 def flatten_picture(
     picture: Picture | Primitive,
-    pipeline: "geo.ViewingPipeline",
+    pipeline: geo.ViewingPipeline,
     *,
     tolerance: float,
     unit_mm: float,

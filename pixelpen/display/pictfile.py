@@ -34,19 +34,35 @@ import base64
 import io
 import json
 import math
+from collections.abc import Callable
 from dataclasses import fields
 from pathlib import Path
-from typing import Any, Callable, TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 from PIL import Image as PILImage
 
+from pixelpen.display.picture import (
+    Arc,
+    Bezier,
+    BSpline,
+    Circle,
+    Ellipse,
+    Fill,
+    Image,
+    Marker,
+    Picture,
+    Polygon,
+    Polyline,
+    Primitive,
+    Rectangle,
+    Segment,
+    Style,
+    Text,
+    colour_hex,
+)
 from pixelpen.errors import ConfigError, ParseError, PixelpenError, quote_token
 from pixelpen.urls import check_path
-from pixelpen.display.picture import (
-    Arc, Bezier, BSpline, Circle, Ellipse, Fill, Image, Marker, Picture, Polygon, Polyline, Primitive, Rectangle,
-    Segment, Style, Text, colour_hex,
-)
 
 FORMAT = "pixelpen-picture"
 VERSION = 1

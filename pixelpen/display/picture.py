@@ -14,8 +14,9 @@ TypeError), a bad value ``ConfigError`` (also a ValueError). Limits (module attr
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Iterator, Literal, Union
+from typing import Literal, Union
 
 import numpy as np
 

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 from pixelpen import geometry as geo
-from pixelpen.raster.canvas import Canvas
-from pixelpen.display.vectorize import device_angle
-from pixelpen.geometry.hatch import hatch
 from pixelpen.display.flatten import DeviceShape
 from pixelpen.display.picture import Fill, Image
+from pixelpen.display.vectorize import device_angle
+from pixelpen.geometry.hatch import hatch
+from pixelpen.raster.canvas import Canvas
 
 DEFAULT_HATCH_MM = 1.0
 """Hatch spacing on raster displays when the fill gives none."""

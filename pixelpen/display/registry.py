@@ -10,8 +10,9 @@ from __future__ import annotations
 import importlib
 import logging
 import pkgutil
+from collections.abc import Callable
 from importlib import metadata
-from typing import TYPE_CHECKING, Callable, TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 from pixelpen.errors import URLError
 from pixelpen.urls import DeviceURL, parse_url
@@ -21,7 +22,7 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-_DISPLAYS: dict[str, type["Display"]] = {}
+_DISPLAYS: dict[str, type[Display]] = {}
 _loaded = False
 D = TypeVar("D", bound=type)
 
@@ -59,13 +60,13 @@ def _load() -> None:
             log.warning("display plug-in %s (%s) failed to load: %s", entry.name, entry.value, exc)
 
 
-def known_schemes() -> dict[str, type["Display"]]:
+def known_schemes() -> dict[str, type[Display]]:
     """All registered schemes and their display classes."""
     _load()
     return dict(sorted(_DISPLAYS.items()))
 
 
-def display_class(scheme: str) -> type["Display"]:
+def display_class(scheme: str) -> type[Display]:
     """The display class registered for ``scheme``; URLError listing the known schemes otherwise."""
     _load()
     try:
@@ -74,7 +75,7 @@ def display_class(scheme: str) -> type["Display"]:
         raise URLError(f"unknown scheme {scheme!r}; known schemes: {', '.join(sorted(_DISPLAYS))}") from None
 
 
-def open_display(url: str | DeviceURL, **kwargs: object) -> "Display":
+def open_display(url: str | DeviceURL, **kwargs: object) -> Display:
     """Create and open the display a URL names (``pixelpen.open``)."""
     parsed = url if isinstance(url, DeviceURL) else parse_url(url)
     if parsed.scheme == "sim":

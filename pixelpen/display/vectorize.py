@@ -11,8 +11,8 @@ import numpy as np
 
 from pixelpen.display.picture import Style, colour_hex, parse_colour
 from pixelpen.errors import ConfigError
-from pixelpen.vector.displaylist import DisplayList
 from pixelpen.geometry.hatch import hatch
+from pixelpen.vector.displaylist import DisplayList
 
 log = logging.getLogger(__name__)
 

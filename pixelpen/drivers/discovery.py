@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import logging
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Any, Callable, Final
+from typing import Any, Final
 
 from serial.tools import list_ports
 
-from pixelpen.errors import ConfigError, LinkError, ParseError
 from pixelpen.drivers.stream import Link
+from pixelpen.errors import ConfigError, LinkError, ParseError
 
 _log = logging.getLogger(__name__)
 

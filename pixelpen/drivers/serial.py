@@ -26,9 +26,9 @@ import serial
 from serial.tools import list_ports
 
 from pixelpen.clock import Clock
+from pixelpen.drivers.stream import Link
 from pixelpen.errors import Disconnected, LinkError, LinkTimeout, PixelpenError
 from pixelpen.sim.transports import urlhandler as _sim_urlhandler  # noqa: F401  (registers sim://)
-from pixelpen.drivers.stream import Link
 
 FLOWS = ("none", "rtscts", "xonxoff")
 

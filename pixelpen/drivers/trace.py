@@ -36,14 +36,15 @@ import math
 import os
 import re
 from bisect import bisect_right
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import IO, Final, Iterable, Mapping
+from typing import IO, Final
 from urllib.parse import quote, unquote
 
 from pixelpen.clock import Clock, SimulatedClock
+from pixelpen.drivers.stream import Link, printable
 from pixelpen.errors import ConfigError, LinkError, ParseError, TraceMismatch
 from pixelpen.urls import check_path
-from pixelpen.drivers.stream import Link, printable
 
 TRACE_MAGIC: Final = "#pixelpen-trace"
 TRACE_VERSION: Final = 1

@@ -23,8 +23,8 @@ import usb.core
 import usb.util
 
 from pixelpen.clock import Clock
-from pixelpen.errors import Disconnected, LinkError, LinkTimeout, ParseError
 from pixelpen.drivers.stream import Link
+from pixelpen.errors import Disconnected, LinkError, LinkTimeout, ParseError
 
 PRINTER_CLASS = 7
 GET_DEVICE_ID = 0

@@ -6,7 +6,8 @@ BOTTOM = 4 (y < ymin), TOP = 8 (y > ymax). Window edges are inside: a point on t
 
 from __future__ import annotations
 
-from typing import Literal, Sequence
+from collections.abc import Sequence
+from typing import Literal
 
 import numpy as np
 

@@ -11,7 +11,7 @@ B-spline evaluation needs O(samples x degree) memory whatever the number of cont
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

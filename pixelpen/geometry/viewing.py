@@ -3,12 +3,23 @@
 from __future__ import annotations
 
 import math
-from typing import Any, Literal, Sequence
+from collections.abc import Sequence
+from typing import Any, Literal
 
 import numpy as np
 
 from pixelpen.errors import InvalidArgument, InvalidArgumentType
-from pixelpen.geometry.transforms import ArrayLike, as_number, as_pair, apply, compose, invert, rotate, scale_factor, translate
+from pixelpen.geometry.transforms import (
+    ArrayLike,
+    apply,
+    as_number,
+    as_pair,
+    compose,
+    invert,
+    rotate,
+    scale_factor,
+    translate,
+)
 
 Rect = tuple[float, float, float, float]
 Align = Literal["center", "lower-left"]

@@ -16,10 +16,11 @@ TOML integers longer than Python's 4300-digit limit and files nested too deep ar
 from __future__ import annotations
 
 import re
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any
 
 from pixelpen.errors import ConfigError, ParseError, quote_token
 from pixelpen.tomltext import read_toml
@@ -40,8 +41,14 @@ MIN_UNIT_MM = 1e-6
 """Smallest device unit in millimetres."""
 
 __all__ = [
-    "DeviceProfile", "Paper", "LinkSettings", "ServoSettings",
-    "load_profile", "builtin_profiles", "load_vpype_config", "parse_length_mm",
+    "DeviceProfile",
+    "LinkSettings",
+    "Paper",
+    "ServoSettings",
+    "builtin_profiles",
+    "load_profile",
+    "load_vpype_config",
+    "parse_length_mm",
 ]
 
 PROTOCOLS = ("hpgl", "ebb", "grbl", "other")
@@ -197,7 +204,7 @@ class _Table:
             raise self.fail(name, f"expected {what}", value)
         return value
 
-    def sub(self, name: str, keys: tuple[str, ...] | None, required: bool = False) -> "_Table | None":
+    def sub(self, name: str, keys: tuple[str, ...] | None, required: bool = False) -> _Table | None:
         if name not in self.data:
             if required:
                 raise ConfigError(f"{self.source}: missing table '{self.key(name)}'")
@@ -294,7 +301,7 @@ def _paper(name: str, t: _Table) -> Paper:
 
 
 def _link(t: _Table) -> LinkSettings:
-    opt_int = lambda key: t.get(key, lambda v: _is_int(v) and v >= 0, "an integer >= 0", None)  # noqa: E731
+    opt_int = lambda key: t.get(key, lambda v: _is_int(v) and v >= 0, "an integer >= 0", None)
     return LinkSettings(
         baudrate=t.get("baudrate", lambda v: _is_int(v) and v > 0, "an integer baud rate > 0", 9600),
         bytesize=t.get("bytesize", _one_of((5, 6, 7, 8)), "5, 6, 7 or 8", 8),
@@ -311,7 +318,7 @@ def _link(t: _Table) -> LinkSettings:
 
 
 def _servo(t: _Table) -> ServoSettings:
-    percent = lambda v: _is_num(v) and 0 <= v <= 100  # noqa: E731
+    percent = lambda v: _is_num(v) and 0 <= v <= 100
     return ServoSettings(
         min=t.get("min", lambda v: _is_int(v) and v >= 0, "an integer >= 0", None),
         max=t.get("max", lambda v: _is_int(v) and v >= 0, "an integer >= 0", None),
@@ -324,7 +331,7 @@ def _servo(t: _Table) -> ServoSettings:
 
 def _profile(data: dict, source: str) -> DeviceProfile:
     t = _Table(data, source, "", _PROFILE_KEYS)
-    text = lambda v: isinstance(v, str)  # noqa: E731
+    text = lambda v: isinstance(v, str)
     name = t.get("name", lambda v: isinstance(v, str) and v.strip() != "", "a non-empty string", required=True)
     pens = t.get("pens", _pen_count, f"an integer 1..{MAX_PENS}", 1)
     colours = t.get("pen_colours", lambda v: isinstance(v, list) and all(_is_colour(c) for c in v),
@@ -450,7 +457,7 @@ _LENGTH_WHAT = "a length (a number of px, or a string such as '0.025mm')"
 
 
 def _vpype_paper(t: _Table) -> Paper:
-    length_pair = lambda v: isinstance(v, list) and len(v) == 2 and all(_is_length(x) for x in v)  # noqa: E731
+    length_pair = lambda v: isinstance(v, list) and len(v) == 2 and all(_is_length(x) for x in v)
     name = t.get("name", lambda v: isinstance(v, str) and v != "", "a non-empty string", required=True)
     size = t.get("paper_size", length_pair, "a [width, height] pair of lengths", None)
     origin = t.get("origin_location", length_pair, "an [x, y] pair of lengths", required=True)

@@ -5,4 +5,4 @@ from pixelpen.raster.circles import midpoint_circle, midpoint_ellipse
 from pixelpen.raster.formats import FORMATS, pack, unpack
 from pixelpen.raster.lines import bresenham, dda
 
-__all__ = ["Canvas", "MODES", "bresenham", "dda", "midpoint_circle", "midpoint_ellipse", "pack", "unpack", "FORMATS"]
+__all__ = ["FORMATS", "MODES", "Canvas", "bresenham", "dda", "midpoint_circle", "midpoint_ellipse", "pack", "unpack"]

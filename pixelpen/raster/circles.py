@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from pixelpen.errors import ConfigError
-from pixelpen.raster.lines import COORD_LIMIT, int_args, as_int_array, ragged
+from pixelpen.raster.lines import COORD_LIMIT, as_int_array, int_args, ragged
 
 RADIUS_LIMIT = (1 << 15) - 1
 """Largest radius accepted (circles and ellipses): keeps the exact integer checks inside int64."""

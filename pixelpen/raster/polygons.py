@@ -22,7 +22,7 @@ faster path with no sort: each triangle is two trapezoids whose left and right e
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike

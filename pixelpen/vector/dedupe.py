@@ -16,7 +16,7 @@ from pixelpen.errors import ConfigError
 from pixelpen.vector.displaylist import DisplayList
 from pixelpen.vector.merge import group_ids
 
-__all__ = ["remove_duplicates", "deduplicate", "DuplicateRemoval", "filter_min_length", "stroke_lengths"]
+__all__ = ["DuplicateRemoval", "deduplicate", "filter_min_length", "remove_duplicates", "stroke_lengths"]
 
 
 @dataclasses.dataclass(frozen=True)

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import math
-
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -60,7 +59,7 @@ class DisplayList:
         unit_mm: float = 1.0,
         pen_colours: dict[int, str] | None = None,
         page: tuple[float, float] | None = None,
-    ) -> "DisplayList":
+    ) -> DisplayList:
         """Build a display list from a sequence of (N, 2) arrays (empty arrays are skipped)."""
         polys = [np.asarray(p, dtype=np.float64).reshape(-1, 2) for p in polylines]
         keep = [i for i, p in enumerate(polys) if len(p)]
@@ -125,7 +124,7 @@ class DisplayList:
         lo, hi = self.points.min(axis=0), self.points.max(axis=0)
         return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
 
-    def reordered(self, order: Sequence[int], reverse: Sequence[bool] | np.ndarray | None = None) -> "DisplayList":
+    def reordered(self, order: Sequence[int], reverse: Sequence[bool] | np.ndarray | None = None) -> DisplayList:
         """A new display list with strokes taken in ``order``, each reversed where ``reverse`` says so."""
         order = np.asarray(order, dtype=np.int64)
         rev = np.zeros(len(order), bool) if reverse is None else np.asarray(reverse, bool)
@@ -142,12 +141,12 @@ class DisplayList:
             layer_names=dict(self.layer_names), pen_colours=dict(self.pen_colours),
         )
 
-    def select(self, mask: np.ndarray) -> "DisplayList":
+    def select(self, mask: np.ndarray) -> DisplayList:
         """A new display list with only the strokes where ``mask`` is true (order kept)."""
         return self.reordered(np.flatnonzero(np.asarray(mask, bool)))
 
     @staticmethod
-    def concat(lists: Sequence["DisplayList"]) -> "DisplayList":
+    def concat(lists: Sequence[DisplayList]) -> DisplayList:
         """Join display lists in order (unit and page of the first; layer names merged)."""
         lists = [d for d in lists]
         if not lists:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache, lru_cache
 from importlib import resources
 from typing import NamedTuple
 
@@ -146,7 +146,7 @@ def font_names() -> list[str]:
     return list(_shipped_sections())
 
 
-@lru_cache(maxsize=None)
+@cache
 def load_font(name: str) -> Font:
     """The shipped font called ``name`` (ConfigError naming the available fonts otherwise)."""
     sections = _shipped_sections()

@@ -11,7 +11,7 @@ from scipy.spatial import cKDTree
 from pixelpen.errors import ConfigError
 from pixelpen.vector.displaylist import DisplayList
 
-__all__ = ["merge_paths", "link_ends", "walk_chains", "join_chains", "group_ids"]
+__all__ = ["group_ids", "join_chains", "link_ends", "merge_paths", "walk_chains"]
 
 _CANDIDATES = 8  # nearest other ends considered for joining each end
 
@@ -73,7 +73,7 @@ def walk_chains(n: int, link: np.ndarray, reverse: bool) -> tuple[np.ndarray, np
     seen = bytearray(n)
     entries: list[int] = []
     heads = np.zeros(n, bool)
-    for s in range(0, 2 * n) if reverse else range(0, 2 * n, 2):
+    for s in range(2 * n) if reverse else range(0, 2 * n, 2):
         if links[s] >= 0 or seen[s >> 1]:
             continue
         heads[len(entries)] = True

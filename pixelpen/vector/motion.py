@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Union
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -14,7 +14,7 @@ from pixelpen.vector.displaylist import DisplayList
 if TYPE_CHECKING:
     from pixelpen.profiles.model import DeviceProfile
 
-__all__ = ["MotionLimits", "Plan", "PlotTime", "plan", "estimate_time", "junction_speeds"]
+__all__ = ["MotionLimits", "Plan", "PlotTime", "estimate_time", "junction_speeds", "plan"]
 
 _REVERSAL_COS = 0.999999  # GRBL: a junction this close to a full reversal is taken at zero speed
 
@@ -175,7 +175,7 @@ def plan(points: np.ndarray, limits: MotionLimits, offsets: np.ndarray | None = 
 
 def estimate_time(
     dl: DisplayList,
-    profile: Union["DeviceProfile", str],
+    profile: DeviceProfile | str,
     home: tuple[float, float] = (0.0, 0.0),
     return_home: bool = True,
 ) -> PlotTime:

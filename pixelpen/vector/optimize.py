@@ -16,8 +16,13 @@ if TYPE_CHECKING:
     from pixelpen.profiles.model import DeviceProfile
 
 __all__ = [
-    "optimize", "OptimizeReport", "merge_paths", "order_paths", "simplify_strokes", "remove_duplicates",
+    "OptimizeReport",
     "filter_min_length",
+    "merge_paths",
+    "optimize",
+    "order_paths",
+    "remove_duplicates",
+    "simplify_strokes",
 ]
 
 
@@ -83,7 +88,7 @@ def optimize(
     min_length: float | None = None,
     home: tuple[float, float] = (0.0, 0.0),
     time_budget: float | None = None,
-    profile: "DeviceProfile | None" = None,
+    profile: DeviceProfile | None = None,
     across_layers: bool = False,
     report: OptimizeReport | None = None,
 ) -> DisplayList:

@@ -23,7 +23,7 @@ from pixelpen.vector.merge import link_ends, walk_chains
 if TYPE_CHECKING:
     from pixelpen.profiles.model import DeviceProfile
 
-__all__ = ["order_paths", "stroke_groups", "auto_budget"]
+__all__ = ["auto_budget", "order_paths", "stroke_groups"]
 
 _NEIGHBOURS = 8  # candidate list length per end point for the local search
 _MATCH_NEIGHBOURS = 6  # candidate links per end point for the greedy matching
@@ -87,7 +87,7 @@ def order_paths(
     home: tuple[float, float] = (0.0, 0.0),
     reverse: bool = True,
     time_budget: float | None = None,
-    profile: "DeviceProfile | None" = None,
+    profile: DeviceProfile | None = None,
     across_layers: bool = False,
 ) -> DisplayList:
     """Reorder (and, if ``reverse``, flip) strokes to cut pen-up travel, starting from ``home`` (device units).

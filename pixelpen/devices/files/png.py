@@ -12,8 +12,8 @@ from pathlib import Path
 from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.kinds import RasterDisplay
 from pixelpen.display.registry import register_display
-from pixelpen.raster.canvas import Canvas
 from pixelpen.errors import ConfigError, URLError
+from pixelpen.raster.canvas import Canvas
 from pixelpen.urls import DeviceURL, check_path, parse_size
 
 _MODES = {"1": "mono", "L": "grey", "P": "indexed", "RGB565": "rgb565", "RGB": "rgb888", "RGBA": "rgba"}
@@ -56,7 +56,7 @@ class PngFileDisplay(RasterDisplay):
         self.path = Path(path)
 
     @classmethod
-    def from_url(cls, url: DeviceURL, **kwargs: object) -> "PngFileDisplay":
+    def from_url(cls, url: DeviceURL, **kwargs: object) -> PngFileDisplay:
         opts = cls.options_of(url)
         w, h, unit = opts.get("size", parse_size, (800.0, 600.0, "px"))
         if unit != "px" or w != int(w) or h != int(h):

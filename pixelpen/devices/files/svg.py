@@ -17,7 +17,6 @@ from pixelpen.urls import DeviceURL, check_path, parse_size, to_mm
 from pixelpen.vector.displaylist import DisplayList
 from pixelpen.vector.svgimport import write_svg
 
-
 MAX_PEN_WIDTH_MM = 1000.0
 """Widest pen width in millimetres."""
 
@@ -44,7 +43,7 @@ class SvgFileDisplay(VectorDisplay):
         self.path = Path(path)
 
     @classmethod
-    def from_url(cls, url: DeviceURL, **kwargs: object) -> "SvgFileDisplay":
+    def from_url(cls, url: DeviceURL, **kwargs: object) -> SvgFileDisplay:
         opts = cls.options_of(url)
         w, h, unit = opts.get("size", lambda t: parse_size(t, "mm"), (210.0, 297.0, "mm"))
         return cls(url.target, size_mm=(to_mm(w, unit), to_mm(h, unit)), pen_width_mm=opts.get("pen_width", float, 0.3))

@@ -43,12 +43,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from pixelpen.display.registry import register_display
-from pixelpen.drivers.discovery import list_serial_ports
-from pixelpen.drivers.stream import Link
-from pixelpen.errors import ConfigError, Disconnected, LinkError, LinkTimeout, ParseError, ProtocolError
-from pixelpen.urls import Options
-from pixelpen.profiles.model import DeviceProfile, load_profile
+from pixelpen.devices.plotters.base import DeviceWhere, PlotterDisplay
 from pixelpen.devices.plotters.ebb_encode import (
     EBB_USB_ID,
     FEATURES,
@@ -67,7 +62,12 @@ from pixelpen.devices.plotters.ebb_encode import (
     supports,
     vplus_volts,
 )
-from pixelpen.devices.plotters.base import DeviceWhere, PlotterDisplay
+from pixelpen.display.registry import register_display
+from pixelpen.drivers.discovery import list_serial_ports
+from pixelpen.drivers.stream import Link
+from pixelpen.errors import ConfigError, Disconnected, LinkError, LinkTimeout, ParseError, ProtocolError
+from pixelpen.profiles.model import DeviceProfile, load_profile
+from pixelpen.urls import Options
 
 log = logging.getLogger(__name__)
 

@@ -50,22 +50,23 @@ import logging
 import math
 import os
 from abc import abstractmethod
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Callable, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
 from pixelpen.clock import REAL_CLOCK, Clock
 from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.kinds import VectorDisplay
-from pixelpen.drivers.stream import Link
 from pixelpen.drivers.serial import SerialLink
+from pixelpen.drivers.stream import Link
 from pixelpen.errors import ConfigError, LinkError, ParseError, PixelpenError, ProtocolError, URLError
+from pixelpen.profiles.model import DeviceProfile, load_profile
 from pixelpen.urls import DeviceURL, Options, check_path, format_url
 from pixelpen.vector.displaylist import DisplayList
 from pixelpen.vector.motion import estimate_time
-from pixelpen.profiles.model import DeviceProfile, load_profile
 
 log = logging.getLogger(__name__)
 
@@ -272,7 +273,7 @@ class PlotState:
         os.replace(tmp, path)
 
     @classmethod
-    def load(cls, path: Path) -> "PlotState":
+    def load(cls, path: Path) -> PlotState:
         """Read a state file; a ParseError names the file and the field that is wrong."""
         try:
             data = json.loads(Path(path).read_text(encoding="utf-8"))
@@ -425,7 +426,7 @@ class PlotterDisplay(VectorDisplay):
 
     # -- construction ------------------------------------------------------------------------
     @classmethod
-    def from_url(cls, url: DeviceURL, **kwargs: object) -> "PlotterDisplay":
+    def from_url(cls, url: DeviceURL, **kwargs: object) -> PlotterDisplay:
         """``MODEL:PORT?options`` for hardware, ``sim:MODEL?options`` for the simulator."""
         sim_opts: dict[str, str] | None = None
         if url.scheme == "sim":
@@ -829,7 +830,7 @@ class PlotterDisplay(VectorDisplay):
         """De-energise the motors now (the carriage can then be moved by hand)."""
         self._manual("motors off")._manual_motors_off()
 
-    def _manual(self, what: str) -> "PlotterDisplay":
+    def _manual(self, what: str) -> PlotterDisplay:
         if self.link is None:
             raise PixelpenError(f"{self.profile.name} is not open ({what})")
         self._left_as_set = True

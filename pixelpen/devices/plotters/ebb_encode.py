@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from pixelpen.errors import ConfigError, ParseError
-from pixelpen.vector.motion import MotionLimits, Plan, plan
 from pixelpen.profiles.model import ServoSettings
+from pixelpen.vector.motion import MotionLimits, Plan, plan
 
 __all__ = [
     "EBB_USB_ID",

@@ -47,12 +47,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from pixelpen.display.registry import register_display
-from pixelpen.drivers.discovery import list_serial_ports
-from pixelpen.drivers.stream import Link
-from pixelpen.errors import ConfigError, Disconnected, LinkError, LinkTimeout, ParseError, ProtocolError
-from pixelpen.urls import Options, parse_bool
-from pixelpen.profiles.model import DeviceProfile
+from pixelpen.devices.plotters.base import DeviceWhere, PlotterDisplay
 from pixelpen.devices.plotters.grbl_encode import (
     ALARM_CODES,
     ERROR_CODES,
@@ -71,7 +66,12 @@ from pixelpen.devices.plotters.grbl_encode import (
     parse_welcome,
     stroke_lines,
 )
-from pixelpen.devices.plotters.base import DeviceWhere, PlotterDisplay
+from pixelpen.display.registry import register_display
+from pixelpen.drivers.discovery import list_serial_ports
+from pixelpen.drivers.stream import Link
+from pixelpen.errors import ConfigError, Disconnected, LinkError, LinkTimeout, ParseError, ProtocolError
+from pixelpen.profiles.model import DeviceProfile
+from pixelpen.urls import Options, parse_bool
 
 log = logging.getLogger(__name__)
 
@@ -325,7 +325,7 @@ class GrblPlotter(PlotterDisplay):
         done = lifting[0] if lifting else None
         self._send_line(lines[0], _Tag(index, None, done, lifting[1] if lifting else None))
         if joins:
-            vertices = range(1, len(pts)) if len(pts) > 1 else range(0, 1)
+            vertices = range(1, len(pts)) if len(pts) > 1 else range(1)
         else:
             down = len(self.pen_motion.down_lines())
             for line in lines[1:1 + down]:

@@ -73,17 +73,17 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from pixelpen.display.registry import register_display
-from pixelpen.drivers import discovery
-from pixelpen.drivers.stream import Link
-from pixelpen.drivers.serial import SerialLink
-from pixelpen.drivers.usbprinter import UsbPrinterLink
-from pixelpen.errors import ConfigError, LinkError, LinkTimeout, ProtocolError, URLError
-from pixelpen.urls import Options, parse_bool
-from pixelpen.vector.displaylist import DisplayList
-from pixelpen.profiles.model import DeviceProfile
 from pixelpen.devices.plotters import hpgl_encode as enc
 from pixelpen.devices.plotters.base import DeviceWhere, PlotterDisplay
+from pixelpen.display.registry import register_display
+from pixelpen.drivers import discovery
+from pixelpen.drivers.serial import SerialLink
+from pixelpen.drivers.stream import Link
+from pixelpen.drivers.usbprinter import UsbPrinterLink
+from pixelpen.errors import ConfigError, LinkError, LinkTimeout, ProtocolError, URLError
+from pixelpen.profiles.model import DeviceProfile
+from pixelpen.urls import Options, parse_bool
+from pixelpen.vector.displaylist import DisplayList
 
 log = logging.getLogger(__name__)
 
@@ -252,8 +252,7 @@ class HPGLDisplay(PlotterDisplay):
     knows_ps: ClassVar[bool] = False
     """True when the model takes ``PS`` (paper size)."""
     mnemonics: ClassVar[frozenset[str]] = frozenset(
-        "AA AR CA CI CP CS DF DI DR DT EA ER EW FT IM IN IP IW LB LT OA OC OE OF OH OI OO OP OS OW PA PD PR PT PU "
-        "RA RO RR SA SC SI SL SM SP SR SS TL UC VS WG XT YT".split()
+        ["AA", "AR", "CA", "CI", "CP", "CS", "DF", "DI", "DR", "DT", "EA", "ER", "EW", "FT", "IM", "IN", "IP", "IW", "LB", "LT", "OA", "OC", "OE", "OF", "OH", "OI", "OO", "OP", "OS", "OW", "PA", "PD", "PR", "PT", "PU", "RA", "RO", "RR", "SA", "SC", "SI", "SL", "SM", "SP", "SR", "SS", "TL", "UC", "VS", "WG", "XT", "YT"]
     )
     """HP-GL instructions the model knows (the HP-GL/1 set; an error 1 names a sent one outside it)."""
     url_options = {

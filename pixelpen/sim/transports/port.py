@@ -53,8 +53,9 @@ from __future__ import annotations
 
 import math
 import threading
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Callable, Final, Mapping
+from typing import Final
 
 from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
 from pixelpen.errors import ConfigError, Disconnected, LinkError, LinkTimeout, URLError

@@ -722,7 +722,7 @@ class EbbSimulator:
                 raise EbbError(6, error_text(6, self._fw3))
             ticks = max(int(e) for e in ends)  # type: ignore[arg-type]
         cmd = _Command(name, duration=ticks * TICK, axes=axes,
-                       moving=tuple(bool(ax.steps is None and (ax.rate or ax.accel) or ax.steps) for ax in axes))
+                       moving=tuple(bool((ax.steps is None and (ax.rate or ax.accel)) or ax.steps) for ax in axes))
 
         def begin(t: float, cmd: _Command = cmd) -> None:
             self._begin_motion(t, clear)

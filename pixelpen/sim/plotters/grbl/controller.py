@@ -50,7 +50,6 @@ import numpy as np
 
 from pixelpen.clock import REAL_CLOCK, Clock
 from pixelpen.errors import ConfigError
-from pixelpen.urls import parse_size
 from pixelpen.sim.base import register_simulator
 from pixelpen.sim.plotters.grbl.gcode import (
     MM_PER_INCH,
@@ -68,6 +67,7 @@ from pixelpen.sim.plotters.grbl.gcode import (
 )
 from pixelpen.sim.plotters.grbl.planner import AxisLimits, Block, Planner
 from pixelpen.sim.plotters.sheet import Paper, WireStats, clamp_path, read_options
+from pixelpen.urls import parse_size
 
 if TYPE_CHECKING:
     from pixelpen.raster.canvas import Canvas

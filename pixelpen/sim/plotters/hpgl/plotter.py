@@ -51,11 +51,8 @@ from pixelpen.display.picture import colour_hex, parse_colour
 from pixelpen.errors import ConfigError, PixelpenError, URLError
 from pixelpen.geometry.clip import clip_segments
 from pixelpen.geometry.dashes import dash_polylines
-from pixelpen.vector.displaylist import DisplayList
-from pixelpen.vector.font import text_extent, text_strokes
 from pixelpen.geometry.hatch import hatch
 from pixelpen.sim.base import register_simulator
-from pixelpen.sim.plotters.sheet import paper_format, write_paper_svg
 from pixelpen.sim.plotters.hpgl.parsing import (
     ETX,
     DeviceControl,
@@ -63,6 +60,9 @@ from pixelpen.sim.plotters.hpgl.parsing import (
     Instruction,
     InstructionReader,
 )
+from pixelpen.sim.plotters.sheet import paper_format, write_paper_svg
+from pixelpen.vector.displaylist import DisplayList
+from pixelpen.vector.font import text_extent, text_strokes
 
 log = logging.getLogger(__name__)
 
@@ -153,10 +153,7 @@ def _corner_papers(limits: Mapping[str, tuple[int, int]], pages: Mapping[str, tu
 
 _PAGES = {"a4": _A4_PAGE, "a3": _A3_PAGE, "letter": _LETTER_PAGE, "tabloid": _TABLOID_PAGE}
 _COMMON_MNEMONICS = frozenset(
-    (
-        "AA AR CA CI CP CS DF DI DR DT EA ER EW FT IM IN IP IW LB LT OA OC OE OF OH OI OO OP OS OW "
-        "PA PD PR PT PU RA RO RR SA SC SI SL SM SP SR SS TL UC VS WG XT YT"
-    ).split()
+    ["AA", "AR", "CA", "CI", "CP", "CS", "DF", "DI", "DR", "DT", "EA", "ER", "EW", "FT", "IM", "IN", "IP", "IW", "LB", "LT", "OA", "OC", "OE", "OF", "OH", "OI", "OO", "OP", "OS", "OW", "PA", "PD", "PR", "PT", "PU", "RA", "RO", "RR", "SA", "SC", "SI", "SL", "SM", "SP", "SR", "SS", "TL", "UC", "VS", "WG", "XT", "YT"]
 )
 """HP-GL/1 instructions the three models share (chiplotle3's 7475A whitelist, less digitizing and PS).
 

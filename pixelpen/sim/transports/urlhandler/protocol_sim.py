@@ -22,16 +22,17 @@ before ``write_timeout`` raises :class:`SimTimeout` (``SerialTimeoutException`` 
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any, Iterator
+from typing import Any
 
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException, SerialTimeoutException
 
 from pixelpen.clock import Clock
 from pixelpen.errors import Disconnected, LinkError, LinkTimeout, URLError
-from pixelpen.urls import parse_url
 from pixelpen.sim.base import WireDevice, simulator_models
 from pixelpen.sim.transports.port import SimPort, open_sim_port, split_options
+from pixelpen.urls import parse_url
 
 
 class SimDisconnected(SerialException, Disconnected):
