@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import reprlib
+from pathlib import Path
 
 TOKEN_CHARS = 120
 """Characters of a quoted token an error message shows at most (the token itself is kept whole on the error)."""
@@ -114,3 +115,32 @@ class Disconnected(LinkError, ConnectionError):
 
 class TraceMismatch(LinkError):
     """A replayed trace diverged from what the program sent: says at which byte."""
+
+
+class PlotInterrupted(PixelpenError):
+    """A plot stopped on a fault; ``resume_from`` is the first stroke the device did not confirm."""
+
+    def __init__(self, message: str, *, resume_from: int, state_file: Path | None, cause: BaseException | None = None) -> None:
+        self.resume_from = resume_from
+        self.state_file = state_file
+        self.cause = cause
+        where = f"; state saved to {state_file} (plot again with --resume)" if state_file else ""
+        super().__init__(f"{message}; {resume_from} strokes were confirmed{where}")
+
+
+class DeviceFault(PlotInterrupted, ProtocolError):
+    """The device reported an error during a plot: a ProtocolError (``code``, ``command``) the plot resumes from."""
+
+    def __init__(self, error: ProtocolError, *, resume_from: int, state_file: Path | None) -> None:
+        PlotInterrupted.__init__(self, f"plot stopped by a device error: {error}", resume_from=resume_from,
+                                 state_file=state_file, cause=error)
+        self.code, self.command, self.device = error.code, error.command, error.device
+
+
+class PositionUnknown(PixelpenError):
+    """Where the device stopped cannot be told; ``resume_from`` is where a confirmed resume restarts."""
+
+    def __init__(self, message: str, *, resume_from: int, strokes: range) -> None:
+        self.resume_from = resume_from
+        self.strokes = strokes
+        super().__init__(message)

@@ -62,7 +62,10 @@ from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.kinds import VectorDisplay
 from pixelpen.drivers.serial import SerialLink
 from pixelpen.drivers.stream import Link
-from pixelpen.errors import ConfigError, LinkError, ParseError, PixelpenError, ProtocolError, URLError
+from pixelpen.errors import (  # noqa: F401  (PlotInterrupted, DeviceFault, PositionUnknown re-exported)
+    ConfigError, DeviceFault, LinkError, ParseError, PixelpenError, PlotInterrupted, PositionUnknown, ProtocolError,
+    URLError,
+)
 from pixelpen.profiles.model import DeviceProfile, load_profile
 from pixelpen.urls import DeviceURL, Options, check_path, format_url
 from pixelpen.vector.displaylist import DisplayList
@@ -90,35 +93,6 @@ class PlotProgress:
     def fraction(self) -> float:
         """Share of the pen-down distance confirmed, 0..1."""
         return self.pen_down_mm_done / self.pen_down_mm_total if self.pen_down_mm_total else 1.0
-
-
-class PlotInterrupted(PixelpenError):
-    """A plot stopped on a fault; ``resume_from`` is the first stroke the device did not confirm."""
-
-    def __init__(self, message: str, *, resume_from: int, state_file: Path | None, cause: BaseException | None = None) -> None:
-        self.resume_from = resume_from
-        self.state_file = state_file
-        self.cause = cause
-        where = f"; state saved to {state_file} (plot again with --resume)" if state_file else ""
-        super().__init__(f"{message}; {resume_from} strokes were confirmed{where}")
-
-
-class DeviceFault(PlotInterrupted, ProtocolError):
-    """The device reported an error during a plot: a ProtocolError (``code``, ``command``) the plot resumes from."""
-
-    def __init__(self, error: ProtocolError, *, resume_from: int, state_file: Path | None) -> None:
-        PlotInterrupted.__init__(self, f"plot stopped by a device error: {error}", resume_from=resume_from,
-                                 state_file=state_file, cause=error)
-        self.code, self.command, self.device = error.code, error.command, error.device
-
-
-class PositionUnknown(PixelpenError):
-    """Where the device stopped cannot be told; ``resume_from`` is where a confirmed resume restarts."""
-
-    def __init__(self, message: str, *, resume_from: int, strokes: range) -> None:
-        self.resume_from = resume_from
-        self.strokes = strokes
-        super().__init__(message)
 
 
 @dataclass(frozen=True)
