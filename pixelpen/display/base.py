@@ -10,13 +10,14 @@ from __future__ import annotations
 import logging
 from abc import ABC, abstractmethod
 from collections.abc import Iterable
-from typing import ClassVar, Literal
+from typing import Any, ClassVar, Literal
 
 from pixelpen import geometry as geo
 from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.flatten import DeviceShape, flatten_picture
 from pixelpen.display.picture import PRIMITIVE_TYPES, Picture, Primitive, Segment
 from pixelpen.errors import ConfigError, PixelpenError
+from pixelpen.options import OptionSpec, OptionValues, read_options
 from pixelpen.urls import DeviceURL, Options
 
 log = logging.getLogger(__name__)
@@ -29,10 +30,16 @@ class Display(ABC):
     """An output device that draws pictures: open, set window/viewport, draw, flush, close."""
 
     schemes: ClassVar[tuple[str, ...]] = ()
+    OPTIONS: ClassVar[tuple[OptionSpec[Any], ...]] = ()
+    """The options the scheme's URLs accept, as specs (read by ``read_url_options``, listed by ``pixelpen devices``)."""
     url_options: ClassVar[dict[str, str]] = {}
-    """Options the scheme's URLs accept, with a one-line help text each."""
+    """Options the scheme's URLs accept, with a one-line help text each (the older form of ``OPTIONS``)."""
     simulated: ClassVar[bool] = False
     """True when ``sim:<scheme>`` gives a simulated device of this model."""
+    SIM_SHARED: ClassVar[frozenset[str]] = frozenset()
+    """Display options of a ``sim:`` URL that the simulator is given too (e.g. ``paper``)."""
+    SIM_TRANSPORT: ClassVar[frozenset[str]] = frozenset()
+    """Display options that on a ``sim:`` URL go to the simulator's transport instead (e.g. ``baud``, ``flow``)."""
 
     def __init__(self, capabilities: Capabilities, *, deferral: Deferral = "asap") -> None:
         if deferral not in ("asap", "flush"):
@@ -54,6 +61,23 @@ class Display(ABC):
     @abstractmethod
     def from_url(cls, url: DeviceURL, **kwargs: object) -> Display:
         """Build the display a parsed URL describes; read options with ``cls.options_of(url)``."""
+
+    @classmethod
+    def read_url_options(cls, url: DeviceURL) -> OptionValues:
+        """The URL's options read against ``OPTIONS``; unknown names are refused, listing the known ones."""
+        return read_options(cls.OPTIONS, url.options, str(url))
+
+    @classmethod
+    def split_sim_url(cls, url: DeviceURL) -> tuple[DeviceURL, dict[str, str]]:
+        """Split ``sim:MODEL?options`` into the display's own URL and the options for the simulator.
+
+        The display keeps the options it declares (``OPTIONS``) except ``SIM_TRANSPORT``; the simulator gets
+        every other option, and ``SIM_SHARED`` ones as well.
+        """
+        declared = {spec.name for spec in cls.OPTIONS}
+        own = {k: v for k, v in url.options.items() if k in declared and k not in cls.SIM_TRANSPORT}
+        sim = {k: v for k, v in url.options.items() if k not in own or k in cls.SIM_SHARED}
+        return DeviceURL(url.target, "", own, str(url)), sim
 
     @classmethod
     def options_of(cls, url: DeviceURL) -> Options:

@@ -6,7 +6,9 @@ import pytest
 from pixelpen.display.base import Display
 from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.picture import Circle, Picture, Polyline, Segment
-from pixelpen.errors import ConfigError, PixelpenError
+from pixelpen.errors import ConfigError, PixelpenError, URLError
+from pixelpen.options import OptionSpec, integer, text
+from pixelpen.urls import DeviceURL, parse_url
 
 CAPS = Capabilities(model="rec", category="output", kind="vector", size=(1000, 500), unit_mm=0.1,
                     colour_model="pens", y_down=False, tolerance=0.5)
@@ -128,3 +130,32 @@ def test_a_bad_window_is_refused_at_once_as_pixelpen_and_value_error(window):
     with pytest.raises(ValueError, match="angle"):
         d.window(0, 0, 1, 1, angle=float("inf"))
     assert d.pipeline.window == (0.0, 0.0, 100.0, 50.0)
+
+
+class OptionedDisplay(RecordingDisplay):
+    """A display declaring URL options as specs, some shared with or passed to its simulator."""
+
+    OPTIONS = (OptionSpec("paper", text, "a4", "paper size"), OptionSpec("pens", integer(1, 8), 1, "pens"),
+               OptionSpec("baud", integer(1), 9600, "line speed"))
+    SIM_SHARED = frozenset({"paper"})
+    SIM_TRANSPORT = frozenset({"baud", "flow"})
+
+
+def test_read_url_options_reads_the_specs_and_refuses_unknown_names_listing_the_known():
+    values = OptionedDisplay.read_url_options(parse_url("rec:/dev/x?pens=3"))
+    assert dict(values) == {"paper": "a4", "pens": 3, "baud": 9600} and values.given == {"pens"}
+    with pytest.raises(URLError, match=r"unknown option\(s\) pen; known: baud, paper, pens"):
+        OptionedDisplay.read_url_options(parse_url("rec:/dev/x?pen=3"))
+    with pytest.raises(URLError, match=r"option pens='9' is not valid"):
+        OptionedDisplay.read_url_options(parse_url("rec:/dev/x?pens=9"))
+    with pytest.raises(URLError, match="inside brackets"):
+        OptionedDisplay.read_url_options(parse_url("rec:rfc2217://host:4000?logging=debug"))
+
+
+def test_split_sim_url_keeps_declared_options_and_hands_the_rest_to_the_simulator():
+    own, sim = OptionedDisplay.split_sim_url(parse_url("sim:rec?paper=a3&pens=2&baud=300&speed=fast"))
+    assert (own.scheme, own.target, dict(own.options)) == ("rec", "", {"paper": "a3", "pens": "2"})
+    assert str(own) == "sim:rec?paper=a3&pens=2&baud=300&speed=fast"  # errors name the URL as given
+    assert sim == {"paper": "a3", "baud": "300", "speed": "fast"}
+    assert RecordingDisplay.split_sim_url(parse_url("sim:rec?speed=fast")) == (
+        DeviceURL("rec", "", {}, "sim:rec?speed=fast"), {"speed": "fast"})
