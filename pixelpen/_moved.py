@@ -59,9 +59,11 @@ class _MovedLoader(importlib.abc.Loader):
 
 
 class MovedFinder(importlib.abc.MetaPathFinder):
-    """Finds the old module names in MOVED (first on sys.meta_path, so a moved package's children are not loaded twice)."""
+    """Finds the old names in MOVED (first on sys.meta_path, so a moved package's children load only once)."""
 
-    def find_spec(self, fullname: str, path: object = None, target: object = None) -> importlib.machinery.ModuleSpec | None:
+    def find_spec(
+        self, fullname: str, path: object = None, target: object = None
+    ) -> importlib.machinery.ModuleSpec | None:
         """A spec loading the moved module for an old name; None for every other name."""
         new = MOVED.get(fullname)
         return None if new is None else importlib.machinery.ModuleSpec(fullname, _MovedLoader(new))

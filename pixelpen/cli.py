@@ -53,7 +53,9 @@ def build_parser() -> Parser:
 
     parser = Parser(prog="pixelpen", description="Draw on plotters, panels and files; simulate them.")
     parser.add_argument("--version", action="version", version=f"pixelpen {__version__}")
-    parser.add_argument("-v", "--verbose", action="count", default=0, help="-v for progress details, -vv for wire traffic")
+    parser.add_argument(
+        "-v", "--verbose", action="count", default=0, help="-v for progress details, -vv for wire traffic"
+    )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     core.register(sub)
     vector.register(sub)

@@ -18,7 +18,7 @@ _MAX_TEXT = 64
 
 
 def parse_colour(colour: object) -> RGB:
-    """Read a colour given as a CSS name, ``#rgb``/``#rrggbb``, ``rgb()``/``hsl()`` text or an (r, g, b) tuple of 0-255."""
+    """Read a CSS colour name, ``#rgb``/``#rrggbb``, ``rgb()``/``hsl()`` text or an (r, g, b) tuple of 0-255."""
     if isinstance(colour, str):
         text = colour.strip().lower()
         if len(text) <= _MAX_TEXT:
@@ -45,4 +45,4 @@ def _is_byte(value: object) -> bool:
 
 def colour_hex(rgb: RGB) -> str:
     """Format an (r, g, b) colour as ``#rrggbb``."""
-    return "#%02x%02x%02x" % rgb
+    return "#{:02x}{:02x}{:02x}".format(*rgb)

@@ -180,14 +180,16 @@ def _key(action: argparse.Action) -> str:
 
 def _options(parser: argparse.ArgumentParser) -> list[argparse.Action]:
     """The parser's configurable options (not positionals, help or version)."""
-    return [a for a in parser._actions if a.option_strings and not isinstance(a, (argparse._HelpAction, argparse._VersionAction))]
+    skip = (argparse._HelpAction, argparse._VersionAction)
+    return [a for a in parser._actions if a.option_strings and not isinstance(a, skip)]
 
 
 def _action(parser: argparse.ArgumentParser, key: str) -> argparse.Action | None:
     """The option ``--KEY`` of ``parser`` (underscores or dashes alike)."""
     wanted = "--" + _dashed(key)
     for action in _options(parser):
-        names = action.option_strings[:1] if isinstance(action, argparse.BooleanOptionalAction) else action.option_strings
+        boolean = isinstance(action, argparse.BooleanOptionalAction)
+        names = action.option_strings[:1] if boolean else action.option_strings
         if wanted in names:
             return action
     return None

@@ -120,7 +120,9 @@ class TraceMismatch(LinkError):
 class PlotInterrupted(PixelpenError):
     """A plot stopped on a fault; ``resume_from`` is the first stroke the device did not confirm."""
 
-    def __init__(self, message: str, *, resume_from: int, state_file: Path | None, cause: BaseException | None = None) -> None:
+    def __init__(
+        self, message: str, *, resume_from: int, state_file: Path | None, cause: BaseException | None = None
+    ) -> None:
         self.resume_from = resume_from
         self.state_file = state_file
         self.cause = cause

@@ -61,7 +61,7 @@ class OptionValues(Mapping[str, Any]):
 
 
 def read_options(specs: Iterable[OptionSpec[Any]], options: Mapping[str, str], where: str) -> OptionValues:
-    """Read ``options`` (name -> text) against ``specs``; unknown names and bad values raise URLError naming ``where``."""
+    """Read ``options`` (name -> text) against ``specs``; unknown names or bad values raise URLError naming where."""
     by_name = {spec.name: spec for spec in specs}
     check_known(by_name, options, where)
     values = {name: spec.read(str(options[name]), where) if name in options else spec.default

@@ -109,7 +109,7 @@ class SimPlotter:
 
     @property
     def elapsed(self) -> float:
-        """Simulated seconds since the device was created (its clock starts at 0): initialising, pen changes and parking too."""
+        """Simulated seconds since the device was created (clock starts at 0): initialising, pen changes, parking."""
         return float(self.device.clock.now())
 
 

@@ -58,5 +58,6 @@ def read_toml(text: str, source: str, *, max_depth: int) -> dict:
         where = re.search(r"\(at line (\d+), column (\d+)\)", msg)
         if where:
             msg = msg[: where.start()].strip()
-            raise ParseError(f"not valid TOML: {msg}", source=source, line=int(where[1]), column=int(where[2])) from None
+            line, column = int(where[1]), int(where[2])
+            raise ParseError(f"not valid TOML: {msg}", source=source, line=line, column=column) from None
         raise ParseError(f"not valid TOML: {msg}", source=source) from None

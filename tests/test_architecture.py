@@ -97,4 +97,4 @@ def test_a_long_module_says_why(path: Path) -> None:
     if lines <= MAX_LINES:
         return
     doc = ast.get_docstring(ast.parse(text)) or ""
-    assert LONG_REASON in doc, f"{path.name} has {lines} lines: split it, or say why in its docstring ('{LONG_REASON} ...')"
+    assert LONG_REASON in doc, f"{path.name} has {lines} lines: split it, or say why in its docstring ({LONG_REASON!r})"
