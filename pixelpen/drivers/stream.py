@@ -9,8 +9,15 @@ A transport subclasses :class:`Link` and supplies four primitives (``_read_raw``
 * ``read_until(terminator, timeout, max_size)`` returns one reply including its terminator, raises
   LinkTimeout naming the bytes received so far, and LinkError when ``max_size`` bytes came without
   the terminator (those bytes are consumed and carried on the exception as ``partial``);
-* software XON/XOFF (``soft_xonxoff``): DC3 (0x13) from the device holds writes until DC1 (0x11);
-  both bytes are removed from the input, as a tty with IXON does.
+* ``flush``, ``reset_input``, ``reset_output``, ``in_waiting``, ``close`` (and ``with``).
+
+A stream only moves bytes: serial line signals (CTS/DSR/RTS/DTR) and software XON/XOFF flow control
+belong to :class:`~pixelpen.drivers.serial.SerialLink`, which uses two hooks the base offers:
+``_write_window`` (how many bytes may go now, waiting while the device holds writes) and
+``_filter_input`` (bytes taken out of the input, such as XON/XOFF).  ``held_off`` tells a driver
+whether the device's flow control holds writes now; a stream without flow control never is.
+The panel bus and the HID report link are other kinds of transport (:mod:`pixelpen.drivers.bus`,
+:mod:`pixelpen.drivers.reports`).
 
 Timeouts: ``None`` means the link's default (``timeout`` / ``write_timeout``), ``0`` polls, and
 ``math.inf`` (or a default of None) waits without limit.  Every wait is measured on ``self.clock``,
@@ -23,19 +30,14 @@ from __future__ import annotations
 import logging
 import math
 from types import TracebackType
-from typing import Final, TypeVar
+from typing import TypeVar
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.errors import LinkError, LinkTimeout
-
-XON: Final = 0x11
-"""DC1: the device may take more bytes."""
-XOFF: Final = 0x13
-"""DC3: the device asks the host to stop sending."""
+from pixelpen.errors import InvalidArgument, LinkError, LinkTimeout
 
 _L = TypeVar("_L", bound="Link")
-_SOFT_FLOW_CHUNK = 64  # bytes sent between two looks for XOFF when software flow control is on
-_XOFF_POLL = 0.01  # clock seconds between looks for XON while held off
+IDLE_POLL = 0.01
+"""Clock seconds a wait with no limit lets pass between two looks (a transport that returned early)."""
 
 
 def printable(data: bytes) -> str:
@@ -61,15 +63,11 @@ class Link:
         timeout: float | None = 2.0,
         write_timeout: float | None = 10.0,
         clock: Clock | None = None,
-        soft_xonxoff: bool = False,
     ) -> None:
         self.name = name
         self.timeout = timeout
         self.write_timeout = write_timeout
         self.clock: Clock = clock if clock is not None else REAL_CLOCK
-        self.soft_xonxoff = soft_xonxoff
-        self.held_off = False
-        """True while an XOFF from the device holds writes (software flow control)."""
         self._rx = bytearray()
         self._closed = False
         self._log = logging.getLogger(type(self).__module__)
@@ -101,12 +99,28 @@ class Link:
     def _reset_output_raw(self) -> None:
         """Discard output the transport still holds unsent (default: it holds none)."""
 
+    def _write_window(self, deadline: float | None, limit: float | None, sent: int, total: int) -> int:
+        """How many of the ``total - sent`` bytes left may go now; flow control waits here until ``deadline``.
+
+        ``limit`` is the write timeout in force (for the error message); the default lets every byte go.
+        """
+        return total - sent
+
+    def _filter_input(self, data: bytes) -> bytes:
+        """Bytes that arrived, less those the transport acts on itself (default: all are data)."""
+        return data
+
     # -- the driver-facing contract ------------------------------------------------------------
 
     @property
     def closed(self) -> bool:
         """True once ``close()`` was called."""
         return self._closed
+
+    @property
+    def held_off(self) -> bool:
+        """True while the device's flow control holds writes (a stream without flow control: never)."""
+        return False
 
     def write(self, data: bytes, timeout: float | None = None) -> None:
         """Send all of ``data`` (LinkTimeout if ``timeout``/``write_timeout`` passes first)."""
@@ -120,18 +134,7 @@ class Link:
             self._log.debug("%s > %s", self.name, format_bytes(data))
         sent = 0
         while sent < len(data):
-            if self.soft_xonxoff:
-                self._pull(0.0)
-                while self.held_off:
-                    remaining = self._remaining(deadline)
-                    if remaining is not None and remaining <= 0:
-                        raise LinkTimeout(
-                            f"{self.name}: write held off by XOFF for {limit}s; sent {sent} of {len(data)} bytes"
-                        )
-                    self._pull(_XOFF_POLL if remaining is None else min(_XOFF_POLL, remaining))
-                end = min(len(data), sent + _SOFT_FLOW_CHUNK)
-            else:
-                end = len(data)
+            end = sent + self._write_window(deadline, limit, sent, len(data))
             remaining = self._remaining(deadline)
             if remaining is not None and remaining <= 0:
                 raise LinkTimeout(f"{self.name}: write timed out after {limit}s; sent {sent} of {len(data)} bytes")
@@ -145,7 +148,7 @@ class Link:
         """Return 1..``size`` bytes as soon as any arrive; ``b""`` only when ``timeout`` passed."""
         self._check_open()
         if size < 1:
-            raise ValueError(f"read size must be at least 1, got {size}")
+            raise InvalidArgument(f"read size must be at least 1, got {size}")
         limit = self.timeout if timeout is None else timeout
         deadline = self._deadline(limit)
         if not self._rx:
@@ -161,7 +164,7 @@ class Link:
         """Return bytes up to and including ``terminator`` (LinkTimeout, or LinkError past ``max_size``)."""
         self._check_open()
         if not terminator:
-            raise ValueError("read_until needs a non-empty terminator")
+            raise InvalidArgument("read_until needs a non-empty terminator")
         limit = self.timeout if timeout is None else timeout
         deadline = self._deadline(limit)
         searched = 0
@@ -232,36 +235,6 @@ class Link:
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name}{' closed' if self._closed else ''}>"
 
-    # -- control lines: transports that have them override these ------------------------------
-
-    @property
-    def cts(self) -> bool:
-        """Clear To Send as the device drives it."""
-        raise LinkError(f"{self.name}: this transport has no CTS line")
-
-    @property
-    def dsr(self) -> bool:
-        """Data Set Ready as the device drives it."""
-        raise LinkError(f"{self.name}: this transport has no DSR line")
-
-    @property
-    def rts(self) -> bool:
-        """Request To Send as the host drives it."""
-        raise LinkError(f"{self.name}: this transport has no RTS line")
-
-    @rts.setter
-    def rts(self, value: bool) -> None:
-        raise LinkError(f"{self.name}: this transport has no RTS line")
-
-    @property
-    def dtr(self) -> bool:
-        """Data Terminal Ready as the host drives it."""
-        raise LinkError(f"{self.name}: this transport has no DTR line")
-
-    @dtr.setter
-    def dtr(self, value: bool) -> None:
-        raise LinkError(f"{self.name}: this transport has no DTR line")
-
     # -- helpers -------------------------------------------------------------------------------
 
     def _check_open(self) -> None:
@@ -278,13 +251,13 @@ class Link:
     def _let_pass(self, started: float, wait: float | None) -> None:
         """Make sure ``wait`` clock seconds passed since ``started`` (a transport that returned early)."""
         if wait is None:
-            wait = _XOFF_POLL
+            wait = IDLE_POLL
         rest = started + wait - self.clock.now()
         if rest > 0:
             self.clock.sleep(rest)
 
     def _pull(self, wait: float | None) -> None:
-        """Move what the transport has (waiting up to ``wait``) into the input buffer, applying XON/XOFF."""
+        """Move what the transport has (waiting up to ``wait``) into the input buffer, through ``_filter_input``."""
         started = self.clock.now()
         data = self._read_raw(wait)
         if not data:
@@ -293,16 +266,7 @@ class Link:
             return
         if self._log.isEnabledFor(logging.DEBUG):
             self._log.debug("%s < %s", self.name, format_bytes(data))
-        if self.soft_xonxoff and (XON in data or XOFF in data):
-            for b in data:
-                if b == XOFF:
-                    self.held_off = True
-                elif b == XON:
-                    self.held_off = False
-                else:
-                    self._rx.append(b)
-        else:
-            self._rx += data
+        self._rx += self._filter_input(data)
 
     def _take(self, n: int) -> bytes:
         out = bytes(self._rx[:n])

@@ -42,6 +42,7 @@ from typing import IO, Final
 from urllib.parse import quote, unquote
 
 from pixelpen.clock import Clock, SimulatedClock
+from pixelpen.drivers.serial import SerialLines
 from pixelpen.drivers.stream import Link, printable
 from pixelpen.errors import ConfigError, LinkError, ParseError, TraceMismatch
 from pixelpen.urls import check_path
@@ -366,33 +367,39 @@ class RecordingLink(Link):
         finally:
             self.writer.close()
 
+    def _lines(self) -> SerialLines:
+        """The inner link's serial line signals (LinkError when it is no serial link)."""
+        if isinstance(self.inner, SerialLines):
+            return self.inner
+        raise LinkError(f"{self.name}: the recorded link has no serial line signals")
+
     @property
     def cts(self) -> bool:
         """The inner link's CTS."""
-        return self.inner.cts
+        return self._lines().cts
 
     @property
     def dsr(self) -> bool:
         """The inner link's DSR."""
-        return self.inner.dsr
+        return self._lines().dsr
 
     @property
     def rts(self) -> bool:
         """The inner link's RTS."""
-        return self.inner.rts
+        return self._lines().rts
 
     @rts.setter
     def rts(self, value: bool) -> None:
-        self.inner.rts = value
+        self._lines().rts = value
 
     @property
     def dtr(self) -> bool:
         """The inner link's DTR."""
-        return self.inner.dtr
+        return self._lines().dtr
 
     @dtr.setter
     def dtr(self, value: bool) -> None:
-        self.inner.dtr = value
+        self._lines().dtr = value
 
 
 class ReplayLink(Link):

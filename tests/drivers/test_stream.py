@@ -12,7 +12,7 @@ import pytest
 
 from pixelpen.clock import REAL_CLOCK, SimulatedClock
 from pixelpen.drivers.stream import Link, format_bytes
-from pixelpen.drivers.serial import SerialLink
+from pixelpen.drivers.serial import SerialLines, SerialLink
 from pixelpen.drivers.trace import RecordingLink
 from pixelpen.drivers.usbprinter import UsbPrinterLink
 from pixelpen.errors import LinkError, LinkTimeout
@@ -180,10 +180,17 @@ def test_format_bytes_shows_hex_and_printable():
     assert format_bytes(b"x" * 10, limit=4) == "78 78 78 78 |xxxx| ... (+6 bytes)"
 
 
-def test_base_link_without_lines_says_so():
-    link = make_usb().link
-    with pytest.raises(LinkError, match="CTS"):
-        assert link.cts
-    with pytest.raises(LinkError, match="RTS"):
-        link.rts = True
-    link.close()
+def test_line_signals_belong_to_the_serial_link_not_the_stream():
+    usb = make_usb().link
+    assert not isinstance(usb, SerialLines) and not hasattr(usb, "cts") and not hasattr(usb, "soft_xonxoff")
+    assert not usb.held_off  # a stream without flow control is never held off
+    recording = RecordingLink(usb, io.StringIO())
+    with pytest.raises(LinkError, match="no serial line signals"):
+        assert recording.cts
+    with pytest.raises(LinkError, match="no serial line signals"):
+        recording.rts = True
+    recording.close()
+    serial_link = make_loop().link
+    assert isinstance(serial_link, SerialLines) and isinstance(RecordingLink(serial_link, io.StringIO()), SerialLines)
+    serial_link.close()
+    assert not any(hasattr(Link, name) for name in ("cts", "dsr", "rts", "dtr", "soft_xonxoff"))
