@@ -1,17 +1,39 @@
-"""GRBL 1.1 G-code block parser: words, modal groups and the documented error codes, without side effects.
+"""GRBL 1.1 G-code block parser, along ``gc_execute_line``'s own steps, without side effects.
 
-Written from gnea/grbl ``doc/markdown/commands.md`` (modal groups, defaults) and
-``doc/csv/error_codes_en_US.csv`` (error numbers).  :func:`parse_block` checks a pre-processed line
-(upper case, no spaces or comments) against the parser state and returns either an error code or a
-:class:`GBlock` with every target already in machine millimetres; executing it is the simulator's job.
+Written from gnea/grbl ``doc/markdown/commands.md`` and ``doc/csv/error_codes_en_US.csv``, with the
+structure of ``grbl/gcode.c``: STEP 1 initialises the block from the parser state, STEP 2 imports every
+word (modal-group violations refused there), STEP 3 error-checks the block in the order of execution
+(the numbered sub-steps [0] .. [21]), STEP 4 works out the parser state the block leaves (the controller
+then executes the block in the same order).  :func:`parse_block` takes a pre-processed line (upper case,
+no spaces or comments) and returns an error code or a :class:`GBlock` whose targets are machine mm.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable
 
 import numpy as np
+
+from pixelpen.sim.plotters.grbl.arcs import arc_points
+from pixelpen.sim.plotters.grbl.modal import (
+    ARC_RADIUS_TOLERANCE,
+    MAX_LINE_NUMBER,
+    MAX_TOOL_NUMBER,
+    MM_PER_INCH,
+    MOTION_CCW,
+    MOTION_CW,
+    MOTION_LINEAR,
+    MOTION_NONE,
+    MOTION_SEEK,
+    N_COORDINATE_SYSTEM,
+    PROBES,
+    STATUS,
+    GBlock,
+    GcodeState,
+    Persistent,
+    read_float,
+)
 
 __all__ = [
     "MM_PER_INCH",
@@ -20,144 +42,15 @@ __all__ = [
     "MOTION_LINEAR",
     "MOTION_NONE",
     "MOTION_SEEK",
+    "PROBES",
     "STATUS",
     "GBlock",
     "GcodeState",
     "Persistent",
+    "arc_points",
     "parse_block",
     "read_float",
 ]
-
-MM_PER_INCH = 25.4
-MAX_INT_DIGITS = 8
-MAX_LINE_NUMBER = 9_999_999  # docs: N must be within 1 - 9,999,999
-MAX_TOOL_NUMBER = 255
-N_COORDINATE_SYSTEM = 6
-ARC_RADIUS_TOLERANCE = 0.005  # mm; and 0.1 % of the radius, never above 0.5 mm
-
-MOTION_SEEK, MOTION_LINEAR, MOTION_CW, MOTION_CCW, MOTION_NONE = 0, 1, 2, 3, 80
-PROBES = (382, 383, 384, 385)  # G38.2 .. G38.5
-
-STATUS = {
-    "expected_letter": 1, "bad_number": 2, "invalid_statement": 3, "negative_value": 4,
-    "setting_disabled": 5, "step_pulse_min": 6, "not_idle": 8, "gcode_lock": 9,
-    "soft_limit_needs_homing": 10, "overflow": 11, "max_step_rate": 12, "check_door": 13,
-    "travel_exceeded": 15, "invalid_jog": 16, "unsupported": 20, "modal_group": 21,
-    "undefined_feed": 22, "not_integer": 23, "axis_conflict": 24, "word_repeated": 25,
-    "no_axis_words": 26, "invalid_line_number": 27, "value_word_missing": 28,
-    "unsupported_coord_sys": 29, "g53_motion_mode": 30, "axis_words_exist": 31,
-    "no_axis_words_in_plane": 32, "invalid_target": 33, "arc_radius": 34, "no_offsets_in_plane": 35,
-    "unused_words": 36, "g43_axis": 37, "max_tool": 38,
-}
-"""GRBL 1.1 status codes by name (``error:N`` numbers from doc/csv/error_codes_en_US.csv)."""
-
-
-@dataclass
-class Persistent:
-    """What GRBL keeps in EEPROM besides its $ settings: G54-G59, G28 and G30 positions (machine mm)."""
-
-    coords: np.ndarray = field(default_factory=lambda: np.zeros((N_COORDINATE_SYSTEM, 3)))
-    g28: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    g30: np.ndarray = field(default_factory=lambda: np.zeros(3))
-
-
-@dataclass
-class GcodeState:
-    """The G-code parser's modal state and position, as ``$G`` and ``$#`` report it (reset by a soft reset)."""
-
-    motion: int = MOTION_SEEK
-    coord_select: int = 0
-    plane: int = 0  # 0 G17, 1 G18, 2 G19
-    inches: bool = False
-    incremental: bool = False
-    inverse_time: bool = False
-    spindle: int = 5  # 3 M3, 4 M4, 5 M5
-    flood: bool = False
-    mist: bool = False
-    tlo_dynamic: bool = False
-    feed_rate: float = 0.0  # mm/min
-    spindle_speed: float = 0.0
-    tool: int = 0
-    line_number: int = 0
-    position: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    coord_system: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    coord_offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    tool_length_offset: float = 0.0
-
-    def wco(self) -> np.ndarray:
-        """Work coordinate offset: active WCS + G92 + tool length offset (on Z)."""
-        w = self.coord_system + self.coord_offset
-        w = w.copy()
-        w[2] += self.tool_length_offset
-        return w
-
-    def copy(self) -> GcodeState:
-        """An independent copy (arrays included)."""
-        return replace(
-            self, position=self.position.copy(), coord_system=self.coord_system.copy(),
-            coord_offset=self.coord_offset.copy(),
-        )
-
-
-@dataclass
-class GBlock:
-    """One parsed, error-checked block: the new modal state and what it asks the machine to do."""
-
-    modal: GcodeState
-    """Parser state after the block (position updated to the block's end)."""
-    non_modal: str = ""  # "", "G4", "G10", "G28", "G30", "G28.1", "G30.1", "G53", "G92", "G92.1"
-    motion_command: bool = False  # axis words execute the motion mode
-    target: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    """End of the block's motion in machine mm (for G28/G30: the intermediate point)."""
-    home: np.ndarray | None = None  # G28/G30 stored position (machine mm)
-    arc_offset: np.ndarray | None = None  # arc centre minus start, machine mm
-    arc_radius: float = 0.0
-    clockwise: bool = False
-    dwell: float = 0.0  # seconds
-    g10_index: int = -1
-    g10_values: np.ndarray | None = None
-    feed: float = 0.0  # mm/min (inverse-time: 1/min)
-    spindle_changed: bool = False
-    speed_changed: bool = False
-    coolant_changed: bool = False
-    wco_changed: bool = False
-    program_flow: int = 0  # 0 running, 1 M0 pause, 2 M2, 30 M30
-    axis_words: int = 0
-    jog: bool = False
-    probe_no_error: bool = False
-
-
-def read_float(line: str, i: int) -> tuple[float, int] | None:
-    """GRBL's ``read_float``: optional sign, digits with one '.', at most 8 significant digits kept.
-
-    Returns (value, index after the number) or None when no digit was read.
-    """
-    n = len(line)
-    negative = False
-    if i < n and line[i] in "+-":
-        negative = line[i] == "-"
-        i += 1
-    intval, exp, ndigit, decimal = 0, 0, 0, False
-    while i < n:
-        c = line[i]
-        if "0" <= c <= "9":
-            ndigit += 1
-            if ndigit <= MAX_INT_DIGITS:
-                if decimal:
-                    exp -= 1
-                intval = intval * 10 + (ord(c) - 48)
-            elif not decimal:
-                exp += 1
-        elif c == "." and not decimal:
-            decimal = True
-        else:
-            break
-        i += 1
-    if not ndigit:
-        return None
-    value = float(intval) * (10.0 ** exp) if intval else 0.0
-    return (-value if negative else value), i
-
 
 _G_GROUP = {  # G integer -> modal group (GRBL numbering: 0 non-modal, 1 motion, 2 plane, ...)
     4: 0, 10: 0, 28: 0, 30: 0, 53: 0, 92: 0,
@@ -167,6 +60,8 @@ _G_GROUP = {  # G integer -> modal group (GRBL numbering: 0 non-modal, 1 motion,
 }
 _M_GROUP = {0: 4, 1: 4, 2: 4, 30: 4, 3: 7, 4: 7, 5: 7, 7: 8, 8: 8, 9: 8}
 _VALUE_WORDS = "FIJKLNPRSTXYZ"
+_PLANE_AXES = ((0, 1, 2), (2, 0, 1), (1, 2, 0))
+"""G17, G18, G19: (first, second, linear) axis of the plane."""
 
 
 def parse_block(line: str, state: GcodeState, persistent: Persistent, *, jog: bool = False) -> GBlock | int:
@@ -174,386 +69,516 @@ def parse_block(line: str, state: GcodeState, persistent: Persistent, *, jog: bo
 
     Returns an error code (``error:N``) or the block; ``state`` and ``persistent`` are not changed.
     """
-    new = state.copy()
-    non_modal = ""
-    axis_command = ""  # "", "motion", "non_modal", "tlo"
-    command_groups: set[int] = set()
-    words: dict[str, float] = {}
-    axis_words = 0
-    ijk_words = 0
-    xyz = np.zeros(3)
-    ijk = np.zeros(3)
-    tlo_g43 = False
-    program_flow = 0
-    spindle = state.spindle
-    flood, mist = state.flood, state.mist
-    i = 3 if jog else 0
-    if jog:
-        new.motion = MOTION_LINEAR
-        new.inverse_time = False
-    n = len(line)
-    while i < n:
-        letter = line[i]
-        if not ("A" <= letter <= "Z"):
-            return STATUS["expected_letter"]
-        got = read_float(line, i + 1)
-        if got is None:
-            return STATUS["bad_number"]
-        value, i = got
-        if letter in "GM" and not (0.0 <= value < 256.0):
-            return STATUS["unsupported"]
-        int_value = int(math.trunc(value))
-        mantissa = int(round(100 * (value - int_value)))
-        if letter == "G":
-            if int_value not in _G_GROUP:
-                return STATUS["unsupported"]
-            group = _G_GROUP[int_value]
-            if int_value in (10, 28, 30, 92):
-                if mantissa == 0:
-                    if axis_command:
-                        return STATUS["axis_conflict"]
-                    axis_command = "non_modal"
-            if group == 0:
-                if int_value in (28, 30, 92):
-                    if mantissa not in (0, 10):
-                        return STATUS["unsupported"]
-                    non_modal = f"G{int_value}" + (".1" if mantissa == 10 else "")
-                    mantissa = 0
-                else:
-                    non_modal = f"G{int_value}"
-            elif group == 1:
-                if int_value != 80:
-                    if axis_command:
-                        return STATUS["axis_conflict"]
-                    axis_command = "motion"
-                new.motion = int_value
-                if int_value == 38:
-                    if mantissa not in (20, 30, 40, 50):
-                        return STATUS["unsupported"]
-                    new.motion = 380 + mantissa // 10
-                    mantissa = 0
-            elif group == 2:
-                new.plane = int_value - 17
-            elif group == 3:
-                if mantissa == 0:
-                    new.incremental = int_value == 91
-                else:
-                    group = 4
-                    if mantissa != 10 or int_value == 90:
-                        return STATUS["unsupported"]
-                    mantissa = 0
-            elif group == 5:
-                new.inverse_time = int_value == 93
-            elif group == 6:
-                new.inches = int_value == 20
-            elif group == 8:
-                if axis_command:
-                    return STATUS["axis_conflict"]
-                axis_command = "tlo"
-                if int_value == 49:
-                    new.tlo_dynamic = False
-                elif mantissa == 10:
-                    new.tlo_dynamic = True
-                    tlo_g43 = True
-                else:
-                    return STATUS["unsupported"]
-                mantissa = 0
-            elif group == 12:
-                new.coord_select = int_value - 54
-            elif group == 13:
-                if mantissa != 0:
-                    return STATUS["unsupported"]
-            if mantissa > 0:
-                return STATUS["not_integer"]
-            if group in command_groups:
-                return STATUS["modal_group"]
-            command_groups.add(group)
-        elif letter == "M":
-            if mantissa > 0:
-                return STATUS["not_integer"]
-            if int_value not in _M_GROUP:
-                return STATUS["unsupported"]
-            group = 100 + _M_GROUP[int_value]
-            if int_value in (0, 2, 30):
-                program_flow = 1 if int_value == 0 else int_value
-            elif int_value in (3, 4, 5):
-                spindle = int_value
-            elif int_value == 8:
-                flood = True
-            elif int_value == 9:
-                flood = mist = False
-            # M1 (optional stop) is ignored; M7 needs ENABLE_M7, off in the default build: no effect
-            if group in command_groups:
-                return STATUS["modal_group"]
-            command_groups.add(group)
-        else:
-            if letter not in _VALUE_WORDS:
-                return STATUS["unsupported"]
-            if letter == "T" and value > MAX_TOOL_NUMBER:
-                return STATUS["max_tool"]
-            if letter in words:
-                return STATUS["word_repeated"]
-            if letter in "FNPTS" and value < 0.0:
-                return STATUS["negative_value"]
-            words[letter] = value
-            if letter in "XYZ":
-                axis_words |= 1 << "XYZ".index(letter)
-                xyz["XYZ".index(letter)] = value
-            elif letter in "IJK":
-                ijk_words |= 1 << "IJK".index(letter)
-                ijk["IJK".index(letter)] = value
+    return _BlockParser(line, state, persistent, jog).parse()
 
-    # ---- error checking, in GRBL's order -------------------------------------------------------
-    if axis_words and not axis_command:
-        axis_command = "motion"
-    if "N" in words and words["N"] > MAX_LINE_NUMBER:
-        return STATUS["invalid_line_number"]
-    feed = words.get("F", 0.0)
-    if jog:
-        if "F" not in words:
-            return STATUS["undefined_feed"]
-        if new.inches:
-            feed *= MM_PER_INCH
-    elif new.inverse_time:
-        if axis_command == "motion" and new.motion not in (MOTION_NONE, MOTION_SEEK) and "F" not in words:
-            return STATUS["undefined_feed"]
-    elif not state.inverse_time:
-        if "F" in words:
+
+class _Refused(Exception):
+    """A check failed: the block is answered with ``error:code``."""
+
+    def __init__(self, name: str) -> None:
+        super().__init__(name)
+        self.code = STATUS[name]
+
+
+class _BlockParser:
+    """One block through gc_execute_line's steps; each step one method, each failing check raises _Refused."""
+
+    def __init__(self, line: str, state: GcodeState, persistent: Persistent, jog: bool) -> None:
+        """STEP 1: initialise the block from the current modes (a jog is G1 in units per minute)."""
+        self.line, self.state, self.persistent, self.jog = line, state, persistent, jog
+        self.new = state.copy()
+        self.block = GBlock(modal=self.new, jog=jog)
+        self.non_modal = ""
+        self.axis_command = ""  # "", "motion", "non_modal", "tlo"
+        self.command_groups: set[int] = set()
+        self.words: dict[str, float] = {}
+        self.axis_words = 0
+        self.ijk_words = 0
+        self.xyz = np.zeros(3)
+        self.ijk = np.zeros(3)
+        self.tlo_g43 = False
+        self.program_flow = 0
+        self.spindle = state.spindle
+        self.flood, self.mist = state.flood, state.mist
+        self.feed = 0.0
+        self.speed = state.spindle_speed
+        self.dwell = 0.0
+        self.used = {"N", "F", "S", "T"} if not jog else {"N", "F"}
+        self.block_coord = state.coord_system.copy()
+        self.target = np.zeros(3)
+        if jog:
+            self.new.motion = MOTION_LINEAR
+            self.new.inverse_time = False
+
+    def parse(self) -> GBlock | int:
+        """Run STEPs 2 to 4: the checked block, or the error code of the first check that failed."""
+        try:
+            self.import_words()
+            self.check()
+        except _Refused as refused:
+            return refused.code
+        return self.update_state()
+
+    # ---- STEP 2: import all g-code words -------------------------------------------------------------
+    def import_words(self) -> None:
+        """STEP 2: read every word; G and M commands join their modal group, value words are stored."""
+        line, i = self.line, 3 if self.jog else 0
+        while i < len(line):
+            letter = line[i]
+            if not ("A" <= letter <= "Z"):
+                raise _Refused("expected_letter")
+            got = read_float(line, i + 1)
+            if got is None:
+                raise _Refused("bad_number")
+            value, i = got
+            if letter in "GM" and not (0.0 <= value < 256.0):
+                raise _Refused("unsupported")
+            code = math.trunc(value)
+            mantissa = round(100 * (value - code))
+            if letter == "G":
+                self._g_command(code, mantissa)
+            elif letter == "M":
+                self._m_command(code, mantissa)
+            else:
+                self._value_word(letter, value)
+
+    def _claim_axis_words(self, kind: str) -> None:
+        """A command that uses the block's axis words; a second one is error:24."""
+        if self.axis_command:
+            raise _Refused("axis_conflict")
+        self.axis_command = kind
+
+    def _g_command(self, code: int, mantissa: int) -> None:
+        if code not in _G_GROUP:
+            raise _Refused("unsupported")
+        if code in (10, 28, 30, 92) and mantissa == 0:
+            self._claim_axis_words("non_modal")
+        group, mantissa = _G_COMMANDS[_G_GROUP[code]](self, code, mantissa)
+        if mantissa > 0:
+            raise _Refused("not_integer")
+        self._join_group(group)
+
+    def _join_group(self, group: int) -> None:
+        """One command per modal group and block (error:21)."""
+        if group in self.command_groups:
+            raise _Refused("modal_group")
+        self.command_groups.add(group)
+
+    def _g_non_modal(self, code: int, mantissa: int) -> tuple[int, int]:
+        """G4, G10, G28(.1), G30(.1), G53, G92(.1)."""
+        if code in (28, 30, 92):
+            if mantissa not in (0, 10):
+                raise _Refused("unsupported")
+            self.non_modal = f"G{code}" + (".1" if mantissa == 10 else "")
+            return 0, 0
+        self.non_modal = f"G{code}"
+        return 0, mantissa
+
+    def _g_motion(self, code: int, mantissa: int) -> tuple[int, int]:
+        """G0, G1, G2, G3, G38.2-G38.5, G80."""
+        if code != 80:
+            self._claim_axis_words("motion")
+        self.new.motion = code
+        if code == 38:
+            if mantissa not in (20, 30, 40, 50):
+                raise _Refused("unsupported")
+            self.new.motion = 380 + mantissa // 10
+            mantissa = 0
+        return 1, mantissa
+
+    def _g_plane(self, code: int, mantissa: int) -> tuple[int, int]:
+        """G17, G18, G19."""
+        self.new.plane = code - 17
+        return 2, mantissa
+
+    def _g_distance(self, code: int, mantissa: int) -> tuple[int, int]:
+        """G90, G91; G91.1 (arc distance, the only one GRBL has) is modal group 4."""
+        if mantissa == 0:
+            self.new.incremental = code == 91
+            return 3, 0
+        if mantissa != 10 or code == 90:
+            raise _Refused("unsupported")
+        return 4, 0
+
+    def _g_feed_mode(self, code: int, mantissa: int) -> tuple[int, int]:
+        """G93, G94."""
+        self.new.inverse_time = code == 93
+        return 5, mantissa
+
+    def _g_units(self, code: int, mantissa: int) -> tuple[int, int]:
+        """G20, G21."""
+        self.new.inches = code == 20
+        return 6, mantissa
+
+    def _g_cutter(self, code: int, mantissa: int) -> tuple[int, int]:
+        """G40 (cutter compensation off: already off)."""
+        return 7, mantissa
+
+    def _g_tool_length(self, code: int, mantissa: int) -> tuple[int, int]:
+        """G43.1 (dynamic tool length offset), G49."""
+        self._claim_axis_words("tlo")
+        if code == 49:
+            self.new.tlo_dynamic = False
+        elif mantissa == 10:
+            self.new.tlo_dynamic = True
+            self.tlo_g43 = True
+        else:
+            raise _Refused("unsupported")
+        return 8, 0
+
+    def _g_coordinate_system(self, code: int, mantissa: int) -> tuple[int, int]:
+        """G54 .. G59."""
+        self.new.coord_select = code - 54
+        return 12, mantissa
+
+    def _g_path_control(self, code: int, mantissa: int) -> tuple[int, int]:
+        """G61 (G61.1 and G64 are not supported)."""
+        if mantissa != 0:
+            raise _Refused("unsupported")
+        return 13, mantissa
+
+    def _m_command(self, code: int, mantissa: int) -> None:
+        """M0, M1, M2, M30 (program flow), M3, M4, M5 (spindle), M7, M8, M9 (coolant)."""
+        if mantissa > 0:
+            raise _Refused("not_integer")
+        if code not in _M_GROUP:
+            raise _Refused("unsupported")
+        if code in (0, 2, 30):
+            self.program_flow = 1 if code == 0 else code
+        elif code in (3, 4, 5):
+            self.spindle = code
+        elif code == 8:
+            self.flood = True
+        elif code == 9:
+            self.flood = self.mist = False
+        # M1 (optional stop) is ignored; M7 needs ENABLE_M7, off in the default build: no effect
+        self._join_group(100 + _M_GROUP[code])
+
+    def _value_word(self, letter: str, value: float) -> None:
+        if letter not in _VALUE_WORDS:
+            raise _Refused("unsupported")
+        if letter == "T" and value > MAX_TOOL_NUMBER:
+            raise _Refused("max_tool")
+        if letter in self.words:
+            raise _Refused("word_repeated")
+        if letter in "FNPTS" and value < 0.0:
+            raise _Refused("negative_value")
+        self.words[letter] = value
+        if letter in "XYZ":
+            self.axis_words |= 1 << "XYZ".index(letter)
+            self.xyz["XYZ".index(letter)] = value
+        elif letter in "IJK":
+            self.ijk_words |= 1 << "IJK".index(letter)
+            self.ijk["IJK".index(letter)] = value
+
+    # ---- STEP 3: error-check all commands and values -------------------------------------------------
+    def check(self) -> None:
+        """STEP 3: the checks in the order of execution; values end in machine mm (feed in mm/min)."""
+        self._check_common()
+        self._check_feed()
+        self._check_dwell()
+        self._check_units_and_plane()
+        self._check_tool_length()
+        self._check_coordinate_system()
+        self._check_non_modal()
+        self._check_motion()
+        self._check_unused_words()
+        self._check_jog()
+
+    def _check_common(self) -> None:
+        """[0] Axis words with no command use the motion mode; the line number is in range."""
+        if self.axis_words and not self.axis_command:
+            self.axis_command = "motion"
+        if "N" in self.words and self.words["N"] > MAX_LINE_NUMBER:
+            raise _Refused("invalid_line_number")
+
+    def _check_feed(self) -> None:
+        """[2] Feed rate mode, [3] feed rate (a jog needs its own F), [4] spindle speed."""
+        words, new = self.words, self.new
+        self.feed = words.get("F", 0.0)
+        if self.jog:
+            if "F" not in words:
+                raise _Refused("undefined_feed")
             if new.inches:
-                feed *= MM_PER_INCH
-        else:
-            feed = state.feed_rate
-    speed = words.get("S", state.spindle_speed)
-    used = {"N", "F", "S", "T"} if not jog else {"N", "F"}
-    dwell = 0.0
-    if non_modal == "G4":
-        if "P" not in words:
-            return STATUS["value_word_missing"]
-        dwell = words["P"]
-        used.add("P")
-    axis0, axis1, _ = ((0, 1, 2), (2, 0, 1), (1, 2, 0))[new.plane]
-    if new.inches:
-        xyz = xyz * MM_PER_INCH
-    if axis_command == "tlo" and tlo_g43 and axis_words != 0b100:
-        return STATUS["g43_axis"]
-    block_coord = state.coord_system.copy()
-    if 12 in command_groups and new.coord_select != state.coord_select:
-        block_coord = persistent.coords[new.coord_select].copy()
+                self.feed *= MM_PER_INCH
+        elif new.inverse_time:
+            if self.axis_command == "motion" and new.motion not in (MOTION_NONE, MOTION_SEEK) and "F" not in words:
+                raise _Refused("undefined_feed")
+        elif not self.state.inverse_time:
+            if "F" not in words:
+                self.feed = self.state.feed_rate
+            elif new.inches:
+                self.feed *= MM_PER_INCH
+        self.speed = words.get("S", self.state.spindle_speed)
 
-    block = GBlock(modal=new, non_modal=non_modal, axis_words=axis_words, jog=jog, feed=feed)
-    target = xyz.copy()
-    if non_modal == "G10":
-        if not axis_words:
-            return STATUS["no_axis_words"]
+    def _check_dwell(self) -> None:
+        """[10] G4 needs its P word (seconds)."""
+        if self.non_modal == "G4":
+            if "P" not in self.words:
+                raise _Refused("value_word_missing")
+            self.dwell = self.words["P"]
+            self.used.add("P")
+
+    def _check_units_and_plane(self) -> None:
+        """[11] Active plane (taken where arcs need it), [12] length units: axis words to mm."""
+        if self.new.inches:
+            self.xyz = self.xyz * MM_PER_INCH
+
+    def _check_tool_length(self) -> None:
+        """[14] G43.1 takes a Z word and no other axis word."""
+        if self.axis_command == "tlo" and self.tlo_g43 and self.axis_words != 0b100:
+            raise _Refused("g43_axis")
+
+    def _check_coordinate_system(self) -> None:
+        """[15] A newly selected G54-G59 applies to this block's own targets."""
+        if 12 in self.command_groups and self.new.coord_select != self.state.coord_select:
+            self.block_coord = self.persistent.coords[self.new.coord_select].copy()
+
+    def _check_non_modal(self) -> None:
+        """[19] G10 coordinate data, G92 axis offsets, or the machine target (G28/G30 positions, G53)."""
+        self.target = self.xyz.copy()
+        if self.non_modal == "G10":
+            self._check_g10()
+        elif self.non_modal == "G92":
+            self._check_g92()
+        else:
+            self._check_target()
+
+    def _check_g10(self) -> None:
+        """G10 L2/L20 Pn: the stored work coordinate system it writes."""
+        words, state = self.words, self.state
+        if not self.axis_words:
+            raise _Refused("no_axis_words")
         if "P" not in words or "L" not in words:
-            return STATUS["value_word_missing"]
-        p = int(math.trunc(words["P"]))
+            raise _Refused("value_word_missing")
+        p = math.trunc(words["P"])
         if p > N_COORDINATE_SYSTEM:
-            return STATUS["unsupported_coord_sys"]
-        l_word = int(math.trunc(words["L"]))
-        if l_word != 20:
-            if l_word == 2:
-                if "R" in words:
-                    return STATUS["unsupported"]
-            else:
-                return STATUS["unsupported"]
-        used |= {"L", "P"}
-        index = p - 1 if p > 0 else new.coord_select
-        values = persistent.coords[index].copy()
-        for k in range(3):
-            if axis_words & (1 << k):
-                if l_word == 20:
-                    values[k] = state.position[k] - state.coord_offset[k] - xyz[k]
-                    if k == 2:
-                        values[k] -= state.tool_length_offset
-                else:
-                    values[k] = xyz[k]
-        block.g10_index, block.g10_values = index, values
-    elif non_modal == "G92":
-        if not axis_words:
-            return STATUS["no_axis_words"]
-        offset = state.coord_offset.copy()
-        for k in range(3):
-            if axis_words & (1 << k):
-                offset[k] = state.position[k] - block_coord[k] - xyz[k]
+            raise _Refused("unsupported_coord_sys")
+        l_word = math.trunc(words["L"])
+        if l_word not in (2, 20) or (l_word == 2 and "R" in words):
+            raise _Refused("unsupported")
+        self.used |= {"L", "P"}
+        index = p - 1 if p > 0 else self.new.coord_select
+        values = self.persistent.coords[index].copy()
+        for k in self._given_axes():
+            if l_word == 20:
+                values[k] = state.position[k] - state.coord_offset[k] - self.xyz[k]
                 if k == 2:
-                    offset[k] -= state.tool_length_offset
-        new.coord_offset = offset
-    else:
-        if axis_command != "tlo" and axis_words:
-            for k in range(3):
-                if not axis_words & (1 << k):
-                    target[k] = state.position[k]
-                elif non_modal != "G53":
-                    if not new.incremental:
-                        target[k] += block_coord[k] + state.coord_offset[k]
-                        if k == 2:
-                            target[k] += state.tool_length_offset
-                    else:
-                        target[k] += state.position[k]
-        if non_modal in ("G28", "G30"):
-            home = (persistent.g28 if non_modal == "G28" else persistent.g30).copy()
-            if axis_words:
-                for k in range(3):
-                    if not axis_words & (1 << k):
-                        home[k] = state.position[k]
+                    values[k] -= state.tool_length_offset
             else:
-                axis_command = ""
-            block.home = home
-        elif non_modal == "G53" and new.motion not in (MOTION_SEEK, MOTION_LINEAR):
-            return STATUS["g53_motion_mode"]
+                values[k] = self.xyz[k]
+        self.block.g10_index, self.block.g10_values = index, values
 
-    if new.motion == MOTION_NONE:
-        if axis_words:
-            return STATUS["axis_words_exist"]
-    elif axis_command == "motion":
-        if new.motion == MOTION_SEEK:
-            if not axis_words:
-                axis_command = ""
+    def _check_g92(self) -> None:
+        """G92: the offset that makes the current position read as the given coordinates."""
+        state = self.state
+        if not self.axis_words:
+            raise _Refused("no_axis_words")
+        offset = state.coord_offset.copy()
+        for k in self._given_axes():
+            offset[k] = state.position[k] - self.block_coord[k] - self.xyz[k]
+            if k == 2:
+                offset[k] -= state.tool_length_offset
+        self.new.coord_offset = offset
+
+    def _check_target(self) -> None:
+        """The block's target in machine mm; G28/G30 fetch their stored position; G53 only with G0/G1."""
+        if self.axis_command != "tlo" and self.axis_words:
+            self._machine_target()
+        if self.non_modal in ("G28", "G30"):
+            home = (self.persistent.g28 if self.non_modal == "G28" else self.persistent.g30).copy()
+            if self.axis_words:
+                for k in range(3):
+                    if not self.axis_words & (1 << k):
+                        home[k] = self.state.position[k]
+            else:
+                self.axis_command = ""
+            self.block.home = home
+        elif self.non_modal == "G53" and self.new.motion not in (MOTION_SEEK, MOTION_LINEAR):
+            raise _Refused("g53_motion_mode")
+
+    def _machine_target(self) -> None:
+        """Work (or G53 machine, or G91 incremental) axis words to machine mm; missing axes stay put."""
+        state, target = self.state, self.target
+        for k in range(3):
+            if not self.axis_words & (1 << k):
+                target[k] = state.position[k]
+            elif self.non_modal == "G53":
+                continue
+            elif self.new.incremental:
+                target[k] += state.position[k]
+            else:
+                target[k] += self.block_coord[k] + state.coord_offset[k]
+                if k == 2:
+                    target[k] += state.tool_length_offset
+
+    def _given_axes(self) -> list[int]:
+        """The axes (0 X, 1 Y, 2 Z) the block has words for."""
+        return [k for k in range(3) if self.axis_words & (1 << k)]
+
+    def _check_motion(self) -> None:
+        """[20] Motion modes: G80 takes no axis words, G1-G3 and probes need a feed, arcs and probes a target."""
+        motion = self.new.motion
+        if motion == MOTION_NONE:
+            if self.axis_words:
+                raise _Refused("axis_words_exist")
+            return
+        if self.axis_command != "motion":
+            return
+        if motion != MOTION_SEEK and self.feed == 0.0:
+            raise _Refused("undefined_feed")
+        if motion in (MOTION_SEEK, MOTION_LINEAR):
+            if not self.axis_words:
+                self.axis_command = ""
+        elif motion in (MOTION_CW, MOTION_CCW):
+            self._check_arc()
         else:
-            if feed == 0.0:
-                return STATUS["undefined_feed"]
-            if new.motion == MOTION_LINEAR:
-                if not axis_words:
-                    axis_command = ""
-            elif new.motion in (MOTION_CW, MOTION_CCW):
-                error = _check_arc(block, words, state, target, ijk, ijk_words, axis_words, (axis0, axis1), new, used)
-                if error:
-                    return error
-            else:  # probing
-                if not axis_words:
-                    return STATUS["no_axis_words"]
-                if np.array_equal(state.position, target):
-                    return STATUS["invalid_target"]
-                block.probe_no_error = new.motion in (383, 385)
-    if axis_command:
-        used |= {"X", "Y", "Z"}
-    if set(words) - used:
-        return STATUS["unused_words"]
+            self._check_probe()
 
-    if jog:
-        if command_groups - {0, 3, 6} or non_modal not in ("", "G53") or not axis_words:
-            return STATUS["invalid_jog"]
+    def _check_arc(self) -> None:
+        """G2/G3: the radius or centre-offset form; fills the block's arc offset and radius."""
+        a0, a1, _ = _PLANE_AXES[self.new.plane]
+        block, state = self.block, self.state
+        block.clockwise = self.new.motion == MOTION_CW
+        if not self.axis_words:
+            raise _Refused("no_axis_words")
+        if not self.axis_words & ((1 << a0) | (1 << a1)):
+            raise _Refused("no_axis_words_in_plane")
+        x = self.target[a0] - state.position[a0]
+        y = self.target[a1] - state.position[a1]
+        if "R" in self.words:
+            self.used.add("R")
+            block.arc_offset, block.arc_radius = self._arc_by_radius(x, y, a0, a1)
+        else:
+            if not self.ijk_words & ((1 << a0) | (1 << a1)):
+                raise _Refused("no_offsets_in_plane")
+            self.used.update("IJK")
+            block.arc_offset, block.arc_radius = self._arc_by_offset(x, y, a0, a1)
 
-    # ---- the block's effects on the parser state -----------------------------------------------
-    block.motion_command = axis_command == "motion" and new.motion != MOTION_NONE
-    block.target = target
-    block.dwell = dwell
-    block.program_flow = program_flow
-    if jog:
-        block.modal = state.copy()
-        block.modal.position = target.copy()
-        return block
-    new.line_number = int(words.get("N", 0))
-    new.feed_rate = feed
-    block.speed_changed = speed != state.spindle_speed
-    new.spindle_speed = speed
-    new.tool = int(math.trunc(words.get("T", state.tool)))
-    block.spindle_changed = spindle != state.spindle
-    new.spindle = spindle
-    block.coolant_changed = (flood, mist) != (state.flood, state.mist)
-    new.flood, new.mist = flood, mist
-    if axis_command == "tlo":
-        new.tool_length_offset = xyz[2] if new.tlo_dynamic else 0.0
-        block.wco_changed |= new.tool_length_offset != state.tool_length_offset
-    if new.coord_select != state.coord_select:
-        new.coord_system = block_coord
-        block.wco_changed = True
-    if block.g10_index == new.coord_select and block.g10_values is not None:
-        new.coord_system = block.g10_values.copy()
-        block.wco_changed = True
-    if non_modal == "G92":
-        block.wco_changed = True
-    elif non_modal == "G92.1":
-        new.coord_offset = np.zeros(3)
-        block.wco_changed = True
-    if non_modal in ("G28", "G30") and block.home is not None:
-        new.position = block.home.copy()
-    if block.motion_command and new.motion not in PROBES:
-        new.position = target.copy()
-    if program_flow in (2, 30):
-        new.motion, new.plane, new.incremental, new.inverse_time = MOTION_LINEAR, 0, False, False
-        new.coord_select, new.spindle, new.flood, new.mist = 0, 5, False, False
-    return block
-
-
-def _check_arc(
-    block: GBlock, words: dict[str, float], state: GcodeState, target: np.ndarray, ijk: np.ndarray,
-    ijk_words: int, axis_words: int, plane: tuple[int, int], new: GcodeState, used: set[str],
-) -> int:
-    """GRBL's G2/G3 checks (radius and centre-offset formats); fills the block's arc offset and radius."""
-    a0, a1 = plane
-    block.clockwise = new.motion == MOTION_CW
-    if not axis_words:
-        return STATUS["no_axis_words"]
-    if not axis_words & ((1 << a0) | (1 << a1)):
-        return STATUS["no_axis_words_in_plane"]
-    x = target[a0] - state.position[a0]
-    y = target[a1] - state.position[a1]
-    offset = np.zeros(3)
-    if "R" in words:
-        used.add("R")
-        if np.array_equal(state.position, target):
-            return STATUS["invalid_target"]
-        r = words["R"] * (MM_PER_INCH if new.inches else 1.0)
+    def _arc_by_radius(self, x: float, y: float, a0: int, a1: int) -> tuple[np.ndarray, float]:
+        """R form: the centre on the side the sign of R and the direction choose."""
+        if np.array_equal(self.state.position, self.target):
+            raise _Refused("invalid_target")
+        r = self.words["R"] * (MM_PER_INCH if self.new.inches else 1.0)
         h2 = 4.0 * r * r - x * x - y * y
         if h2 < 0:
-            return STATUS["arc_radius"]
+            raise _Refused("arc_radius")
         h_x2_div_d = -math.sqrt(h2) / math.hypot(x, y)
-        if new.motion == MOTION_CCW:
+        if self.new.motion == MOTION_CCW:
             h_x2_div_d = -h_x2_div_d
         if r < 0:
             h_x2_div_d = -h_x2_div_d
             r = -r
+        offset = np.zeros(3)
         offset[a0] = 0.5 * (x - y * h_x2_div_d)
         offset[a1] = 0.5 * (y + x * h_x2_div_d)
-        block.arc_radius = r
-    else:
-        if not ijk_words & ((1 << a0) | (1 << a1)):
-            return STATUS["no_offsets_in_plane"]
-        used.update("IJK")
-        offset = ijk * (MM_PER_INCH if new.inches else 1.0)
+        return offset, r
+
+    def _arc_by_offset(self, x: float, y: float, a0: int, a1: int) -> tuple[np.ndarray, float]:
+        """IJK form: start and end must lie on one circle (within GRBL's tolerance)."""
+        offset = self.ijk * (MM_PER_INCH if self.new.inches else 1.0)
         target_r = math.hypot(x - offset[a0], y - offset[a1])
         radius = math.hypot(offset[a0], offset[a1])
         delta_r = abs(target_r - radius)
         if delta_r > ARC_RADIUS_TOLERANCE and (delta_r > 0.5 or delta_r > 0.001 * radius):
-            return STATUS["invalid_target"]
-        block.arc_radius = radius
-    block.arc_offset = offset
-    return 0
+            raise _Refused("invalid_target")
+        return offset, radius
+
+    def _check_probe(self) -> None:
+        """G38.x: axis words and a target other than here."""
+        if not self.axis_words:
+            raise _Refused("no_axis_words")
+        if np.array_equal(self.state.position, self.target):
+            raise _Refused("invalid_target")
+        self.block.probe_no_error = self.new.motion in (383, 385)
+
+    def _check_unused_words(self) -> None:
+        """[0] Every value word was used by some command (error:36 otherwise)."""
+        if self.axis_command:
+            self.used |= {"X", "Y", "Z"}
+        if set(self.words) - self.used:
+            raise _Refused("unused_words")
+
+    def _check_jog(self) -> None:
+        """$J= takes only G20/G21, G90/G91, G53 and axis words (error:16)."""
+        if self.jog and (self.command_groups - {0, 3, 6} or self.non_modal not in ("", "G53") or not self.axis_words):
+            raise _Refused("invalid_jog")
+
+    # ---- STEP 4: the parser state the block leaves ---------------------------------------------------
+    def update_state(self) -> GBlock:
+        """STEP 4: the block with the parser state it leaves, in the order of execution."""
+        block = self.block
+        block.non_modal, block.axis_words, block.feed = self.non_modal, self.axis_words, self.feed
+        block.motion_command = self.axis_command == "motion" and self.new.motion != MOTION_NONE
+        block.target = self.target
+        block.dwell = self.dwell
+        block.program_flow = self.program_flow
+        if self.jog:
+            block.modal = self.state.copy()
+            block.modal.position = self.target.copy()
+            return block
+        self._update_modes()
+        self._update_offsets()
+        self._update_position()
+        self._update_program_flow()
+        return block
+
+    def _update_modes(self) -> None:
+        """[1]-[8] Line number, feed rate, spindle speed, tool, spindle and coolant state."""
+        new, state, block = self.new, self.state, self.block
+        new.line_number = int(self.words.get("N", 0))
+        new.feed_rate = self.feed
+        block.speed_changed = self.speed != state.spindle_speed
+        new.spindle_speed = self.speed
+        new.tool = math.trunc(self.words.get("T", state.tool))
+        block.spindle_changed = self.spindle != state.spindle
+        new.spindle = self.spindle
+        block.coolant_changed = (self.flood, self.mist) != (state.flood, state.mist)
+        new.flood, new.mist = self.flood, self.mist
+
+    def _update_offsets(self) -> None:
+        """[14] tool length offset, [15] coordinate system, [19] G10 into the active system, G92, G92.1."""
+        new, state, block = self.new, self.state, self.block
+        if self.axis_command == "tlo":
+            new.tool_length_offset = self.xyz[2] if new.tlo_dynamic else 0.0
+            block.wco_changed |= new.tool_length_offset != state.tool_length_offset
+        if new.coord_select != state.coord_select:
+            new.coord_system = self.block_coord
+            block.wco_changed = True
+        if block.g10_index == new.coord_select and block.g10_values is not None:
+            new.coord_system = block.g10_values.copy()
+            block.wco_changed = True
+        if self.non_modal == "G92":
+            block.wco_changed = True
+        elif self.non_modal == "G92.1":
+            new.coord_offset = np.zeros(3)
+            block.wco_changed = True
+
+    def _update_position(self) -> None:
+        """[19] G28/G30 end at their stored position, [20] a motion (not a probe: that ends where it stops)."""
+        if self.non_modal in ("G28", "G30") and self.block.home is not None:
+            self.new.position = self.block.home.copy()
+        if self.block.motion_command and self.new.motion not in PROBES:
+            self.new.position = self.target.copy()
+
+    def _update_program_flow(self) -> None:
+        """[21] M2/M30 restore the default modes."""
+        new = self.new
+        if self.program_flow in (2, 30):
+            new.motion, new.plane, new.incremental, new.inverse_time = MOTION_LINEAR, 0, False, False
+            new.coord_select, new.spindle, new.flood, new.mist = 0, 5, False, False
 
 
-def arc_points(
-    start: np.ndarray, target: np.ndarray, offset: np.ndarray, radius: float, plane: int,
-    clockwise: bool, tolerance: float,
-) -> np.ndarray:
-    """Chord end points GRBL's ``mc_arc`` feeds the planner for an arc (the last one is the target).
-
-    The segment count is floor(½·|θ|·r / √(tol·(2r − tol))), as in motion_control.c; points lie
-    exactly on the circle (vectorised, no small-angle drift).  Returns (N, 3) machine mm, N >= 1.
-    """
-    a0, a1, al = ((0, 1, 2), (2, 0, 1), (1, 2, 0))[plane]
-    c0 = start[a0] + offset[a0]
-    c1 = start[a1] + offset[a1]
-    r0, r1 = -offset[a0], -offset[a1]
-    rt0, rt1 = target[a0] - c0, target[a1] - c1
-    travel = math.atan2(r0 * rt1 - r1 * rt0, r0 * rt0 + r1 * rt1)
-    eps = 5e-7
-    if clockwise:
-        if travel >= -eps:
-            travel -= 2 * math.pi
-    elif travel <= eps:
-        travel += 2 * math.pi
-    denom = math.sqrt(max(tolerance * (2 * radius - tolerance), 1e-30))
-    segments = int(math.floor(abs(0.5 * travel * radius) / denom)) if radius > 0 else 0
-    segments = min(segments, 100_000)
-    if segments <= 1:
-        return target.reshape(1, 3).copy()
-    k = np.arange(1, segments)
-    theta = math.atan2(r1, r0) + travel * k / segments
-    pts = np.empty((segments, 3))
-    pts[:-1, a0] = c0 + radius * np.cos(theta)
-    pts[:-1, a1] = c1 + radius * np.sin(theta)
-    pts[:-1, al] = start[al] + (target[al] - start[al]) * k / segments
-    pts[-1] = target
-    return pts
+_G_COMMANDS: dict[int, Callable[[_BlockParser, int, int], tuple[int, int]]] = {
+    0: _BlockParser._g_non_modal,
+    1: _BlockParser._g_motion,
+    2: _BlockParser._g_plane,
+    3: _BlockParser._g_distance,
+    5: _BlockParser._g_feed_mode,
+    6: _BlockParser._g_units,
+    7: _BlockParser._g_cutter,
+    8: _BlockParser._g_tool_length,
+    12: _BlockParser._g_coordinate_system,
+    13: _BlockParser._g_path_control,
+}
+"""Modal group -> the STEP 2 handler of its G commands (returns the group the command joins, the mantissa left)."""
