@@ -91,7 +91,7 @@ def list_serial_ports() -> list[DiscoveredDevice]:
     """Serial ports the OS lists, with USB IDs and a model guess where the adapter is known."""
     try:
         ports = list_ports.comports()
-    except Exception as exc:  # sysfs/registry quirks must not break discovery
+    except Exception as exc:  # noqa: BLE001 - sysfs/registry quirks must not break discovery
         _log.debug("listing serial ports failed: %s", exc)
         return []
     found = []
@@ -112,7 +112,7 @@ def list_usb_devices(backend: Any = None) -> list[DiscoveredDevice]:
         import usb.core
 
         devices = list(usb.core.find(find_all=True, backend=backend))
-    except Exception as exc:  # NoBackendError, permission or bus errors: nothing to list
+    except Exception as exc:  # noqa: BLE001 - NoBackendError, permission or bus errors: nothing to list
         _log.debug("listing USB devices failed: %s", exc)
         return []
     found = []
@@ -137,7 +137,7 @@ def list_usb_devices(backend: Any = None) -> list[DiscoveredDevice]:
 def _has_printer_interface(dev: Any) -> bool:
     try:
         return any(intf.bInterfaceClass == 7 for cfg in dev for intf in cfg)
-    except Exception:  # descriptors unreadable: not known to be a printer
+    except Exception:  # noqa: BLE001 - descriptors unreadable: not known to be a printer
         return False
 
 
@@ -147,7 +147,7 @@ def list_hid_devices() -> list[DiscoveredDevice]:
         import hid
 
         entries = hid.enumerate()
-    except Exception as exc:  # ImportError, missing hidraw, permissions
+    except Exception as exc:  # noqa: BLE001 - ImportError, missing hidraw, permissions
         _log.debug("listing HID devices failed: %s", exc)
         return []
     found = []

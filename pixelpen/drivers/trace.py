@@ -257,7 +257,7 @@ class TraceWriter:
 
     def __init__(self, dest: PathOrFile, url: str, settings: Mapping[str, object] | None = None) -> None:
         if isinstance(dest, (str, os.PathLike)):
-            self._file: IO[str] = open(check_path(dest, "trace file"), "w", encoding="utf-8", newline="\n")
+            self._file: IO[str] = open(check_path(dest, "trace file"), "w", encoding="utf-8", newline="\n")  # noqa: SIM115 - the writer owns it until close()
             self._owns = True
         else:
             self._file, self._owns = dest, False

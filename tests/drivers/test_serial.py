@@ -178,3 +178,41 @@ def test_rfc2217_ports_get_no_port_write_timeout(monkeypatch):
     link.reset_output()
     assert seen["reset_output"] is True  # queued bytes are dropped at the port
     link.close()
+
+
+def test_an_unknown_scheme_names_the_known_ones():
+    with pytest.raises(LinkError, match=r"no handler for nosuch://; known schemes: .*loop://.*sim://"):
+        SerialLink("nosuch://x")
+
+
+def test_a_scheme_pyserial_does_not_know_is_found_in_the_entry_point_group(tmp_path, monkeypatch):
+    import serial
+
+    package = tmp_path / "thirdparty_handlers"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "protocol_echoloop.py").write_text(
+        "from serial.urlhandler.protocol_loop import Serial as Loop\n"
+        "class Serial(Loop):\n"
+        "    def __init__(self, *args, clock=None, **kwargs):\n"
+        "        self.clock = clock\n"
+        "        super().__init__(*args, **kwargs)\n"
+        "    def from_url(self, url):\n"
+        "        return super().from_url('loop://')\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setattr(serial, "protocol_handler_packages", list(serial.protocol_handler_packages))
+    monkeypatch.setattr(serial_link, "serial_handlers", lambda: {"echoloop": "thirdparty_handlers"})
+    clock = SimulatedClock()
+    link = SerialLink("echoloop://anything", clock=clock, timeout=0.5)
+    assert "thirdparty_handlers" in serial.protocol_handler_packages
+    assert link.port.clock is clock  # a handler from the group is handed the link's clock
+    link.write(b"hi")
+    assert link.read(2) == b"hi"
+    link.close()
+
+
+def test_sim_is_registered_in_the_entry_point_group_and_pyserial_schemes_stay_pyserials():
+    assert serial_link.serial_handlers()["sim"] == "pixelpen.sim.transports.urlhandler"
+    assert serial_link.url_scheme("RFC2217://host:1") == "rfc2217" and serial_link.url_scheme("/dev/ttyS0") is None
+    assert not serial_link.use_handler("loop://") and not serial_link.use_handler("/dev/ttyS0")
