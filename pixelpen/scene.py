@@ -28,6 +28,8 @@ WORLD = (0.0, 0.0, 200.0, 140.0)
 """The scene's world window, in millimetres: a 200 x 140 area, y up."""
 PAGE = (0.0, 0.0, 260.0, 140.0)
 """The demo page: the scene on the left, two magnified insets in a 60 mm strip on the right."""
+GREEN = "#00a000"
+"""The scene's green, lighter than CSS ``green`` (#008000): the one the picture layer named green before colour.py."""
 INSETS = (
     # (world window, window angle, page rectangle of the inset's viewport)
     ((15.0, 60.0, 55.0, 90.0), np.pi / 10, (205.0, 73.0, 255.0, 135.0)),
@@ -38,7 +40,7 @@ INSETS = (
 def reference_scene() -> Picture:
     """Build the reference scene in world coordinates (millimetres, y up)."""
     pic = Picture(window=WORLD)
-    ink, red, blue, green = Style(), Style(colour="red"), Style(colour="blue"), Style(colour="green")
+    ink, red, blue, green = Style(), Style(colour="red"), Style(colour="blue"), Style(colour=GREEN)
     pic.add(Rectangle(2, 2, 198, 138, Style(width=0.5)))
     pic.add(Text((6, 128), "pixelpen reference scene", height=6, style=ink))
 
@@ -50,15 +52,15 @@ def reference_scene() -> Picture:
     star = _star((30, 75), 18, 8, 5)
     hole = _regular((30, 75), 4, 6)
     pic.add(Polygon((star, hole), Style(colour="blue", fill=Fill("hatch", angle=np.pi / 4, spacing=1.5))))
-    pic.add(Polygon(_regular((70, 75), 12, 6), Style(colour="orange", fill=Fill("solid"))))
+    pic.add(Polygon(_regular((70, 75), 12, 6), Style(colour="darkorange", fill=Fill("solid"))))
     pic.add(Rectangle(90, 62, 115, 88, Style(colour="purple", fill=Fill("crosshatch", angle=0.3, spacing=2.0))))
 
     # conics
     pic.add(Circle((135, 110), 14, red))
-    pic.add(Ellipse((170, 110), 20, 9, angle=np.pi / 6, style=Style(colour="green", fill=Fill("solid", outline=True))))
+    pic.add(Ellipse((170, 110), 20, 9, angle=np.pi / 6, style=Style(colour=GREEN, fill=Fill("solid", outline=True))))
     pic.add(Arc((135, 75), 12, 12, 0.0, 1.5 * np.pi, style=blue))
     pic.add(Arc((165, 75), 14, 10, np.pi / 4, 5 * np.pi / 4, close="chord", style=red))
-    pic.add(Arc((185, 75), 10, 10, 0.0, np.pi / 2, close="pie", style=Style(colour="brown", fill=Fill("hatch", spacing=1.0))))
+    pic.add(Arc((185, 75), 10, 10, 0.0, np.pi / 2, close="pie", style=Style(colour="saddlebrown", fill=Fill("hatch", spacing=1.0))))
 
     # curves: a cubic Bezier path, a degree-5 Bezier, a B-spline with its control polygon
     pic.add(Bezier([[6, 20], [20, 55], [40, -5], [55, 30], [70, 65], [80, 10], [95, 35]], degree=3, style=red))

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from abc import abstractmethod
 
+from pixelpen.colour import parse_colour
 from pixelpen.display.base import Deferral, Display
 from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.flatten import DeviceShape
-from pixelpen.display.picture import parse_colour
 from pixelpen.display.rasterize import rasterize
 from pixelpen.display.vectorize import PenLayerMap, build_display_list
 from pixelpen.raster.canvas import Canvas

@@ -42,6 +42,7 @@ from typing import Any, TypeVar
 import numpy as np
 from PIL import Image as PILImage
 
+from pixelpen.colour import colour_hex
 from pixelpen.display.picture import (
     Arc,
     Bezier,
@@ -59,7 +60,6 @@ from pixelpen.display.picture import (
     Segment,
     Style,
     Text,
-    colour_hex,
 )
 from pixelpen.errors import ConfigError, ParseError, PixelpenError, quote_token
 from pixelpen.urls import check_path

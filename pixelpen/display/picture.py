@@ -21,19 +21,15 @@ from typing import Literal, Union
 import numpy as np
 
 from pixelpen import geometry as geo
+from pixelpen.colour import NAMED_COLOURS as NAMED_COLOURS  # re-exported for importers from before colour.py
+from pixelpen.colour import colour_hex as colour_hex
+from pixelpen.colour import parse_colour as parse_colour
 from pixelpen.errors import ConfigError, InvalidArgumentType, quote_token
 
 FillStyle = Literal["hollow", "solid", "hatch", "crosshatch", "pattern"]
 Align = Literal["left", "center", "right"]
 VAlign = Literal["bottom", "baseline", "middle", "top"]
 MarkerKind = Literal["dot", "plus", "cross", "star", "circle", "square", "diamond"]
-
-NAMED_COLOURS = {
-    "black": (0, 0, 0), "white": (255, 255, 255), "red": (255, 0, 0), "green": (0, 160, 0),
-    "blue": (0, 0, 255), "cyan": (0, 255, 255), "magenta": (255, 0, 255), "yellow": (255, 255, 0),
-    "orange": (255, 140, 0), "brown": (139, 69, 19), "purple": (128, 0, 128), "grey": (128, 128, 128),
-    "gray": (128, 128, 128),
-}
 
 
 MAX_COORDINATE = 1e15
@@ -110,34 +106,6 @@ def _set(obj: object, **values: object) -> None:
     """Store checked values on a frozen dataclass."""
     for key, value in values.items():
         object.__setattr__(obj, key, value)
-
-
-def parse_colour(colour: object) -> tuple[int, int, int]:
-    """Read a colour given as a name, ``#rgb``/``#rrggbb`` or an (r, g, b) tuple of 0-255 integers."""
-    if isinstance(colour, str):
-        text = colour.strip().lower()
-        if text in NAMED_COLOURS:
-            return NAMED_COLOURS[text]
-        if text.startswith("#") and len(text) in (4, 7):
-            digits = text[1:]
-            if len(digits) == 3:
-                digits = "".join(c * 2 for c in digits)
-            try:
-                return (int(digits[0:2], 16), int(digits[2:4], 16), int(digits[4:6], 16))
-            except ValueError:
-                pass
-        raise ConfigError(f"unknown colour {quote_token(colour)}: use a name ({', '.join(sorted(NAMED_COLOURS))}) or #rrggbb")
-    if isinstance(colour, (tuple, list)) and len(colour) == 3 and all(
-        isinstance(c, (int, np.integer)) and not isinstance(c, bool) for c in colour
-    ):
-        if all(0 <= int(c) <= 255 for c in colour):
-            return (int(colour[0]), int(colour[1]), int(colour[2]))
-    raise ConfigError(f"colour must be a name, '#rrggbb' or (r, g, b) in 0..255, got {quote_token(colour)}")
-
-
-def colour_hex(rgb: tuple[int, int, int]) -> str:
-    """Format an (r, g, b) colour as ``#rrggbb``."""
-    return "#%02x%02x%02x" % rgb
 
 
 @dataclass(frozen=True)

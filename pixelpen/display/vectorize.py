@@ -9,7 +9,8 @@ from typing import Protocol
 
 import numpy as np
 
-from pixelpen.display.picture import Style, colour_hex, parse_colour
+from pixelpen.colour import colour_hex, parse_colour
+from pixelpen.display.picture import Style
 from pixelpen.errors import ConfigError
 from pixelpen.geometry.hatch import hatch
 from pixelpen.vector.displaylist import DisplayList

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw
 
-from pixelpen.display.picture import parse_colour
+from pixelpen.colour import parse_colour
 from pixelpen.errors import ConfigError
 from pixelpen.vector.displaylist import DisplayList
 

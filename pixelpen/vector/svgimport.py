@@ -38,6 +38,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 import svgelements as se
 
+from pixelpen.colour import colour_hex, parse_colour
 from pixelpen.errors import ConfigError, ParseError
 from pixelpen.vector.displaylist import DisplayList
 
@@ -370,10 +371,24 @@ def _has_layers(doc: se.SVG) -> bool:
     return False
 
 
-def _colour(paint: object) -> str | None:
-    if paint is None or getattr(paint, "value", None) is None:
+def _colour(element: se.Shape, key: str) -> str | None:
+    """The ``stroke`` or ``fill`` paint of ``element`` as ``#rrggbb``; None for no paint.
+
+    svgelements resolves the cascade (inheritance, ``currentColor``, CSS); the paint's text is then read by
+    :mod:`pixelpen.colour`, so a name or form gives the value it has on the Picture API (svgelements' own table
+    has a wrong ``aliceblue``, no ``rebeccapurple`` and truncates percentages). What colour.py does not read
+    (``rgba()``, ``url(#gradient)``) keeps svgelements' value.
+    """
+    paint = getattr(element, key)
+    if paint is None or paint.value is None:
         return None
-    return paint.hexrgb  # type: ignore[attr-defined]
+    text = element.values.get(key)
+    if isinstance(text, str):
+        try:
+            return colour_hex(parse_colour(text))
+        except ConfigError:
+            pass
+    return str(paint.hexrgb)
 
 
 def _segment_count(seg: object, tol: float) -> int:
@@ -566,7 +581,7 @@ def read_svg(
         if element.values.get("visibility") in ("hidden", "collapse"):
             skipped["hidden element(s) skipped"] += 1
             continue
-        stroke, fill = _colour(element.stroke), _colour(element.fill)
+        stroke, fill = _colour(element, "stroke"), _colour(element, "fill")
         if stroke is None and fill is None:
             skipped["element(s) with neither stroke nor fill skipped"] += 1
             continue
