@@ -6,32 +6,56 @@ pictures are built from the primitives in ``pixelpen.display.picture``.
 
 from __future__ import annotations
 
+import importlib
+from typing import TYPE_CHECKING
+
 from pixelpen import _moved
-from pixelpen.display.base import Display
-from pixelpen.display.picture import (
-    Arc,
-    Bezier,
-    BSpline,
-    Circle,
-    Ellipse,
-    Fill,
-    Image,
-    Marker,
-    Picture,
-    Polygon,
-    Polyline,
-    Rectangle,
-    Segment,
-    Style,
-    Text,
-)
 from pixelpen.display.registry import known_schemes
 from pixelpen.display.registry import open_display as open
 from pixelpen.errors import ConfigError, LinkError, ParseError, PixelpenError, ProtocolError, URLError
 
+if TYPE_CHECKING:
+    from pixelpen.display.base import Display
+    from pixelpen.display.picture import (
+        Arc,
+        Bezier,
+        BSpline,
+        Circle,
+        Ellipse,
+        Fill,
+        Image,
+        Marker,
+        Picture,
+        Polygon,
+        Polyline,
+        Rectangle,
+        Segment,
+        Style,
+        Text,
+    )
+
 _moved.install()
 
 __version__ = "0.1.0"
+
+_LAZY = {"Display": "pixelpen.display.base"} | dict.fromkeys(
+    ("Arc", "BSpline", "Bezier", "Circle", "Ellipse", "Fill", "Image", "Marker", "Picture", "Polygon", "Polyline",
+     "Rectangle", "Segment", "Style", "Text"), "pixelpen.display.picture")
+"""Public names imported on first use (so ``import pixelpen`` loads neither numpy nor Pillow)."""
+
+
+def __getattr__(name: str) -> object:
+    """Import a lazily exported name's module on first access, then keep the name here."""
+    if name not in _LAZY:
+        raise AttributeError(f"module 'pixelpen' has no attribute {name!r}")
+    value = getattr(importlib.import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    """The module's names, the lazily exported ones included."""
+    return sorted(set(globals()) | set(_LAZY))
 
 __all__ = [
     "Arc",

@@ -10,6 +10,7 @@ from __future__ import annotations
 import logging
 from abc import ABC, abstractmethod
 from collections.abc import Iterable
+from types import TracebackType
 from typing import Any, ClassVar, Literal
 
 from pixelpen import geometry as geo
@@ -112,7 +113,8 @@ class Display(ABC):
     def __enter__(self) -> Display:
         return self.open()
 
-    def __exit__(self, exc_type, exc, tb) -> None:
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
         if exc_type is None:
             self.close()
         else:
@@ -153,8 +155,8 @@ class Display(ABC):
     def draw(self, item: Picture | Primitive | Segment | Iterable[Primitive]) -> None:
         """Draw a picture, segment or primitive now (deferral 'asap') or at the next ``flush()``."""
         self._require_open()
-        if not isinstance(item, (Picture, Segment) + PRIMITIVE_TYPES):
-            items = list(item)  # type: ignore[arg-type]
+        if not isinstance(item, (Picture, Segment, *PRIMITIVE_TYPES)):
+            items = list(item)
             picture = Picture()
             for prim in items:
                 picture.add(prim)
@@ -177,7 +179,9 @@ class Display(ABC):
         self._pending.clear()
         self._erase()
 
-    def shapes(self, item: Picture | Primitive | Segment, pipeline: geo.ViewingPipeline | None = None) -> Iterable[DeviceShape]:
+    def shapes(
+        self, item: Picture | Primitive | Segment, pipeline: geo.ViewingPipeline | None = None
+    ) -> Iterable[DeviceShape]:
         """The device-space shapes of an item under ``pipeline`` (default: the current one)."""
         if isinstance(item, Segment):
             picture = Picture()
