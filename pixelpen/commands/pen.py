@@ -11,7 +11,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-from pixelpen.commands.plot import plotter_for
 from pixelpen.errors import ConfigError
 
 ACTIONS = {
@@ -26,6 +25,8 @@ ACTIONS = {
 
 def run_pen(args: argparse.Namespace) -> int:
     """Do one manual action on the plotter at --to."""
+    from pixelpen.devices.plotters.job import plotter_for
+
     method_name, done = ACTIONS[args.action]
     display = plotter_for(args.to)
     if not callable(getattr(display, method_name, None)):

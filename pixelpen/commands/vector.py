@@ -111,15 +111,9 @@ def _outside(dl: DisplayList, size: tuple[float, float]) -> DisplayList:
 def _device_preview(args: argparse.Namespace) -> list[str]:
     """Draw the sheet, the hard-clip limits and the drawing on them (cut parts in a warning colour); say what is cut."""
     from pixelpen import geometry as geo
-    from pixelpen.commands.plot import (
-        CUT_REPORT_MM,
-        SHEET_COLOURS,
-        Layout,
-        clip_to_device,
-        load_drawing,
-        plotter_for,
-        sheet_to_device,
-    )
+    from pixelpen.commands.plot import SHEET_COLOURS
+    from pixelpen.devices.plotters.job import plotter_for
+    from pixelpen.devices.plotters.layout import CUT_REPORT_MM, Layout, clip_to_device, load_drawing, sheet_to_device
     from pixelpen.display.registry import display_class
     from pixelpen.profiles.model import load_profile
     from pixelpen.urls import format_url

@@ -19,9 +19,12 @@ import pytest
 from pixelpen.cli import main
 from pixelpen.commands import plot as plotcmd
 from pixelpen.devices.plotters.base import PlotProgress
+from pixelpen.devices.plotters.job import plotter_for
+from pixelpen.devices.plotters.layout import Layout, clip_to_device, page_to_world
 from pixelpen.display.pictfile import save_picture
 from pixelpen.display.picture import Picture, Polyline, Style
 from pixelpen.sim.base import forget_simulator, named_simulator
+from pixelpen.vector.displaylist import DisplayList
 
 HP_UNIT = 0.02488  # hp7475a.toml unit_mm
 HP_ORIGIN = (10.0, 206.0)  # hp7475a.toml [paper.a4] origin_mm: device origin 10 mm right of, 206 mm below the top left
@@ -134,8 +137,8 @@ def test_picture_world_millimetres_are_device_millimetres(tmp_path, sim):
 
 def test_page_to_world_puts_the_profile_origin_at_the_device_origin():
     for url in ("sim:hp7475a", "sim:hp7475a?paper=a3", "sim:grbl", "sim:axidraw"):
-        display = plotcmd.plotter_for(url)
-        matrix = plotcmd.page_to_world(display)
+        display = plotter_for(url)
+        matrix = page_to_world(display)
         origin = display.paper.origin_mm
         device = display.pipeline.to_device(matrix[:2, :2] @ np.asarray(origin) + matrix[:2, 2])
         np.testing.assert_allclose(device, [0.0, 0.0], atol=1e-6)
@@ -291,8 +294,8 @@ def test_lines_beyond_the_limits_are_cut_with_a_warning_naming_how_much(tmp_path
 
 
 def test_clip_to_device_splits_a_stroke_that_leaves_and_returns():
-    dl = plotcmd.DisplayList.from_polylines([np.array([[1, 1], [5, 1], [5, 20], [8, 20], [8, 1], [9, 1]])])
-    clipped, cut = plotcmd.clip_to_device(dl, (10, 10))
+    dl = DisplayList.from_polylines([np.array([[1, 1], [5, 1], [5, 20], [8, 20], [8, 1], [9, 1]])])
+    clipped, cut = clip_to_device(dl, (10, 10))
     assert len(clipped) == 2 and cut == pytest.approx(10 + 3 + 10)
     np.testing.assert_allclose(clipped.stroke(0), [[1, 1], [5, 1], [5, 10]])
     np.testing.assert_allclose(clipped.stroke(1), [[8, 10], [8, 1], [9, 1]])
@@ -746,7 +749,7 @@ LAYOUT_SEEDS = [b"a4 90 1.5 10", b"210x297mm -45 0.5 0", b"11x8.5in 180 2 5", b"
 def layout_campaign(cases, seed):
     from tests.fuzzing import campaign
 
-    display = plotcmd.plotter_for("sim:hp7475a")
+    display = plotter_for("sim:hp7475a")
     points = np.array([[10.0, 20.0], [50.0, 20.0], [30.0, 60.0]])
 
     def target(data):
@@ -758,8 +761,8 @@ def layout_campaign(cases, seed):
                 numbers.append(convert(text))
             except plotcmd.argparse.ArgumentTypeError:  # argparse turns it into a usage error
                 return
-        layout = plotcmd.Layout(rotate_deg=numbers[0], scale=numbers[1], center=True, margin_mm=numbers[2],
-                                page=page or None)
+        layout = Layout(rotate_deg=numbers[0], scale=numbers[1], center=True, margin_mm=numbers[2],
+                        page=page or None)
         w, h = layout.page_size(display)
         assert np.isfinite([w, h]).all() and w > 0 and h > 0
         matrix, factor = layout.matrix(points, (numbers[2], numbers[2], w - numbers[2], h - numbers[2]))
