@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import logging
 import re
 
@@ -13,7 +14,7 @@ from hypothesis import strategies as st
 from pixelpen.clock import SimulatedClock
 from pixelpen.errors import ConfigError, URLError
 from pixelpen.sim.base import WireDevice
-from pixelpen.sim.plotters.ebb.board import EbbSimulator, _factory
+from pixelpen.sim.plotters.ebb.board import EbbSimulator, create
 from tests.sim.fakes import DeviceRig
 
 VERSION = b"EBBv13_and_above EB Firmware Version 3.0.2"
@@ -317,10 +318,10 @@ def test_contact_position_is_an_option():
         rig.send("SC,4,20641\rSC,5,15248\rSP,0\rXM,500,800,0\rSP,1\r")
         rig.until_idle()
         assert len(rig.dev.paper.strokes()) == inked
-    assert _factory("axidraw")(contact="16000")._contact_pulse == 16000
+    assert create("axidraw", contact="16000").contact_pulse == 16000
     for bad in ("0", "70000", "\u00b2", "1.5"):
         with pytest.raises(URLError, match="contact"):
-            _factory("axidraw")(contact=bad)
+            create("axidraw", contact=bad)
 
 
 def test_boot_servo_positions_follow_the_firmware_version():
@@ -429,10 +430,10 @@ def test_starved_time_between_moves():
 
 
 def test_factories():
-    axi = _factory("axidraw")
+    axi = functools.partial(create, "axidraw")
     dev = axi(clock=SimulatedClock(), model="minikit", firmware="2.8.1")
     assert dev.paper.width_mm == 160 and dev.firmware == "2.8.1"
-    assert _factory("ebb")(clock=SimulatedClock(), model="se_a3").paper.height_mm == 297
+    assert create("ebb", clock=SimulatedClock(), model="se_a3").paper.height_mm == 297
     with pytest.raises(URLError, match="unknown option.*colour.*known:"):
         axi(colour="red")
     with pytest.raises(URLError, match="model='nano'"):
