@@ -3,7 +3,8 @@
 ``pixelpen sim MODEL --pty`` starts the simulator behind a pseudo-terminal and prints its path (the first
 line on stdout), so any plotting program can open it like a serial port; Ctrl-C stops it and the paper is
 written (SIGTERM stops it the same way).  The line runs at the device's own speed unless ``baud`` says
-otherwise: an EBB is USB CDC (no baud pacing), GRBL 115200, HP plotters 9600.  ``pixelpen sim MODEL --replay FILE`` feeds a raw byte file (an HP-GL file, a G-code file, EBB
+otherwise: an EBB is USB CDC (no baud pacing), GRBL 115200, HP plotters 9600.
+``pixelpen sim MODEL --replay FILE`` feeds a raw byte file (an HP-GL file, a G-code file, EBB
 commands) to the simulator through a :class:`~pixelpen.sim.transports.port.SimPort` at the line's speed, in
 simulated time by default, then writes what the paper shows and prints the device's errors and counters.
 
@@ -29,8 +30,9 @@ from pathlib import Path
 
 from pixelpen.clock import REAL_CLOCK, SimulatedClock
 from pixelpen.errors import ConfigError, PixelpenError, URLError
-from pixelpen.sim.base import WireDevice, create_simulator, simulator_models
-from pixelpen.sim.transports.port import LinkStats, SimPort, TransportOptions, line_baud, split_options
+from pixelpen.sim.base import Fault, WireDevice, create_simulator, simulator_models
+from pixelpen.sim.transports.options import TransportOptions, line_baud, split_options
+from pixelpen.sim.transports.port import LinkStats, SimPort
 
 log = logging.getLogger(__name__)
 
@@ -75,9 +77,12 @@ class PacedDevice:
         """The device's next event."""
         return self.device.next_event_time()
 
-    def inject(self, fault: str) -> None:
-        """Pass a fault on to the device."""
-        self.device.inject(fault)
+    def inject(self, fault: Fault | str, at: int | None = None) -> None:
+        """Pass a fault on to the device (``at`` only when given: older devices take the fault alone)."""
+        if at is None:
+            self.device.inject(fault)
+        else:
+            self.device.inject(fault, at=at)
 
     def close(self) -> None:
         """Close the device."""

@@ -1,13 +1,14 @@
-"""Tiny WireDevices for transport tests: an echo-ish line device with a small buffer, and a scripted responder."""
+"""Tiny StreamDevices for transport tests: an echo-ish line device with a small buffer, and a scripted responder."""
 
 from __future__ import annotations
 
-from pixelpen.clock import REAL_CLOCK, Clock
+from pixelpen.clock import Clock
+from pixelpen.sim.base import Fault, SimulatedDevice
 
 XON, XOFF = 0x11, 0x13
 
 
-class EchoDevice:
+class EchoDevice(SimulatedDevice):
     """Line device: ``buffer_size`` bytes of input, drained at ``drain_rate`` bytes/s, answers ``reply`` per line.
 
     It records everything a transport test wants to check: every byte that arrived (``received``),
@@ -18,6 +19,7 @@ class EchoDevice:
     """
 
     model = "echo"
+    FAULTS = frozenset(Fault)
 
     def __init__(
         self,
@@ -32,7 +34,7 @@ class EchoDevice:
         xon_free: int = 12,
         **options: str,
     ) -> None:
-        self.clock = clock if clock is not None else REAL_CLOCK
+        super().__init__(clock)
         self.buffer_size = int(buffer_size)
         self.drain_interval = 1.0 / float(drain_rate)
         self.ready_free = ready_free
@@ -47,10 +49,7 @@ class EchoDevice:
         self.overflowed = 0
         self.arrived_while_busy = 0
         self.faults: list[tuple[str, int]] = []
-        self.closed = False
         self._line = bytearray()
-        self._out = bytearray()
-        self._t = self.clock.now()
         self._next_drain: float | None = None
         self._xoff_sent = False
 
@@ -62,7 +61,7 @@ class EchoDevice:
     def ready_to_receive(self) -> bool:
         return self.free >= self.ready_free
 
-    def receive(self, data: bytes) -> None:
+    def _receive(self, data: bytes) -> None:
         for b in data:
             self.received.append(b)
             if not self.ready_to_receive:
@@ -72,85 +71,68 @@ class EchoDevice:
                 continue
             self.buffer.append(b)
             if self._next_drain is None:
-                self._next_drain = self._t + self.drain_interval
+                self._next_drain = self._now + self.drain_interval
             if self.xonxoff and not self._xoff_sent and self.free <= self.xoff_free:
-                self._out.append(XOFF)
+                self._emit(bytes([XOFF]))
                 self._xoff_sent = True
 
-    def advance_to(self, t: float) -> None:
-        while self._next_drain is not None and self._next_drain <= t:
-            self._t = self._next_drain
-            b = self.buffer.pop(0)
-            self.executed.append(b)
-            if b in b"\r\n":
-                if self._line:
-                    self.lines.append(bytes(self._line))
-                    self._out += self.reply
-                self._line.clear()
-            else:
-                self._line.append(b)
-            self._next_drain = self._t + self.drain_interval if self.buffer else None
-            if self.xonxoff and self._xoff_sent and self.free >= self.xon_free:
-                self._out.append(XON)
-                self._xoff_sent = False
-        self._t = max(self._t, t)
-
-    def take_output(self) -> bytes:
-        out = bytes(self._out)
-        self._out.clear()
-        return out
-
-    def next_event_time(self) -> float | None:
+    def _next_internal_event(self) -> float | None:
         return self._next_drain
+
+    def _handle_event(self, t: float) -> None:
+        """Execute one byte from the buffer (a line end answers ``reply``)."""
+        self._now = t
+        b = self.buffer.pop(0)
+        self.executed.append(b)
+        if b in b"\r\n":
+            if self._line:
+                self.lines.append(bytes(self._line))
+                self._emit(self.reply)
+            self._line.clear()
+        else:
+            self._line.append(b)
+        self._next_drain = self._now + self.drain_interval if self.buffer else None
+        if self.xonxoff and self._xoff_sent and self.free >= self.xon_free:
+            self._emit(bytes([XON]))
+            self._xoff_sent = False
+
+    def _apply_fault(self, fault: Fault) -> None:
+        self.faults.append((fault.value, len(self.received)))
+
+    def _ignore(self, data: bytes) -> None:
+        self.received += data  # a closed echo device still shows what reached it
 
     def say(self, data: bytes) -> None:
         """Make the device send ``data`` unprompted (tests of the device-to-host direction)."""
-        self._out += data
-
-    def inject(self, fault: str) -> None:
-        self.faults.append((fault, len(self.received)))
-
-    def close(self) -> None:
-        self.closed = True
+        self._emit(data)
 
 
-class ScriptedDevice:
-    """A WireDevice that answers fixed requests: when its input ends with a key, it sends the value."""
+class ScriptedDevice(SimulatedDevice):
+    """A StreamDevice that answers fixed requests: when its input ends with a key, it sends the value."""
 
     model = "scripted"
+    FAULTS = frozenset(Fault)
 
     def __init__(self, replies: dict[bytes, bytes], clock: Clock | None = None) -> None:
-        self.clock = clock if clock is not None else REAL_CLOCK
+        super().__init__(clock)
         self.replies = replies
         self.received = bytearray()
         self.faults: list[str] = []
-        self.closed = False
-        self._out = bytearray()
 
-    ready_to_receive = True
-
-    def receive(self, data: bytes) -> None:
+    def _receive(self, data: bytes) -> None:
         self.received += data
         for request, reply in self.replies.items():
             if self.received.endswith(request):
-                self._out += reply
+                self._emit(reply)
 
-    def advance_to(self, t: float) -> None:
-        pass
-
-    def take_output(self) -> bytes:
-        out = bytes(self._out)
-        self._out.clear()
-        return out
-
-    def next_event_time(self) -> float | None:
+    def _next_internal_event(self) -> float | None:
         return None
 
-    def inject(self, fault: str) -> None:
-        self.faults.append(fault)
+    def _handle_event(self, t: float) -> None:
+        """Never called: nothing is ever scheduled."""
 
-    def close(self) -> None:
-        self.closed = True
+    def _apply_fault(self, fault: Fault) -> None:
+        self.faults.append(fault.value)
 
 
 class DeviceRig:

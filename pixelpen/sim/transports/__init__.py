@@ -1,1 +1,1 @@
-"""The host-facing ends of simulated devices: the paced serial port, pyserial's sim:// handler, a pty, a pyusb backend."""
+"""The host-facing ends of simulated devices: paced serial port, pyserial's sim:// handler, pty, pyusb backend."""

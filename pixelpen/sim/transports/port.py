@@ -21,26 +21,14 @@ Flow control (``flow``) is what the host side obeys:
 * ``xonxoff``: the device sends XOFF (0x13) / XON (0x11) itself; on arrival they stop and restart
   the transmitter and are removed from the host's input, as a tty with IXON does.
 
-Transport options (the ``sim://`` URL splits these off, see :func:`split_options`; every other
-option goes to the simulator factory):
-
-========================  =====================================================================
-``baud=N``                line speed, default 9600
-``flow=none|rtscts|xonxoff``  host-side handshake, default none
-``speed=real|fast``       real time, or a SimulatedClock that jumps ahead whenever the host waits
-``tx_buffer=N``           host transmit buffer in bytes, default 4096
-``drop_after=N``          the link drops after N host bytes went out: every later host operation
-                          raises :class:`~pixelpen.errors.Disconnected`
-``stall_after=N``         the device stops reading after N bytes: the transmit buffer fills and
-                          writes block until their write timeout
-``corrupt_at=N``          host byte number N (counting from 0) arrives with every bit inverted
-``power_loss_after=N``    ``device.inject("power-loss")`` once N host bytes were delivered
-``paper_lever_after=N``   ``device.inject("paper-lever")`` once N host bytes were delivered
-``pause_after=N``         ``device.inject("pause-button")`` once N host bytes were delivered
-``out=FILE``              save the device's paper to FILE (``.png`` or ``.svg``) when the host closes
-                          the port (as it stands then: a plot still in the device's buffer is not waited for)
-========================  =====================================================================
-
+Transport options (``baud``, ``flow``, ``speed``, ``tx_buffer``, ``out`` and the faults by host byte
+count) are declared once as ``TRANSPORT_OPTIONS`` in :mod:`pixelpen.sim.transports.options`
+(``pixelpen devices`` prints their help); a ``sim://`` URL splits them off and gives every other
+option to the simulator factory.  Transport faults (``drop_after``, ``stall_after``, ``corrupt_at``)
+act on the line; device faults (``power_loss_after``, ``paper_lever_after``, ``pause_after``) call
+``device.inject`` once that many host bytes of this port were delivered.  The SimPort counts them,
+not the device (``inject(fault, at=N)``): a device reached again by ``id=`` has counted the bytes of
+earlier ports, and a fault a port did not reach (it dropped or closed first) must not fire on the next.
 The default ``baud`` is the device's own line: its ``default_baud`` attribute when it has one (an EBB is
 USB CDC and ignores the line coding: 12 Mbit/s, USB full speed; GRBL 115200), else 9600.
 
@@ -54,117 +42,36 @@ from __future__ import annotations
 import math
 import threading
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Final
 
 from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
 from pixelpen.errors import ConfigError, Disconnected, LinkError, LinkTimeout, URLError
 from pixelpen.sim.base import WireDevice, create_simulator
-from pixelpen.sim.plotters.sheet import paper_format
+from pixelpen.sim.transports.options import (  # re-exported: these lived here before the options had a module
+    DEFAULT_BAUD,
+    DEVICE_FAULTS,
+    FLOWS,
+    SPEEDS,
+    TRANSPORT_OPTIONS,
+    Faults,
+    TransportOptions,
+    line_baud,
+    split_options,
+)
+
+__all__ = [
+    "DEFAULT_BAUD", "DEVICE_FAULTS", "FLOWS", "SPEEDS", "TRANSPORT_OPTIONS", "Faults", "LinkStats", "SimPort",
+    "TransportOptions", "line_baud", "open_sim_port", "split_options",
+]
 
 XON: Final = 0x11
 XOFF: Final = 0x13
-FLOWS: Final = ("none", "rtscts", "xonxoff")
-SPEEDS: Final = ("real", "fast")
 BITS_PER_BYTE: Final = 10
 """8N1 framing: one start bit, eight data bits, one stop bit."""
 
-DEVICE_FAULTS: Final = {
-    "power_loss_after": "power-loss",
-    "paper_lever_after": "paper-lever",
-    "pause_after": "pause-button",
-}
-"""URL option -> the fault name WireDevice.inject receives."""
-
 _REAL_MIN_SLEEP = 0.001  # real-time waits sleep at least this long (events between are caught up in order)
 _REAL_MAX_SLEEP = 0.05  # ... and at most this long, so other threads' writes are noticed
-
-
-@dataclass(frozen=True)
-class Faults:
-    """Fault injection by host byte count (None: never); see the module docstring."""
-
-    drop_after: int | None = None
-    stall_after: int | None = None
-    corrupt_at: int | None = None
-    power_loss_after: int | None = None
-    paper_lever_after: int | None = None
-    pause_after: int | None = None
-
-    def device_faults(self) -> list[tuple[int, str]]:
-        """(byte count, WireDevice fault name) pairs in the order they fire."""
-        pairs = [(getattr(self, key), name) for key, name in DEVICE_FAULTS.items()]
-        return sorted((n, name) for n, name in pairs if n is not None)
-
-
-@dataclass(frozen=True)
-class TransportOptions:
-    """The transport half of a ``sim://`` URL's options."""
-
-    baud: int | None = None
-    """None: the device's ``default_baud`` (see :func:`line_baud`)."""
-    flow: str = "none"
-    speed: str = "real"
-    tx_buffer: int = 4096
-    faults: Faults = field(default_factory=Faults)
-    out: str | None = None
-    """File the paper is saved to when the host closes the port (``.png`` or ``.svg``)."""
-
-    def make_clock(self) -> Clock:
-        """The clock a device behind these options runs on: real time, or a fresh SimulatedClock."""
-        return SimulatedClock() if self.speed == "fast" else REAL_CLOCK
-
-
-TRANSPORT_OPTIONS: Final = ("baud", "flow", "speed", "tx_buffer", "out", *Faults.__dataclass_fields__)
-DEFAULT_BAUD: Final = 9600
-"""Line speed of a device that names none (an RS-232 plotter's factory setting)."""
-
-
-def line_baud(device: object, baud: int | None = None) -> int:
-    """``baud`` if given, else the device's own ``default_baud``, else DEFAULT_BAUD."""
-    return baud if baud is not None else int(getattr(device, "default_baud", DEFAULT_BAUD))
-
-
-def split_options(options: Mapping[str, str], source: str = "sim") -> tuple[TransportOptions, dict[str, str]]:
-    """Split URL options into validated transport options and the rest (for the simulator factory)."""
-
-    def count(key: str, minimum: int) -> int | None:
-        if key not in options:
-            return None
-        raw = options[key]
-        try:
-            value = int(raw)
-        except ValueError:
-            value = minimum - 1
-        if value < minimum:
-            raise URLError(f"{source}: option {key}={raw!r} is not valid: expected an integer >= {minimum}")
-        return value
-
-    def choice(key: str, allowed: tuple[str, ...], default: str) -> str:
-        value = options.get(key, default).strip().lower()
-        if value not in allowed:
-            raise URLError(
-                f"{source}: option {key}={options[key]!r} is not valid: expected one of {', '.join(allowed)}"
-            )
-        return value
-
-    out = options.get("out")
-    if out is not None:
-        try:
-            paper_format(out)
-        except ConfigError as exc:
-            raise URLError(f"{source}: option out={out!r} is not valid: {exc}") from None
-    faults = Faults(**{key: count(key, 0) for key in Faults.__dataclass_fields__})
-    transport = TransportOptions(
-        baud=count("baud", 1),
-        flow=choice("flow", FLOWS, "none"),
-        speed=choice("speed", SPEEDS, "real"),
-        tx_buffer=count("tx_buffer", 1) or 4096,
-        faults=faults,
-        out=out,
-    )
-    rest = {k: v for k, v in options.items() if k not in TRANSPORT_OPTIONS}
-    return transport, rest
 
 
 @dataclass(frozen=True)
@@ -204,11 +111,8 @@ class SimPort:
         clock: Clock | None = None,
         out: str | None = None,
     ) -> None:
-        baud = line_baud(device, baud)
-        if flow not in FLOWS:
-            raise LinkError(f"SimPort: flow must be one of {', '.join(FLOWS)}, got {flow!r}")
-        if baud <= 0 or tx_buffer <= 0:
-            raise LinkError(f"SimPort: baud and tx_buffer must be positive, got {baud} and {tx_buffer}")
+        if tx_buffer <= 0:
+            raise LinkError(f"SimPort: tx_buffer must be positive, got {tx_buffer}")
         if out is not None and not callable(getattr(device, "save_paper", None)):
             raise LinkError(f"SimPort: out={out!r}, but {getattr(device, 'model', 'the device')} has no paper to save")
         self.device = device
@@ -225,7 +129,7 @@ class SimPort:
         self._simulated = isinstance(self.clock, SimulatedClock)
         self._t = self.clock.now()
         self._opened_at = self._t
-        self._set_line(baud, flow)
+        self._set_line(line_baud(device, baud), flow)
         # host -> device
         self._txq = bytearray()
         self._tx_byte: int | None = None

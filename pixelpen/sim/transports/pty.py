@@ -23,6 +23,7 @@ saves the paper to ``out`` when one was given.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import select
@@ -32,7 +33,8 @@ from types import TracebackType
 from pixelpen.clock import Clock, SimulatedClock
 from pixelpen.errors import Disconnected, LinkError, PixelpenError
 from pixelpen.sim.base import WireDevice
-from pixelpen.sim.transports.port import Faults, SimPort
+from pixelpen.sim.transports.options import Faults
+from pixelpen.sim.transports.port import SimPort
 
 _log = logging.getLogger(__name__)
 _MAX_IDLE = 0.05  # seconds the bridge sleeps at most before looking at the clock again
@@ -127,7 +129,7 @@ class PtyBridge:
             self.error = exc
             _log.info("%s: %s; hanging up the pty", self.path, exc)
             self._close_pty()
-        except Exception as exc:  # a failing device or pty stops the bridge; the owner finds it in .error
+        except Exception as exc:  # noqa: BLE001 - a failing device or pty stops the bridge; the owner finds it in .error
             self.error = exc
             _log.error("%s: bridge stopped: %s: %s; hanging up the pty", self.path, type(exc).__name__, exc)
             self._close_pty()
@@ -165,10 +167,8 @@ class PtyBridge:
                 to_program += incoming
                 fast_forward = False  # give the program real time to react to what it gets
             if to_program:
-                try:
+                with contextlib.suppress(BlockingIOError):
                     del to_program[: os.write(self._master, to_program)]
-                except BlockingIOError:
-                    pass
             space = port.tx_space
             nxt = port.next_event_time()
             now = clock.now()

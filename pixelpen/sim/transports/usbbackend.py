@@ -34,7 +34,8 @@ import usb.core
 from pixelpen.clock import Clock
 from pixelpen.errors import Disconnected, LinkTimeout
 from pixelpen.sim.base import WireDevice
-from pixelpen.sim.transports.port import Faults, SimPort
+from pixelpen.sim.transports.options import Faults
+from pixelpen.sim.transports.port import SimPort
 
 EP_OUT = 0x01
 EP_IN = 0x82

@@ -1,8 +1,10 @@
 """pyserial URL handlers for simulated devices: importing this package makes ``sim://MODEL?options`` work.
 
-Importing ``pixelpen.sim.transports.urlhandler`` (``pixelpen.drivers.serial`` does so) appends this package to
-``serial.protocol_handler_packages``; from then on every ``serial.serial_for_url("sim://hp7475a?...")``
-in the process opens the simulator (see :mod:`pixelpen.sim.transports.urlhandler.protocol_sim` for the URL).
+Importing ``pixelpen.sim.transports.urlhandler`` appends this package to ``serial.protocol_handler_packages``;
+from then on every ``serial.serial_for_url("sim://hp7475a?...")`` in the process opens the simulator (see
+:mod:`pixelpen.sim.transports.urlhandler.protocol_sim` for the URL).  pixelpen's own
+:class:`~pixelpen.drivers.serial.SerialLink` needs no import: it finds this package by the scheme ``sim``
+in the entry-point group ``pixelpen.serial_handlers`` (``pyproject.toml``), as it finds third parties' handlers.
 
 A third-party program that uses pyserial enables it with one line before it opens the port::
 

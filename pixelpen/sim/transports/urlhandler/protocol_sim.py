@@ -31,7 +31,8 @@ from serial.serialutil import PortNotOpenError, SerialBase, SerialException, Ser
 from pixelpen.clock import Clock
 from pixelpen.errors import Disconnected, LinkError, LinkTimeout, URLError
 from pixelpen.sim.base import WireDevice, simulator_models
-from pixelpen.sim.transports.port import SimPort, open_sim_port, split_options
+from pixelpen.sim.transports.options import split_options
+from pixelpen.sim.transports.port import SimPort, open_sim_port
 from pixelpen.urls import parse_url
 
 
