@@ -3,7 +3,7 @@
 import re
 from pathlib import Path
 
-from pixelpen.profiles import model as profiles
+from pixelpen.profiles import toml as profiles
 
 DOC = (Path(__file__).resolve().parents[1] / "docs" / "profiles.md").read_text(encoding="utf-8")
 

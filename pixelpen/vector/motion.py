@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pixelpen.errors import ConfigError
+from pixelpen.profiles.model import MotionLimits
 from pixelpen.vector.displaylist import DisplayList
 
 if TYPE_CHECKING:
@@ -17,41 +17,6 @@ if TYPE_CHECKING:
 __all__ = ["MotionLimits", "Plan", "PlotTime", "estimate_time", "junction_speeds", "plan"]
 
 _REVERSAL_COS = 0.999999  # GRBL: a junction this close to a full reversal is taken at zero speed
-
-
-@dataclass(frozen=True)
-class MotionLimits:
-    """Speed (mm/s), acceleration (mm/s²) and junction deviation ``cornering`` (mm) of one kind of move."""
-
-    speed: float
-    accel: float
-    cornering: float = 0.0
-
-    def __post_init__(self) -> None:
-        for name in ("speed", "accel"):
-            value = getattr(self, name)
-            if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-                raise ConfigError(f"MotionLimits.{name} must be a finite number > 0, got {value!r}")
-        if not isinstance(self.cornering, (int, float)) or not math.isfinite(self.cornering) or self.cornering < 0:
-            raise ConfigError(f"MotionLimits.cornering must be a finite number >= 0, got {self.cornering!r}")
-
-    @property
-    def cruise_distance(self) -> float:
-        """Shortest rest-to-rest move (mm) that reaches full speed: v²/a."""
-        return self.speed * self.speed / self.accel
-
-    def move_time(self, distance: float) -> float:
-        """Seconds for a rest-to-rest straight move of ``distance`` mm (trapezoid, or triangle when short)."""
-        v, a = self.speed, self.accel
-        if distance >= v * v / a:
-            return distance / v + v / a
-        return 2.0 * math.sqrt(max(distance, 0.0) / a)
-
-    def move_times(self, distances: np.ndarray) -> np.ndarray:
-        """Vectorised :meth:`move_time` over an array of distances (mm)."""
-        d = np.maximum(np.asarray(distances, dtype=np.float64), 0.0)
-        v, a = self.speed, self.accel
-        return np.where(d >= v * v / a, d / v + v / a, 2.0 * np.sqrt(d / a))
 
 
 @dataclass
@@ -186,7 +151,7 @@ def estimate_time(
     one lift; every change of pen between consecutive strokes costs the profile's pen change time.
     """
     if isinstance(profile, str):
-        from pixelpen.profiles.model import load_profile
+        from pixelpen.profiles.toml import load_profile
 
         profile = load_profile(profile)
     scale = float(dl.unit_mm)

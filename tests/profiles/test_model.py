@@ -5,8 +5,7 @@ from __future__ import annotations
 import pytest
 
 from pixelpen.errors import ConfigError, ParseError
-from pixelpen.vector.motion import MotionLimits
-from pixelpen.profiles.model import builtin_profiles, load_profile, load_vpype_config, parse_length_mm
+from pixelpen.profiles import MotionLimits, builtin_profiles, load_profile, load_vpype_config, parse_length_mm
 
 MINIMAL = """
 name = "mine"
@@ -354,3 +353,26 @@ def test_vpype_numbers_out_of_range(tmp_path):
         with pytest.raises(ConfigError) as info:
             load_vpype_config(path)
         assert f"'{key}'" in str(info.value), str(info.value)
+
+
+def test_the_readers_still_import_from_model_as_before_the_split():
+    from pixelpen.profiles import model, toml, vpype
+
+    assert model.load_profile is toml.load_profile and model.builtin_profiles is toml.builtin_profiles
+    assert model.load_vpype_config is vpype.load_vpype_config and model.parse_length_mm is vpype.parse_length_mm
+    with pytest.raises(AttributeError):
+        model.no_such_name  # noqa: B018
+
+
+def test_motion_limits_are_profile_data_re_exported_by_the_motion_model():
+    from pixelpen.profiles import model
+    from pixelpen.vector import motion
+
+    assert motion.MotionLimits is model.MotionLimits is MotionLimits
+
+
+def test_parse_length_mm_raises_invalid_argument():
+    from pixelpen.errors import InvalidArgument
+
+    with pytest.raises(InvalidArgument, match="not a length"):
+        parse_length_mm("12 parsecs")
