@@ -115,7 +115,8 @@ class EbbParser(EbbMachine):
             return None
         expected = checksum(line[:cut])
         if int(line[cut + 1:]) != expected:
-            self._emit((prefix + f"!9 Err: Checksum incorrect, expected {expected}" + self._ending(error=True)).encode())
+            text = f"!9 Err: Checksum incorrect, expected {expected}"
+            self._emit((prefix + text + self._ending(error=True)).encode())
             return None
         return line[:cut]
 

@@ -28,7 +28,7 @@ SERVO_TIMEOUT_MS = 60000
 
 
 class PenServo:
-    """The RC servo on RB1 (RP4) that lifts the pen, as UserInit leaves it; ``contact`` is where the pen meets the paper."""
+    """The RC servo on RB1 (RP4) that lifts the pen; ``contact`` is the pulse at which the pen meets the paper."""
 
     def __init__(self, positions: tuple[int, int], contact: int) -> None:
         self.up_position, self.down_position = positions

@@ -13,8 +13,10 @@ from hypothesis import strategies as st
 
 from pixelpen.clock import SimulatedClock
 from pixelpen.errors import ConfigError, URLError
-from pixelpen.sim.base import WireDevice
-from pixelpen.sim.plotters.ebb.board import EbbSimulator, create
+from pixelpen.options import describe
+from pixelpen.sim.base import Fault, SimulatedDevice, WireDevice, simulator_factory
+from pixelpen.sim.plotters.ebb.board import OPTIONS, EbbSimulator, create
+from pixelpen.sim.plotters.ebb.pen import CONTACT_DEFAULT
 from tests.sim.fakes import DeviceRig
 
 VERSION = b"EBBv13_and_above EB Firmware Version 3.0.2"
@@ -87,7 +89,8 @@ def test_the_flush_hash_is_answered_as_unknown_but_logged_only_at_debug(caplog):
     with caplog.at_level(logging.DEBUG, logger="pixelpen.sim.plotters.ebb.board"):
         assert rig.send("#\rV\r") == b"!8 Err: Unknown command '#:23'OK\r\n" + VERSION + b"\r\n"
         assert rig.send("ZZ\r") == b"!8 Err: Unknown command 'ZZ:5A5A'OK\r\n"
-    levels = {r.getMessage().rpartition(" ")[2]: r.levelno for r in caplog.records if "unknown command" in r.getMessage()}
+    levels = {r.getMessage().rpartition(" ")[2]: r.levelno
+              for r in caplog.records if "unknown command" in r.getMessage()}
     assert levels == {"'#'": logging.DEBUG, "'ZZ'": logging.WARNING}
 
 
@@ -147,7 +150,7 @@ def test_sm_xm_lm_sequence_ends_at_hand_computed_positions():
     rig.send("XM,500,40,0\r")
     rig.until_idle()
     assert rig.send("QS\r") == b"40,40\n\rOK\r\n"
-    assert np.allclose(rig.dev.position_mm, before + [1.0, 0.0])  # 40 steps at 40/mm
+    assert np.allclose(rig.dev.position_mm, before + np.array([1.0, 0.0]))  # 40 steps at 40/mm
 
 
 @pytest.mark.parametrize("command, seconds, steps", [
@@ -434,7 +437,7 @@ def test_factories():
     dev = axi(clock=SimulatedClock(), model="minikit", firmware="2.8.1")
     assert dev.paper.width_mm == 160 and dev.firmware == "2.8.1"
     assert create("ebb", clock=SimulatedClock(), model="se_a3").paper.height_mm == 297
-    with pytest.raises(URLError, match="unknown option.*colour.*known:"):
+    with pytest.raises(URLError, match=r"unknown option.*colour.*known:"):
         axi(colour="red")
     with pytest.raises(URLError, match="model='nano'"):
         axi(model="nano")
@@ -458,8 +461,9 @@ def test_fuzz_random_bytes(data, wait):
 
 
 _CMDS = ["SM,100,10,-10", "XM,50,5,5", "LM,85899346,10,0,17180814,2,0", "LT,250,85899346,0,0,0", "SP,0,50",
-         "SP,1,50", "TP", "EM,1,1", "EM,0,0", "QG", "QS", "QM", "ES", "CU,4,2", "CU,10,1", "HM,1000", "S2,14000,4,0,10",
-         "SC,4,9000", "QB", "V", "SM,1", "XM,0,1,1", "ZZ", "LM,0,10,0,0,0,0", "TD,100,1,2,3,4,5,6,7,8", "L3,1,1,1,1,1,1,1,1"]
+         "SP,1,50", "TP", "EM,1,1", "EM,0,0", "QG", "QS", "QM", "ES", "CU,4,2", "CU,10,1", "HM,1000",
+         "S2,14000,4,0,10", "SC,4,9000", "QB", "V", "SM,1", "XM,0,1,1", "ZZ", "LM,0,10,0,0,0,0",
+         "TD,100,1,2,3,4,5,6,7,8", "L3,1,1,1,1,1,1,1,1"]
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -507,3 +511,37 @@ def test_pushing_the_carriage_home_needs_unpowered_motors_and_leaves_the_counter
     rig.until_idle()
     with pytest.raises(ConfigError, match="lift the pen"):
         rig.dev.push_carriage_home()
+
+
+def test_is_a_simulated_device_with_the_shared_faults():
+    rig = Rig()
+    assert isinstance(rig.dev, SimulatedDevice)
+    assert {Fault.POWER_LOSS, Fault.POWER_RESTORE, Fault.PAUSE_BUTTON, Fault.RESET} == EbbSimulator.FAULTS
+    rig.dev.inject(Fault.PAUSE_BUTTON)  # a member works as well as its name
+    assert rig.send("QB\r") == b"1\r\nOK\r\n"
+    with pytest.raises(ConfigError, match="known: pause-button, power-loss, power-restore, reset"):
+        rig.dev.inject(Fault.PAPER_LEVER)
+
+
+def test_a_fault_injected_at_a_byte_count_falls_between_the_bytes():
+    rig = Rig()
+    rig.dev.inject(Fault.POWER_LOSS, at=3)
+    rig.dev.inject("pause-button", at=6)  # the old string names still work
+    assert rig.send("QC\rQC\rQB\r") == b"0394,0293\r\nOK\r\n0394,0000\r\nOK\r\n1\r\nOK\r\n"
+    assert [entry for _, entry in rig.dev.log] == ["QC", "<power-loss>", "QC", "<pause-button>", "QB"]
+
+
+def test_the_url_options_are_declared_as_specs():
+    assert [spec.name for spec in OPTIONS] == ["model", "firmware", "syntax", "pen_colour", "pen_width", "contact"]
+    assert {spec.name: spec.default for spec in OPTIONS}["contact"] == CONTACT_DEFAULT
+    assert all(help_text for _, help_text in describe(OPTIONS))
+    with pytest.raises(URLError, match=r"option pen_width='-1' is not valid"):
+        create("axidraw", pen_width="-1")
+    with pytest.raises(URLError, match=r"option pen_colour='nocolour' is not valid"):
+        create("axidraw", pen_colour="nocolour")
+    assert create("axidraw", clock=SimulatedClock(), pen_colour="steelblue").paper.pen_colours == {1: "steelblue"}
+
+
+def test_both_models_register_when_the_module_is_imported():
+    assert simulator_factory("axidraw")(clock=SimulatedClock()).model == "axidraw"
+    assert simulator_factory("ebb")(clock=SimulatedClock(), syntax="future").syntax == "future"
