@@ -131,8 +131,10 @@ def test_pty_serves_the_device_until_stopped(capsys):
 
 def test_pty_command_writes_the_paper_on_ctrl_c(tmp_path):
     out = tmp_path / "pty.png"
-    proc = subprocess.Popen([sys.executable, "-m", "pixelpen", "sim", "grbl", "--pty", "--speed", "fast", "-o", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "pixelpen", "sim", "grbl", "--pty", "--speed", "fast", "-o", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
     try:
         path = proc.stdout.readline().strip()
         with serial.Serial(path, timeout=20) as port:
@@ -167,8 +169,10 @@ def test_pty_command_writes_the_paper_on_sigterm(tmp_path):
     import xml.etree.ElementTree as ET
 
     out = tmp_path / "pty.svg"
-    proc = subprocess.Popen([sys.executable, "-c", _SIM_MAIN, "sim", "grbl", "--pty", "--speed", "fast", "-o", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _SIM_MAIN, "sim", "grbl", "--pty", "--speed", "fast", "-o", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
     try:
         path = proc.stdout.readline().strip()
         with serial.Serial(path, timeout=20) as port:
@@ -192,8 +196,8 @@ def test_pty_command_writes_the_paper_on_sigterm(tmp_path):
 def test_grbl_simulator_defaults_are_the_machine_the_driver_plots_for():
     # one machine description: what the GRBL driver asks a sim:grbl for equals what pixelpen sim grbl builds
     from pixelpen.devices.plotters.grbl import GrblPlotter
-    from pixelpen.urls import parse_url
     from pixelpen.profiles.model import load_profile
+    from pixelpen.urls import parse_url
 
     profile = load_profile("grbl")
     wanted = GrblPlotter.simulator_options({}, GrblPlotter.options_of(parse_url("grbl:x")), profile)

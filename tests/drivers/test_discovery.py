@@ -51,8 +51,8 @@ def test_known_ids_cover_the_plotter_controller_and_adapters():
 
 @pytest.fixture
 def nothing_attached(monkeypatch):
-    monkeypatch.setattr(discovery.list_ports, "comports", lambda: [])
-    monkeypatch.setitem(sys.modules, "hid", types.SimpleNamespace(enumerate=lambda: []))
+    monkeypatch.setattr(discovery.list_ports, "comports", list)
+    monkeypatch.setitem(sys.modules, "hid", types.SimpleNamespace(enumerate=list))
 
     def no_backend(**kw):
         import usb.core
@@ -107,7 +107,7 @@ def test_serial_ports_get_a_model_guess_from_their_usb_id(monkeypatch):
 
 
 def test_usb_printer_adapter_is_listed_and_probed_for_its_1284_id(monkeypatch):
-    monkeypatch.setattr(discovery.list_ports, "comports", lambda: [])
+    monkeypatch.setattr(discovery.list_ports, "comports", list)
     clock = SimulatedClock()
     backend = PrinterClassBackend(EchoDevice(clock), clock=clock, device_id="MFG:HP;MDL:7550A;CMD:HPGL;")
     [listed] = list_usb_devices(backend)

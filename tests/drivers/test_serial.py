@@ -11,8 +11,8 @@ from pixelpen.clock import REAL_CLOCK, SimulatedClock
 from pixelpen.drivers import serial as serial_link
 from pixelpen.drivers.serial import SerialLink
 from pixelpen.errors import Disconnected, LinkError, LinkTimeout, URLError
-from pixelpen.sim.transports.pty import PtyBridge
 from pixelpen.sim.transports.port import Faults
+from pixelpen.sim.transports.pty import PtyBridge
 from tests.sim.fakes import XOFF, XON, EchoDevice
 
 

@@ -5,14 +5,14 @@ from __future__ import annotations
 import io
 import logging
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import pytest
 
 from pixelpen.clock import REAL_CLOCK, SimulatedClock
-from pixelpen.drivers.stream import Link, format_bytes
 from pixelpen.drivers.serial import SerialLines, SerialLink
+from pixelpen.drivers.stream import Link, format_bytes
 from pixelpen.drivers.trace import RecordingLink
 from pixelpen.drivers.usbprinter import UsbPrinterLink
 from pixelpen.errors import LinkError, LinkTimeout

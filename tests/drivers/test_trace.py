@@ -261,7 +261,7 @@ def test_a_trace_file_name_no_file_system_takes_is_refused_before_opening(tmp_pa
     from pixelpen.drivers.trace import TraceWriter
     from pixelpen.errors import ConfigError
 
-    with pytest.raises(ConfigError, match="trace file.*NUL"):
+    with pytest.raises(ConfigError, match=r"trace file.*NUL"):
         TraceWriter(str(tmp_path / "a\x00b"), "sim://x")
-    with pytest.raises(ConfigError, match="trace file.*255"):
+    with pytest.raises(ConfigError, match=r"trace file.*255"):
         TraceWriter(tmp_path / ("x" * 300), "sim://x")

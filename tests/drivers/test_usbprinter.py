@@ -94,7 +94,7 @@ def make_link(**kw):
 
 
 def test_link_reads_device_id_and_status_from_the_backend():
-    link, backend, device = make_link()
+    link, _backend, device = make_link()
     assert link.device_id() == {"MFG": "Roland DG", "MDL": "DXY-1300", "CMD": "HPGL"}
     assert link.port_status() == PortStatus(0x18, False, True, False)
     device.paper_empty = True
@@ -146,7 +146,7 @@ def test_soft_reset_drops_unread_input():
 def test_missing_device_lists_what_is_there():
     clock = SimulatedClock()
     backend = PrinterClassBackend(EchoDevice(clock), clock=clock, vid=0x1A86, pid=0x7584)
-    with pytest.raises(LinkError, match="067b:2305.*1a86:7584"):
+    with pytest.raises(LinkError, match=r"067b:2305.*1a86:7584"):
         UsbPrinterLink(0x067B, 0x2305, backend=backend)
     assert [d.idProduct for d in find_printers(backend=backend)] == [0x7584]
 

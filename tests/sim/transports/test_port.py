@@ -8,7 +8,8 @@ from hypothesis import strategies as st
 
 from pixelpen.clock import REAL_CLOCK, SimulatedClock
 from pixelpen.errors import Disconnected, LinkError, LinkTimeout, URLError
-from pixelpen.sim.transports.port import Faults, SimPort, open_sim_port, split_options
+from pixelpen.sim.transports.options import Faults, split_options
+from pixelpen.sim.transports.port import SimPort, open_sim_port
 from tests.sim.fakes import XOFF, XON, EchoDevice
 
 TEXT = bytes(range(0x20, 0x7F)) * 2 + b"\r"  # 191 printable bytes and one line end
@@ -250,32 +251,6 @@ def test_close_closes_the_device_once():
     assert device.closed and port.closed
 
 
-def test_split_options_separates_transport_and_device_options():
-    transport, rest = split_options(
-        {"baud": "19200", "flow": "RTSCTS", "speed": "fast", "drop_after": "7", "paper": "a4", "pens": "6"}
-    )
-    assert (transport.baud, transport.flow, transport.speed) == (19200, "rtscts", "fast")
-    assert transport.faults.drop_after == 7
-    assert rest == {"paper": "a4", "pens": "6"}
-    assert isinstance(transport.make_clock(), SimulatedClock)
-
-
-@pytest.mark.parametrize(
-    "options, word",
-    [
-        ({"baud": "fast"}, "baud"),
-        ({"baud": "0"}, "baud"),
-        ({"flow": "dtr"}, "flow"),
-        ({"speed": "warp"}, "speed"),
-        ({"drop_after": "-1"}, "drop_after"),
-        ({"corrupt_at": "x"}, "corrupt_at"),
-    ],
-)
-def test_bad_transport_options_name_the_option(options, word):
-    with pytest.raises(URLError, match=word):
-        split_options(options, "sim://echo")
-
-
 def test_open_sim_port_refuses_device_options_for_a_ready_device():
     with pytest.raises(URLError, match="paper"):
         open_sim_port("echo", {"paper": "a4"}, device=EchoDevice(SimulatedClock()))
@@ -313,12 +288,6 @@ def test_out_saves_the_paper_when_the_port_closes(tmp_path):
     assert paths == ["M10,190 50,190"]  # machine y up -> SVG y down on the 210 mm sheet
 
 
-@pytest.mark.parametrize("name", ["sheet.jpg", "sheet", "sheet.png.txt"])
-def test_out_must_name_a_png_or_svg_file(name):
-    with pytest.raises(URLError, match="out="):
-        split_options({"out": name}, "sim://grbl")
-
-
 def test_out_needs_a_device_with_paper():
     with pytest.raises(LinkError, match="no paper"):
         SimPort(EchoDevice(SimulatedClock()), out="x.png")
@@ -343,7 +312,7 @@ def test_options_named_like_factory_parameters_are_unknown_options(url):
         if url.startswith("sim://"):
             import serial
 
-            import pixelpen.sim.transports.urlhandler  # noqa: F401 - registers sim://
+            import pixelpen.sim.transports.urlhandler
 
             serial.serial_for_url(url, timeout=1).close()
         else:

@@ -8,8 +8,8 @@ import pytest
 import serial
 
 from pixelpen.clock import REAL_CLOCK, SimulatedClock
-from pixelpen.sim.transports.pty import PtyBridge
 from pixelpen.sim.transports.port import Faults
+from pixelpen.sim.transports.pty import PtyBridge
 from tests.sim.fakes import EchoDevice
 
 pytestmark = pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs POSIX ptys")

@@ -69,7 +69,7 @@ def test_constructor_settings_apply_without_url_options_and_reconfigure():
 
 
 def test_control_lines():
-    port, device, clock = open_echo(buffer_size=4, ready_free=4, drain_rate=10)
+    port, _device, clock = open_echo(buffer_size=4, ready_free=4, drain_rate=10)
     assert port.cts and port.dsr and port.cd and not port.ri
     port.rts = False
     port.dtr = False

@@ -71,7 +71,7 @@ def test_get_device_id_has_a_big_endian_length_prefix():
 
 
 def test_get_port_status_reflects_device_attributes():
-    backend, device, dev = make()
+    _backend, device, dev = make()
     assert dev.ctrl_transfer(0xA1, 1, 0, 0, 1)[0] == 0x18  # selected, no error
     device.paper_empty = True
     device.error = True
@@ -79,7 +79,7 @@ def test_get_port_status_reflects_device_attributes():
 
 
 def test_bulk_out_feeds_the_device_and_bulk_in_returns_its_answer():
-    backend, device, dev = make()
+    _backend, device, dev = make()
     assert dev.write(0x01, b"IN;\r", 1000) == 4
     answer = bytes(dev.read(0x82, 64, 1000))
     assert answer == b"OK\r"[: len(answer)] and answer
