@@ -30,3 +30,18 @@ def test_an_id_reaches_the_same_instance_until_forgotten():
         named_simulator("t-same")
     assert create_simulator("hp7475a", clock=clock, id="t-same") is not first
     forget_simulator("t-same")
+
+
+def test_the_transport_test_fakes_are_simulated_stream_devices():
+    from pixelpen.sim.base import Fault, SimulatedDevice, StreamDevice
+    from tests.sim.fakes import EchoDevice, ScriptedDevice
+
+    clock = SimulatedClock()
+    echo, scripted = EchoDevice(clock), ScriptedDevice({b"?": b"!"}, clock)
+    for device in (echo, scripted):
+        assert isinstance(device, SimulatedDevice) and isinstance(device, StreamDevice)
+    scripted.receive(b"a?")
+    assert scripted.take_output() == b"!"
+    echo.inject("power-loss", at=2)  # the base splits the input at the second byte
+    echo.receive(b"abc")
+    assert echo.faults == [(Fault.POWER_LOSS.value, 2)]
