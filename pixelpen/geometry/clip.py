@@ -88,17 +88,23 @@ def _cohen_sutherland(cols: np.ndarray, rect: tuple[float, float, float, float])
     return np.take(result, index, axis=1), index
 
 
+def _parameters(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(t0, t1, keep) per segment for the constraints num + t den >= 0, t in [0, 1] (num, den: (K, N))."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # rejected columns may hold inf/nan
+        ratio = -num / den
+        t0 = np.maximum(np.where(den > 0, ratio, -np.inf).max(axis=0), 0.0)
+        t1 = np.minimum(np.where(den < 0, ratio, np.inf).min(axis=0), 1.0)
+    keep = ~((den == 0) & (num < 0)).any(axis=0) & (t0 <= t1)
+    return t0, t1, keep
+
+
 def _parametric_clip(cols: np.ndarray, num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Clip P(t) = P0 + t (P1 - P0), t in [0, 1], to the constraints num + t den >= 0 (Liang–Barsky / Cyrus–Beck).
 
     cols: (4, N) columns x0, y0, x1, y1; num, den: (K, N) per constraint and segment.
     Returns (clipped columns, source index).
     """
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # rejected columns may hold inf/nan
-        ratio = -num / den
-        t0 = np.maximum(np.where(den > 0, ratio, -np.inf).max(axis=0), 0.0)
-        t1 = np.minimum(np.where(den < 0, ratio, np.inf).min(axis=0), 1.0)
-    keep = ~((den == 0) & (num < 0)).any(axis=0) & (t0 <= t1)
+    t0, t1, keep = _parameters(num, den)
     index = np.flatnonzero(keep)
     x0, y0, x1, y1 = np.take(cols, index, axis=1)
     t0, t1 = t0[index], t1[index]
@@ -111,14 +117,28 @@ def _parametric_clip(cols: np.ndarray, num: np.ndarray, den: np.ndarray) -> tupl
     return out, index
 
 
-def _liang_barsky(cols: np.ndarray, rect: tuple[float, float, float, float]) -> tuple[np.ndarray, np.ndarray]:
-    """Vectorised Liang–Barsky: q_k - p_k t >= 0 for the four boundaries (num = q, den = -p)."""
+def _rect_constraints(cols: np.ndarray, rect: tuple[float, float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Liang–Barsky's q_k - p_k t >= 0 for the four boundaries, as (num = q, den = -p)."""
     xmin, ymin, xmax, ymax = rect
     x0, y0, x1, y1 = cols
     dx, dy = x1 - x0, y1 - y0
-    num = np.stack([x0 - xmin, xmax - x0, y0 - ymin, ymax - y0])
-    den = np.stack([dx, -dx, dy, -dy])
-    return _parametric_clip(cols, num, den)
+    return np.stack([x0 - xmin, xmax - x0, y0 - ymin, ymax - y0]), np.stack([dx, -dx, dy, -dy])
+
+
+def liang_barsky_parameters(
+    cols: np.ndarray, rect: tuple[float, float, float, float]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Liang–Barsky parameters of every segment: (t0, t1, keep), the part t0..t1 of each lies in ``rect``.
+
+    ``cols`` are (4, N) float columns x0, y0, x1, y1 and ``rect`` is (xmin, ymin, xmax, ymax), both taken as
+    they are (no checks: for engines that already hold valid arrays). Rejected segments have ``keep`` False.
+    """
+    return _parameters(*_rect_constraints(cols, rect))
+
+
+def _liang_barsky(cols: np.ndarray, rect: tuple[float, float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Vectorised Liang–Barsky clipping of (4, N) columns to ``rect``."""
+    return _parametric_clip(cols, *_rect_constraints(cols, rect))
 
 
 def clip_segments(

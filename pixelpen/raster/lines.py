@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from pixelpen.errors import ConfigError
+from pixelpen.geometry.clip import liang_barsky_parameters
 
 COORD_LIMIT = 1 << 29
 """Largest absolute endpoint coordinate accepted: keeps every intermediate product inside int64."""
@@ -355,21 +356,11 @@ def _scatter_fast(plane: np.ndarray, runs: LineRuns, precise: np.ndarray, value:
         plane[idx] = value
 
 
-def _liang_barsky(p0: np.ndarray, p1: np.ndarray, lo: np.ndarray, hi: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Vectorised Liang–Barsky: parameters (t0, t1) of each segment inside the box lo..hi, and a keep mask."""
-    d = p1 - p0
-    t0 = np.zeros(p0.shape[0])
-    t1 = np.ones(p0.shape[0])
-    keep = np.ones(p0.shape[0], dtype=bool)
-    for axis in (0, 1):
-        for p, q in ((-d[:, axis], p0[:, axis] - lo[axis]), (d[:, axis], hi[axis] - p0[:, axis])):
-            zero = p == 0
-            keep &= ~(zero & (q < 0))
-            r = np.divide(q, p, out=np.zeros_like(q), where=~zero)
-            t0 = np.where(~zero & (p < 0), np.maximum(t0, r), t0)
-            t1 = np.where(~zero & (p > 0), np.minimum(t1, r), t1)
-    return t0, t1, keep & (t0 <= t1)
+def _clip_parameters(p0: np.ndarray, p1: np.ndarray, lo: np.ndarray, hi: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Liang–Barsky parameters (t0, t1, keep) of each segment p0-p1 inside the box lo..hi (geometry's clipper)."""
+    cols = np.stack([p0[:, 0], p0[:, 1], p1[:, 0], p1[:, 1]])
+    return liang_barsky_parameters(cols, (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1])))
 
 
 def stroke_triangles(segments: np.ndarray, width: int, cap: str, canvas_width: int, canvas_height: int,
@@ -386,7 +377,7 @@ def stroke_triangles(segments: np.ndarray, width: int, cap: str, canvas_width: i
     margin = width + 2.0
     lo = np.array([-margin, -margin])
     hi = np.array([canvas_width - 1 + margin, canvas_height - 1 + margin])
-    t0, t1, keep = _liang_barsky(p0, p1, lo, hi)
+    t0, t1, keep = _clip_parameters(p0, p1, lo, hi)
     dashing = dash is not None
     if dashing:
         on, period = dash  # type: ignore[misc]
@@ -408,7 +399,7 @@ def stroke_triangles(segments: np.ndarray, width: int, cap: str, canvas_width: i
         zero = (major[own] == 0)[:, None]
         p0 = np.where(zero, seg[own, :2], p0)
         p1 = np.where(zero, seg[own, :2], p1)
-        t0, t1, keep = _liang_barsky(p0, p1, lo, hi)
+        t0, t1, keep = _clip_parameters(p0, p1, lo, hi)
     a = (p0 + (p1 - p0) * t0[:, None])[keep]
     b = (p0 + (p1 - p0) * t1[:, None])[keep]
     d = b - a

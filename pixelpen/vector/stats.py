@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from pixelpen.errors import ConfigError
+from pixelpen.profiles import load_profile
 from pixelpen.vector.dedupe import stroke_lengths
 from pixelpen.vector.displaylist import DisplayList
 
@@ -24,12 +25,6 @@ def _resolve_profile(profile: Any) -> Any:
         return None
     if profile is not None and not isinstance(profile, str):
         return profile
-    try:
-        from pixelpen.profiles.model import load_profile
-    except ImportError:
-        if profile is not None:
-            raise ConfigError(f"cannot load device profile {profile!r}: pixelpen.profiles.model is not available") from None
-        return None
     if profile is not None:
         return load_profile(profile)
     try:

@@ -515,3 +515,34 @@ def test_bad_polylines_are_rejected():
     with pytest.raises(ValueError, match=r"polylines\[0\].*row 1"):
         clip_polylines([[(0, 0), (np.nan, 1)]], WINDOW)
     assert clip_polylines([], WINDOW) == []
+
+
+def _liang_barsky_textbook(x0, y0, x1, y1, xmin, ymin, xmax, ymax):
+    """Liang & Barsky (1984) as Foley et al. write it, one segment: (t0, t1) or None when rejected."""
+    t0, t1 = 0.0, 1.0
+    dx, dy = x1 - x0, y1 - y0
+    for p, q in ((-dx, x0 - xmin), (dx, xmax - x0), (-dy, y0 - ymin), (dy, ymax - y0)):
+        if p == 0:
+            if q < 0:
+                return None
+        elif p < 0:
+            t0 = max(t0, q / p)
+        else:
+            t1 = min(t1, q / p)
+    return (t0, t1) if t0 <= t1 else None
+
+
+def test_liang_barsky_parameters_match_the_textbook_exactly():
+    from pixelpen.geometry.clip import liang_barsky_parameters
+
+    rng = np.random.default_rng(9)
+    segs = rng.integers(-40, 140, size=(4000, 4)).astype(np.float64)
+    segs[::7, 2] = segs[::7, 0]  # vertical and horizontal ones too
+    segs[::11, 3] = segs[::11, 1]
+    rect = (-3.0, -3.0, 99.0, 63.0)
+    t0, t1, keep = liang_barsky_parameters(np.ascontiguousarray(segs.T), rect)
+    for i, seg in enumerate(segs):
+        want = _liang_barsky_textbook(*seg, *rect)
+        assert bool(keep[i]) == (want is not None), i
+        if want is not None:
+            assert (t0[i], t1[i]) == want, i
