@@ -7,16 +7,13 @@ bootloader (the board falls silent until a reset).  The pin commands act on ``po
 
 from __future__ import annotations
 
-import logging
 from typing import Any
 
 from pixelpen.sim.plotters.ebb.machine import MAX_FIFO, RA0_READING, MotionCommand
-from pixelpen.sim.plotters.ebb.parser import EbbParser
+from pixelpen.sim.plotters.ebb.parser import EbbParser, log
 from pixelpen.sim.plotters.ebb.ports import PORT_NAMES
 
 __all__ = ["ConfigCommands"]
-
-log = logging.getLogger("pixelpen.sim.plotters.ebb.board")
 
 ANALOG_CHANNELS = 16
 """AC: channels 0..15."""

@@ -123,7 +123,7 @@ class EbbMachine(SimulatedDevice):
         self.nickname = ""
         self._inbox = bytearray()
         self._inpos = 0
-        self._xy = np.zeros(2)  # carriage position on the paper, mm
+        self._xy: np.ndarray = np.zeros(2)  # carriage position on the paper, mm
         self._vplus = SUPPLY_VOLTS
         self._dead = False
         self._ever_moved = False
@@ -255,7 +255,8 @@ class EbbMachine(SimulatedDevice):
         dx = (d1 * e1 + d2 * e2) / 2.0 / spm
         dy = (d1 * e1 - d2 * e2) / 2.0 / spm
         hi = np.array([self._paper.width_mm, self._paper.height_mm])
-        return np.clip(xy + np.array([dx, dy]), 0.0, hi)
+        clipped: np.ndarray = np.clip(xy + np.array([dx, dy]), 0.0, hi)
+        return clipped
 
     def _motors_effective(self, t: float) -> tuple[float, float]:
         if self._vplus < 6.0:
@@ -271,7 +272,8 @@ class EbbMachine(SimulatedDevice):
 
     def _xy_at(self, t: float) -> np.ndarray:
         if self._exec is None:
-            return self._xy.copy()
+            here: np.ndarray = self._xy.copy()
+            return here
         d1, d2 = self._exec.steps_by(t)
         return self._xy_after(self._xy, d1, d2, t)
 
