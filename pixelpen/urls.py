@@ -28,7 +28,7 @@ import os
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TypeVar
+from typing import NamedTuple, TypeVar
 from urllib.parse import quote, unquote
 
 from pixelpen.errors import ConfigError, URLError, quote_token
@@ -120,7 +120,9 @@ def _decode(text: str, what: str, url: str) -> str:
     try:
         return unquote(text, errors="strict")
     except UnicodeDecodeError as exc:
-        raise URLError(f"{quote_token(url)}: {what} holds percent-encoded bytes that are not UTF-8 ({exc.reason})") from None
+        raise URLError(
+            f"{quote_token(url)}: {what} holds percent-encoded bytes that are not UTF-8 ({exc.reason})"
+        ) from None
 
 
 def check_path(path: str | os.PathLike[str], what: str) -> Path:
@@ -140,7 +142,7 @@ def check_path(path: str | os.PathLike[str], what: str) -> Path:
         raise ConfigError(f"{what} {quote_token(text)} contains a NUL character at index {text.index(chr(0))}")
     try:
         encoded = os.fsencode(text)
-    except UnicodeError as exc:
+    except UnicodeEncodeError as exc:
         raise ConfigError(f"{what} {quote_token(text)} cannot be encoded for the file system: {exc.reason}") from None
     if len(encoded) > MAX_PATH:
         raise ConfigError(f"{what} is {len(encoded)} bytes long, more than the {MAX_PATH} a file system takes")
@@ -219,12 +221,27 @@ PAPER_MM = {
 }
 
 
-def parse_size(text: str, default_unit: str = "px") -> tuple[float, float, str]:
+class Size(NamedTuple):
+    """A width and height in a unit, as ``parse_size`` reads them; prints in the URL form (``210x297mm``)."""
+
+    width: float
+    height: float
+    unit: str
+
+    def __str__(self) -> str:
+        return f"{self.width:g}x{self.height:g}{'' if self.unit == 'px' else self.unit}"
+
+    def mm(self) -> tuple[float, float]:
+        """Width and height in millimetres."""
+        return to_mm(self.width, self.unit), to_mm(self.height, self.unit)
+
+
+def parse_size(text: str, default_unit: str = "px") -> Size:
     """Read ``WxH[unit]`` (``800x600``, ``210x297mm``) or a paper name (``a4``) as (w, h, unit)."""
     low = text.strip().lower()
     if low in PAPER_MM:
         w, h = PAPER_MM[low]
-        return w, h, "mm"
+        return Size(w, h, "mm")
     unit = default_unit
     for u in _MM_PER:
         if low.endswith(u):
@@ -236,7 +253,7 @@ def parse_size(text: str, default_unit: str = "px") -> tuple[float, float, str]:
     w, h = float(w_text), float(h_text)
     if not (0 < w <= MAX_SIZE and 0 < h <= MAX_SIZE):
         raise ValueError(f"size must be positive and at most {MAX_SIZE:g}, got {text!r}")
-    return w, h, unit
+    return Size(w, h, unit)
 
 
 def to_mm(value: float, unit: str) -> float:

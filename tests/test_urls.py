@@ -1,10 +1,18 @@
 """Tests of the device URL grammar."""
 
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from pixelpen.errors import ConfigError, URLError
-from pixelpen.urls import Options, check_path, format_url, parse_bool, parse_size, parse_url, to_mm
+from pixelpen.options import OptionSpec, boolean, positive, read_options
+from pixelpen.options import text as any_text
+from pixelpen.urls import Size, check_path, format_url, parse_size, parse_url, to_mm
+
+
+def _read(url, *specs):
+    """The options of a parsed URL read against ``specs`` the way every display reads them."""
+    return read_options(specs, url.options, str(url))
 
 
 def test_plain_target_and_options():
@@ -49,16 +57,16 @@ def test_malformed_urls_say_what_is_wrong(bad, words):
 def test_unknown_option_lists_known_and_hints_brackets():
     u = parse_url("hp7475a:rfc2217://h:1?logging=debug")
     with pytest.raises(URLError) as err:
-        Options(u, ["paper", "baud"])
+        _read(u, OptionSpec("paper", any_text, None, ""), OptionSpec("baud", any_text, None, ""))
     text = str(err.value)
     assert "logging" in text and "paper" in text and "brackets" in text
 
 
 def test_option_conversion_errors_name_the_option():
-    opts = Options(parse_url("png:x.png?dpi=abc"), ["dpi"])
-    with pytest.raises(URLError, match="dpi='abc'"):
-        opts.get("dpi", float, 96.0)
-    assert Options(parse_url("png:x.png"), ["dpi"]).get("dpi", float, 96.0) == 96.0
+    dpi = OptionSpec("dpi", positive, 96.0, "")
+    with pytest.raises(URLError, match=r"png:x\.png\?dpi=abc: option dpi='abc' is not valid"):
+        _read(parse_url("png:x.png?dpi=abc"), dpi)
+    assert _read(parse_url("png:x.png"), dpi)["dpi"] == 96.0
 
 
 text = st.text(st.characters(codec="utf-8", exclude_characters="\x00"), min_size=1, max_size=20)
@@ -82,9 +90,11 @@ def test_sizes_and_units():
     for bad in ("800", "0x5", "axb", "-1x2"):
         with pytest.raises(ValueError):
             parse_size(bad)
-    assert parse_bool("On") is True and parse_bool("0") is False
+    assert boolean("On") is True and boolean("0") is False
     with pytest.raises(ValueError):
-        parse_bool("maybe")
+        boolean("maybe")
+    assert str(parse_size("800x600")) == "800x600" and str(parse_size("a4")) == "210x297mm"
+    assert Size(1, 2, "in").mm() == (25.4, 50.8)
 
 
 @pytest.mark.parametrize("target", ["[", "]", "a]b?c", "[x?", "x?]", "[a][b]?q"])
@@ -110,7 +120,7 @@ def test_sizes_must_be_finite_positive_and_bounded(text):
         parse_size(text)
     url = parse_url(f"png:a.png?size={text}")
     with pytest.raises(URLError, match=f"option size='{text}'"):
-        Options(url, ["size"]).get("size", parse_size, None)
+        _read(url, OptionSpec("size", parse_size, None, ""))
 
 
 @pytest.mark.parametrize("name, words", [

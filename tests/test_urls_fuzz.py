@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import contextlib
+
 import pytest
 
 from pixelpen.errors import PixelpenError
-from pixelpen.urls import Options, check_path, format_url, parse_bool, parse_size, parse_url
+from pixelpen.options import OptionSpec, boolean
+from pixelpen.urls import check_path, format_url, parse_size, parse_url
 from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
 
 SEEDS = [
@@ -24,18 +27,13 @@ SEEDS = [
 def parse_and_read(data: bytes) -> None:
     """The fuzz target: parse, read every option as size, bool and path, and check the URL formats back to itself."""
     url = parse_url(data.decode("utf-8", errors="surrogateescape"))
-    options = Options(url, url.options)
-    for key in url.options:
-        for convert in (parse_size, parse_bool):
-            try:
-                options.get(key, convert, None)
-            except PixelpenError:
-                pass
+    for key, raw in url.options.items():
+        for convert in (parse_size, boolean):
+            with contextlib.suppress(PixelpenError):
+                OptionSpec(key, convert, None, "").read(raw, str(url))
     if url.target:
-        try:
+        with contextlib.suppress(PixelpenError):
             check_path(url.target, "the target")
-        except PixelpenError:
-            pass
     again = parse_url(format_url(url.scheme, url.target, url.options))
     assert (again.scheme, again.target, dict(again.options)) == (url.scheme, url.target, dict(url.options))
 

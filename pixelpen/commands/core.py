@@ -6,18 +6,31 @@ import argparse
 import json
 import re
 import sys
+from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
+from typing import Any
 
 from pixelpen.commands.plot import plot_demo
+from pixelpen.display.base import Display
 from pixelpen.display.pictfile import load_picture
 from pixelpen.display.registry import known_schemes, open_display
 from pixelpen.drivers.discovery import DiscoveredDevice, discover
+from pixelpen.options import OptionSpec, describe
 from pixelpen.scene import draw_reference
+from pixelpen.sim.transports.options import TRANSPORT_OPTIONS
 from pixelpen.urls import format_url
 
 _ROLE = re.compile(r":[a-z]+(?::[a-z]+)?:`(?:([^`<]*?)\s*<[^`>]*>|~(?:[\w.]*\.)?([^`]*)|([^`]*))`")
 _LITERAL = re.compile(r"``(.+?)``|`([^`]+)`|\*\*(.+?)\*\*")
+
+
+OptionSection = tuple[str, Sequence[OptionSpec[Any]]]
+
+OPTION_SECTIONS: list[OptionSection] = [
+    ("options of every sim: and sim:// URL (the simulated line)", TRANSPORT_OPTIONS),
+]
+"""Options listed after the schemes', each group under its title (one line per group of specs)."""
 
 
 def plain_text(text: str) -> str:
@@ -36,7 +49,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("draw", help="draw a picture file onto one or more displays")
     p.add_argument("picture", help="picture file (pixelpen JSON, see docs/picture-format.md)")
-    p.add_argument("--to", action="append", required=True, metavar="URL", help="display URL, e.g. png:out.png (repeatable)")
+    p.add_argument("--to", action="append", required=True, metavar="URL",
+                   help="display URL, e.g. png:out.png (repeatable)")
     p.set_defaults(func=cmd_draw)
 
     p = sub.add_parser("demo", help="draw the reference scene on every display pixelpen has (simulated devices too)")
@@ -45,33 +59,47 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_devices(args: argparse.Namespace) -> int:
-    """Print the schemes with their options, then the serial, USB and HID devices present."""
-    schemes = {
+    """Print the schemes with their options, the other option groups, then the serial, USB and HID devices present."""
+    schemes: dict[str, dict[str, Any]] = {
         name: {"class": cls.__name__, "description": plain_text((cls.__doc__ or "").strip().partition("\n")[0]),
-               "options": {opt: plain_text(text) for opt, text in cls.url_options.items()},
-               "simulated": cls.simulated}
+               "options": scheme_options(cls), "simulated": cls.simulated}
         for name, cls in known_schemes().items()
     }
-    present: list[dict] = []
+    sections = {title: {name: plain_text(text) for name, text in describe(specs)} for title, specs in OPTION_SECTIONS}
+    present: list[dict[str, object]] = []
     if not args.no_probe:
         present = [_record(device) for device in discover()]
     if args.json:
-        json.dump({"schemes": schemes, "present": present}, sys.stdout, indent=2, default=str)
+        json.dump({"schemes": schemes, "options": sections, "present": present}, sys.stdout, indent=2, default=str)
         print()
         return 0
     print("Known schemes:")
     for name, info in schemes.items():
-        sim = "  (sim:%s too)" % name if info["simulated"] else ""
+        sim = f"  (sim:{name} too)" if info["simulated"] else ""
         print(f"  {name + ':':10} {info['description']}{sim}")
-        for opt, text in info["options"].items():
-            print(f"      ?{opt}=  {text}")
+        _print_options(info["options"])
+    for title, options in sections.items():
+        print(f"\n{title[0].upper()}{title[1:]}:")
+        _print_options(options)
     print("\nDevices present:" if present else "\nDevices present: none found")
     for rec in present:
         print("  " + "  ".join(f"{k}={v}" for k, v in rec.items() if v not in (None, "")))
     return 0
 
 
-def _record(device: DiscoveredDevice) -> dict:
+def scheme_options(cls: type[Display]) -> dict[str, str]:
+    """A display's URL options as name -> plain help text, from its ``OPTIONS`` specs."""
+    rows = describe(cls.OPTIONS) if cls.OPTIONS else list(cls.url_options.items())  # url_options: until converted
+    return {name: plain_text(text) for name, text in rows}
+
+
+def _print_options(options: dict[str, str]) -> None:
+    """One ``?name=  help`` line per option."""
+    for name, text in options.items():
+        print(f"      ?{name}=  {text}")
+
+
+def _record(device: DiscoveredDevice) -> dict[str, object]:
     """A discovered device as a flat dict, USB IDs as VID:PID hex."""
     rec = {k: v for k, v in asdict(device).items() if k not in ("vid", "pid", "identity") and v not in (None, "")}
     if device.vid is not None and device.pid is not None:

@@ -9,7 +9,7 @@ from PIL import Image as PILImage
 
 from pixelpen.cli import main
 from pixelpen.display.pictfile import save_picture
-from pixelpen.display.picture import Picture, Polyline, Rectangle, Style, Fill
+from pixelpen.display.picture import Fill, Picture, Polyline, Rectangle, Style
 
 
 @pytest.fixture(autouse=True)
@@ -71,6 +71,20 @@ def test_devices_lists_schemes_with_options(capsys):
     assert main(["devices", "--json", "--no-probe"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert {"png", "svg"} <= set(data["schemes"]) and "size" in data["schemes"]["png"]["options"]
+    assert data["schemes"]["png"]["options"]["size"] == "image size in pixels, WxH (default 800x600)"
+    (line,) = [options for title, options in data["options"].items() if "sim://" in title]
+    assert {"speed", "baud", "flow"} <= set(line)
+
+
+def test_devices_lists_every_option_section_under_its_title(capsys, monkeypatch):
+    from pixelpen.commands import core
+    from pixelpen.options import OptionSpec, integer
+
+    knobs = OptionSpec("knobs", integer(1), 3, "how many ``knobs``")
+    monkeypatch.setattr(core, "OPTION_SECTIONS", [("widgets of the test", (knobs,))])
+    assert main(["devices", "--no-probe"]) == 0
+    out = capsys.readouterr().out
+    assert "\nWidgets of the test:\n      ?knobs=  how many knobs (default 3)\n" in out
 
 
 def test_devices_reports_what_discovery_finds(capsys, monkeypatch):

@@ -81,10 +81,9 @@ def test_close_flushes_and_is_idempotent():
 
 def test_error_inside_with_leaves_device_safe_without_drawing_pending():
     d = RecordingDisplay(deferral="flush")
-    with pytest.raises(RuntimeError):
-        with d:
-            d.draw(Circle((50, 25), 10))
-            raise RuntimeError("boom")
+    with pytest.raises(RuntimeError), d:
+        d.draw(Circle((50, 25), 10))
+        raise RuntimeError("boom")
     assert d.calls == ["open", "close"] and not d.is_open
 
 

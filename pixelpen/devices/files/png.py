@@ -8,27 +8,39 @@ system (:func:`pixelpen.urls.check_path`).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any, ClassVar
 
-from pixelpen.display.capabilities import Capabilities
+from pixelpen.display.capabilities import Capabilities, ColourModel
 from pixelpen.display.kinds import RasterDisplay
 from pixelpen.display.registry import register_display
-from pixelpen.errors import ConfigError, URLError
+from pixelpen.errors import ConfigError
+from pixelpen.options import OptionSpec, choice, colour, positive
 from pixelpen.raster.canvas import Canvas
-from pixelpen.urls import DeviceURL, check_path, parse_size
+from pixelpen.urls import DeviceURL, Size, check_path, parse_size
 
-_MODES = {"1": "mono", "L": "grey", "P": "indexed", "RGB565": "rgb565", "RGB": "rgb888", "RGBA": "rgba"}
+_MODES: dict[str, ColourModel] = {
+    "1": "mono", "L": "grey", "P": "indexed", "RGB565": "rgb565", "RGB": "rgb888", "RGBA": "rgba",
+}
+
+
+def pixel_size(text: str) -> Size:
+    """A ``WxH`` size in whole pixels (``800x600``)."""
+    size = parse_size(text, "px")
+    if size.unit != "px" or size.width != int(size.width) or size.height != int(size.height):
+        raise ValueError("png size is whole pixels, WxH (e.g. 800x600)")
+    return size
 
 
 @register_display("png")
 class PngFileDisplay(RasterDisplay):
     """Draws into a framebuffer and writes it to ``PATH`` (``png:PATH?size=800x600&dpi=96``)."""
 
-    url_options = {
-        "size": "image size in pixels, WxH; default 800x600",
-        "dpi": "pixels per inch, sets the millimetre size of a pixel; default 96",
-        "mode": "pixel mode: 1, L, P, RGB565, RGB or RGBA; default RGB",
-        "background": "background colour, a name or #rrggbb; default white",
-    }
+    OPTIONS: ClassVar[tuple[OptionSpec[Any], ...]] = (
+        OptionSpec("size", pixel_size, Size(800, 600, "px"), "image size in pixels, WxH"),
+        OptionSpec("dpi", positive, 96.0, "pixels per inch, sets the millimetre size of a pixel"),
+        OptionSpec("mode", choice(*_MODES), "RGB", "pixel mode: 1, L, P, RGB565, RGB or RGBA"),
+        OptionSpec("background", colour, "white", "background colour, a name or #rrggbb"),
+    )
     MAX_PIXELS = 100_000_000
     """Pixels of the image (width x height)."""
     MAX_DPI = 100_000.0
@@ -45,7 +57,9 @@ class PngFileDisplay(RasterDisplay):
         if not (isinstance(width, int) and isinstance(height, int) and width > 0 and height > 0):
             raise ConfigError(f"png size must be whole pixels > 0, got {size!r}")
         if width * height > self.MAX_PIXELS:
-            raise ConfigError(f"png size {width}x{height} is more than PngFileDisplay.MAX_PIXELS = {self.MAX_PIXELS} pixels")
+            raise ConfigError(
+                f"png size {width}x{height} is more than PngFileDisplay.MAX_PIXELS = {self.MAX_PIXELS} pixels"
+            )
         if not 0 < dpi <= self.MAX_DPI:
             raise ConfigError(f"png dpi must be > 0 and at most {self.MAX_DPI:g}, got {dpi!r}")
         caps = Capabilities(
@@ -57,14 +71,11 @@ class PngFileDisplay(RasterDisplay):
 
     @classmethod
     def from_url(cls, url: DeviceURL, **kwargs: object) -> PngFileDisplay:
-        opts = cls.options_of(url)
-        w, h, unit = opts.get("size", parse_size, (800.0, 600.0, "px"))
-        if unit != "px" or w != int(w) or h != int(h):
-            raise URLError(f"{url}: png size is whole pixels, WxH (e.g. 800x600), got {url.options['size']!r}")
-        return cls(
-            url.target, size=(int(w), int(h)), dpi=opts.get("dpi", float, 96.0), mode=opts.get("mode", str, "RGB"),
-            background=opts.get("background", str, "white"),
-        )
+        """``png:PATH?options`` (see ``OPTIONS``)."""
+        opts = cls.read_url_options(url)
+        size = opts["size"]
+        return cls(url.target, size=(int(size.width), int(size.height)), dpi=opts["dpi"], mode=opts["mode"],
+                   background=opts["background"])
 
     def _open_device(self) -> None:
         self.path.parent.mkdir(parents=True, exist_ok=True)

@@ -7,13 +7,16 @@ system (:func:`pixelpen.urls.check_path`).
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
+from typing import Any, ClassVar
 
 from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.kinds import VectorDisplay
 from pixelpen.display.registry import register_display
 from pixelpen.errors import ConfigError
-from pixelpen.urls import DeviceURL, check_path, parse_size, to_mm
+from pixelpen.options import OptionSpec, positive
+from pixelpen.urls import DeviceURL, Size, check_path, parse_size
 from pixelpen.vector.displaylist import DisplayList
 from pixelpen.vector.svgimport import write_svg
 
@@ -25,12 +28,15 @@ MAX_PEN_WIDTH_MM = 1000.0
 class SvgFileDisplay(VectorDisplay):
     """Writes what a plotter would draw to ``PATH`` as SVG (``svg:PATH?size=210x297mm``)."""
 
-    url_options = {
-        "size": "page size, WxH with a unit (mm, cm, in, px) or a paper name; default a4 (210x297mm)",
-        "pen_width": "pen width in mm for stroke width and hatch spacing; default 0.3",
-    }
+    OPTIONS: ClassVar[tuple[OptionSpec[Any], ...]] = (
+        OptionSpec("size", partial(parse_size, default_unit="mm"), Size(210.0, 297.0, "mm"),
+                   "page size, WxH with a unit (mm, cm, in, px) or a paper name (a4 is 210x297mm)"),
+        OptionSpec("pen_width", positive, 0.3, "pen width in mm for stroke width and hatch spacing"),
+    )
 
-    def __init__(self, path: str | Path, *, size_mm: tuple[float, float] = (210.0, 297.0), pen_width_mm: float = 0.3) -> None:
+    def __init__(
+        self, path: str | Path, *, size_mm: tuple[float, float] = (210.0, 297.0), pen_width_mm: float = 0.3
+    ) -> None:
         path = check_path(path, "svg file name (the URL target)")
         if not 0 < pen_width_mm <= MAX_PEN_WIDTH_MM:
             raise ConfigError(f"svg pen_width must be > 0 and at most {MAX_PEN_WIDTH_MM:g} mm, got {pen_width_mm!r}")
@@ -44,9 +50,9 @@ class SvgFileDisplay(VectorDisplay):
 
     @classmethod
     def from_url(cls, url: DeviceURL, **kwargs: object) -> SvgFileDisplay:
-        opts = cls.options_of(url)
-        w, h, unit = opts.get("size", lambda t: parse_size(t, "mm"), (210.0, 297.0, "mm"))
-        return cls(url.target, size_mm=(to_mm(w, unit), to_mm(h, unit)), pen_width_mm=opts.get("pen_width", float, 0.3))
+        """``svg:PATH?options`` (see ``OPTIONS``)."""
+        opts = cls.read_url_options(url)
+        return cls(url.target, size_mm=opts["size"].mm(), pen_width_mm=opts["pen_width"])
 
     def _open_device(self) -> None:
         self.path.parent.mkdir(parents=True, exist_ok=True)

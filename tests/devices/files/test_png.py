@@ -37,3 +37,19 @@ def test_bad_options_are_refused_naming_them(tmp_path, query, error, words):
 def test_file_names_no_file_system_takes_are_config_errors(name, words):
     with pytest.raises(ConfigError, match=f"png file name.*{words}"):
         pixelpen.open(f"png:{name}")
+
+
+def test_options_are_specs_read_by_the_shared_reader(tmp_path):
+    from pixelpen.devices.files.png import PngFileDisplay
+    from pixelpen.options import describe
+
+    assert [name for name, _ in describe(PngFileDisplay.OPTIONS)] == ["size", "dpi", "mode", "background"]
+    assert dict(describe(PngFileDisplay.OPTIONS))["size"].endswith("(default 800x600)")
+    with pixelpen.open(f"png:{tmp_path / 'a.png'}?size=8x4&mode=l&background=%23102030") as d:
+        assert d.capabilities.colour_model == "grey" and d.capabilities.size == (8.0, 4.0)
+    with pytest.raises(URLError, match=r"option background='nocolour' is not valid"):
+        pixelpen.open(f"png:{tmp_path / 'a.png'}?background=nocolour")
+    with pytest.raises(URLError, match=r"option mode='CMYK' is not valid: expected one of 1, L, P, RGB565, RGB, RGBA"):
+        pixelpen.open(f"png:{tmp_path / 'a.png'}?mode=CMYK")
+    with pytest.raises(URLError, match=r"unknown option\(s\) colour; known: background, dpi, mode, size"):
+        pixelpen.open(f"png:{tmp_path / 'a.png'}?colour=red")

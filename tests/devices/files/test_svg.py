@@ -34,3 +34,16 @@ def test_bad_options_are_refused_naming_them(tmp_path, query, error, words):
 def test_file_names_no_file_system_takes_are_config_errors(name, words):
     with pytest.raises(ConfigError, match=f"svg file name.*{words}"):
         pixelpen.open(f"svg:{name}")
+
+
+def test_options_are_specs_and_sizes_take_any_unit(tmp_path):
+    from pixelpen.devices.files.svg import SvgFileDisplay
+    from pixelpen.options import describe
+
+    assert [name for name, _ in describe(SvgFileDisplay.OPTIONS)] == ["size", "pen_width"]
+    with pixelpen.open(f"svg:{tmp_path / 'a.svg'}?size=4x2in&pen_width=0.5") as d:
+        assert d.capabilities.size_mm == pytest.approx((101.6, 50.8))
+    with pixelpen.open(f"svg:{tmp_path / 'b.svg'}?size=a3") as d:
+        assert d.capabilities.size_mm == (297.0, 420.0)
+    with pytest.raises(URLError, match=r"unknown option\(s\) dpi; known: pen_width, size"):
+        pixelpen.open(f"svg:{tmp_path / 'a.svg'}?dpi=96")
