@@ -17,7 +17,7 @@ from pixelpen import geometry as geo
 from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.flatten import DeviceShape, flatten_picture
 from pixelpen.display.picture import PRIMITIVE_TYPES, Picture, Primitive, Segment
-from pixelpen.errors import ConfigError, PixelpenError
+from pixelpen.errors import ConfigError, InvalidArgumentType, PixelpenError
 from pixelpen.options import OptionSpec, OptionValues, read_options
 from pixelpen.urls import DeviceURL, Options
 
@@ -156,6 +156,9 @@ class Display(ABC):
         """Draw a picture, segment or primitive now (deferral 'asap') or at the next ``flush()``."""
         self._require_open()
         if not isinstance(item, (Picture, Segment, *PRIMITIVE_TYPES)):
+            if not isinstance(item, Iterable):
+                raise InvalidArgumentType(f"draw takes a Picture, Segment, primitive or an iterable of primitives, "
+                                          f"got {type(item).__name__}")
             items = list(item)
             picture = Picture()
             for prim in items:

@@ -6,7 +6,7 @@ import pytest
 from pixelpen.display.base import Display
 from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.picture import Circle, Picture, Polyline, Segment
-from pixelpen.errors import ConfigError, PixelpenError, URLError
+from pixelpen.errors import ConfigError, InvalidArgumentType, PixelpenError, URLError
 from pixelpen.options import OptionSpec, integer, text
 from pixelpen.urls import DeviceURL, parse_url
 
@@ -158,3 +158,10 @@ def test_split_sim_url_keeps_declared_options_and_hands_the_rest_to_the_simulato
     assert sim == {"paper": "a3", "baud": "300", "speed": "fast"}
     assert RecordingDisplay.split_sim_url(parse_url("sim:rec?speed=fast")) == (
         DeviceURL("rec", "", {}, "sim:rec?speed=fast"), {"speed": "fast"})
+
+
+@pytest.mark.parametrize("item", [5, None, object()])
+def test_drawing_what_is_not_a_picture_or_primitives_is_a_type_error_naming_it(item):
+    with RecordingDisplay() as d, pytest.raises(InvalidArgumentType, match="draw takes a Picture"):
+        d.draw(item)
+    assert d.rendered == []
