@@ -1,1 +1,1 @@
-"""Device models: what the bytes mean for each plotter, panel and file format (``display.registry`` maps schemes to them)."""
+"""Device models: what the bytes mean for each plotter, panel and file format (``display.registry`` maps schemes)."""
