@@ -1,1 +1,1 @@
-"""The EiBotBoard (AxiDraw) simulator: command table, motion and parameters."""
+"""The EiBotBoard (AxiDraw) simulator: ``board.EbbSimulator``; the module docstring of ``board`` maps the rest."""
