@@ -11,14 +11,17 @@ from typing import TYPE_CHECKING, Final, TypeVar
 
 import numpy as np
 
-from pixelpen.display.picture import colour_hex, parse_colour
+from pixelpen.colour import colour_hex, parse_colour
 from pixelpen.errors import ConfigError, URLError
 from pixelpen.vector.displaylist import DisplayList
 
 if TYPE_CHECKING:
     from pixelpen.raster.canvas import Canvas
 
-__all__ = ["PAPER_FORMATS", "Paper", "WireStats", "clamp_path", "paper_format", "read_options", "write_paper_svg"]
+__all__ = [
+    "PAPER_FORMATS", "Paper", "WireStats", "blank_sheet", "clamp_path", "draw_segments", "paper_format", "read_options",
+    "write_paper_svg",
+]
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
@@ -87,6 +90,39 @@ def write_paper_svg(
         pen_colours={k: colour_hex(parse_colour(v)) for k, v in pen_colours.items()},
     )
     write_svg(dl, str(path), size_mm=page_mm, pen_width_mm=pen_width_mm)
+
+
+def blank_sheet(page_mm: tuple[float, float], dpi: float) -> tuple[Canvas, float]:
+    """A white RGB canvas of the page at ``dpi`` and its scale in pixels per millimetre (dpi checked: 1..2400)."""
+    from pixelpen.raster.canvas import Canvas
+
+    if not (isinstance(dpi, (int, float)) and math.isfinite(dpi) and 1.0 <= dpi <= 2400.0):
+        raise ConfigError(f"paper_image: dpi must be a number in 1..2400, got {dpi!r}")
+    scale = dpi / 25.4
+    canvas = Canvas(max(1, round(page_mm[0] * scale)), max(1, round(page_mm[1] * scale)), "RGB")
+    canvas.fill((255, 255, 255))
+    return canvas, scale
+
+
+def draw_segments(
+    canvas: Canvas,
+    pixels: np.ndarray,
+    pens: np.ndarray,
+    widths: np.ndarray,
+    pen_colours: Mapping[int, str],
+    *,
+    cap: str,
+) -> None:
+    """Ink (N, 4) integer pixel segments pen by pen (in pen order), width by width; a pen without a colour plots dry."""
+    for pen in np.unique(pens):
+        colour = pen_colours.get(int(pen))
+        if colour is None:
+            continue
+        rgb = parse_colour(colour)
+        mine = pens == pen
+        for width in np.unique(widths[mine]):
+            sel = mine & (widths == width)
+            canvas.lines(pixels[sel], rgb, width=int(width), cap=cap)
 
 
 class Paper:
@@ -171,26 +207,24 @@ class Paper:
 
     def paper_image(self, dpi: float = 96.0) -> Canvas:
         """Render the sheet (white) with every stroke in its pen's colour and width as an RGB Canvas."""
-        from pixelpen.raster.canvas import Canvas
-
-        if not (isinstance(dpi, (int, float)) and math.isfinite(dpi) and 1.0 <= dpi <= 2400.0):
-            raise ConfigError(f"paper_image: dpi must be a number in 1..2400, got {dpi!r}")
-        scale = dpi / 25.4
-        width = max(1, int(round(self.width_mm * scale)))
-        height = max(1, int(round(self.height_mm * scale)))
-        canvas = Canvas(width, height, "RGB")
-        canvas.fill((255, 255, 255))
-        line_width = max(1, int(round(self.pen_width_mm * scale)))
-        by_pen: dict[int, list[np.ndarray]] = {}
-        for pen, pts in self.strokes():
+        canvas, scale = blank_sheet((self.width_mm, self.height_mm), dpi)
+        height = canvas.height
+        line_width = max(1, round(self.pen_width_mm * scale))
+        segs: list[np.ndarray] = []
+        pens: list[np.ndarray] = []
+        strokes = self.strokes()
+        for pen, pts in strokes:
             px = pts * scale
             if not self.y_down:
                 px = np.column_stack([px[:, 0], height - 1 - px[:, 1]])
             seg = np.hstack([px[:-1], px[1:]]) if len(px) > 1 else np.hstack([px, px])
-            by_pen.setdefault(pen, []).append(seg)
-        for pen, segs in by_pen.items():
-            colour = parse_colour(self.pen_colours.get(pen, "black"))
-            canvas.lines(np.rint(np.vstack(segs)).astype(np.int64), colour, width=line_width)
+            segs.append(seg)
+            pens.append(np.full(len(seg), pen))
+        if segs:
+            colours = {pen: self.pen_colours.get(pen, "black") for pen, _ in strokes}
+            pixels = np.rint(np.vstack(segs)).astype(np.int64)
+            all_pens = np.concatenate(pens)
+            draw_segments(canvas, pixels, all_pens, np.full(len(pixels), line_width), colours, cap="square")
         return canvas
 
     def save_paper(self, path: str | Path, dpi: float = 96.0) -> None:
