@@ -157,6 +157,15 @@ def shear(shx: float = 0.0, shy: float = 0.0, ref: Sequence[float] = (0.0, 0.0))
     ])
 
 
+def place(position: Sequence[float], angle: float = 0.0) -> np.ndarray:
+    """Local frame to world: rotate by ``angle`` radians about the local origin, then move it to ``position``.
+
+    The frame of text, markers and symbols: local x runs along the baseline from the reference point.
+    """
+    px, py = as_pair(position, "position")
+    return compose(translate(px, py), rotate(angle))
+
+
 def compose(*matrices: ArrayLike) -> np.ndarray:
     """Matrix product in the usual order: compose(A, B) applies B first, then A (identity when empty)."""
     result = np.eye(3)

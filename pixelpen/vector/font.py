@@ -11,6 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from pixelpen import geometry as geo
 from pixelpen.errors import ConfigError, ParseError
 
 log = logging.getLogger(__name__)
@@ -235,12 +236,6 @@ def _frame(
     return scale, x_shift, y_shift
 
 
-def _place(local: np.ndarray, position: tuple[float, float], angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    px, py = float(position[0]), float(position[1])
-    return np.column_stack([px + local[:, 0] * c - local[:, 1] * s, py + local[:, 0] * s + local[:, 1] * c])
-
-
 def text_strokes(
     text: str,
     *,
@@ -274,12 +269,12 @@ def text_strokes(
     pts = np.concatenate([g.points for g in layout.glyphs])
     owner = np.repeat(np.arange(len(layout.glyphs)), counts)
     lefts = np.array([g.left for g in layout.glyphs], dtype=np.float64)
-    gx = (pts[:, 0] - lefts[owner] + layout.pen_x[owner] + x_shift[layout.line_of[owner]]) * scale
-    gy = -(pts[:, 1] - f.base) * scale - layout.line_of[owner] * line_spacing * height + y_shift
-    # slant about each line's baseline
-    baseline_y = -layout.line_of[owner] * line_spacing * height + y_shift
-    gx = gx + (gy - baseline_y) * math.tan(slant)
-    world = _place(np.column_stack([gx, gy]), position, angle)
+    # glyph points relative to their line's baseline (font units to world units, y flipped up), slanted there
+    along = (pts[:, 0] - lefts[owner] + layout.pen_x[owner] + x_shift[layout.line_of[owner]]) * scale
+    above = -(pts[:, 1] - f.base) * scale
+    local = geo.apply(geo.shear(shx=math.tan(slant)), np.column_stack([along, above]))
+    local[:, 1] += -layout.line_of[owner] * line_spacing * height + y_shift
+    world = geo.apply(geo.place(position, angle), local)
     point_base = np.concatenate([[0], np.cumsum(counts)[:-1]])
     cuts = np.concatenate([g.offsets[1:-1] + b for g, b in zip(layout.glyphs, point_base)] + [point_base[1:]])
     return [s for s in np.split(world, np.unique(cuts)) if len(s)]
@@ -313,4 +308,4 @@ def text_extent(
     top = height + y_shift
     bottom = y_shift - (n_lines - 1) * line_spacing * height - (f.bottom - f.base) * scale
     local = np.array([[x0, bottom], [x1, bottom], [x1, top], [x0, top]])
-    return TextExtent(x1 - x0, top - bottom, _place(local, position, angle))
+    return TextExtent(x1 - x0, top - bottom, geo.apply(geo.place(position, angle), local))

@@ -211,3 +211,12 @@ def test_overflow_on_the_way_is_refused_not_returned_as_inf():
     with pytest.raises(TypeError) as info:
         translate("1", 0)
     assert isinstance(info.value, PixelpenError)
+
+
+def test_place_rotates_about_the_local_origin_then_moves_it():
+    from pixelpen.geometry.transforms import apply, place
+
+    m = place((10.0, 20.0), math.pi / 2)
+    np.testing.assert_allclose(apply(m, [[0.0, 0.0], [1.0, 0.0], [0.0, 2.0]]), [[10, 20], [10, 21], [8, 20]],
+                               atol=1e-12)
+    np.testing.assert_array_equal(place((3.0, 4.0)), [[1, 0, 3], [0, 1, 4], [0, 0, 1]])

@@ -191,3 +191,30 @@ def test_parse_fonts_rejects_malformed_data(text, match, line):
     with pytest.raises(ParseError, match=match) as info:
         parse_fonts(text, "bad.txt")
     assert info.value.source == "bad.txt" and info.value.line == line
+
+
+REFERENCE_TEXTS = ["Hello, world!", "pixelpen\nreference scene\nthree", "AVATAR gjpqy 0123", "  x  \n\ny"]
+REFERENCE_PARAMS = [
+    {},
+    {"position": (12.5, -3.25), "height": 7.0, "angle": 0.7, "slant": 0.3, "align": "center", "valign": "middle",
+     "spacing": 1.2, "line_spacing": 1.4},
+    {"position": (-100.0, 55.5), "height": 2.5, "angle": -2.2, "slant": -0.4, "align": "right", "valign": "bottom",
+     "font": "futural"},
+    {"height": 13.0, "angle": 3.14159 / 2, "valign": "top", "font": "timesr", "spacing": 0.8},
+]
+
+
+def test_glyphs_are_where_the_hand_written_transforms_put_them():
+    # data/font_reference.npz: text_strokes/text_extent before they used geometry.transforms (shear, place);
+    # the same points to rounding (the sums are associated differently), the same strokes
+    from pathlib import Path
+
+    ref = np.load(Path(__file__).parent / "data" / "font_reference.npz")
+    cases = [(t, p) for t in REFERENCE_TEXTS for p in REFERENCE_PARAMS]
+    for k, (text, params) in enumerate(cases):
+        strokes = text_strokes(text, **params)
+        assert [len(s) for s in strokes] == ref[f"n{k}"].tolist()
+        np.testing.assert_allclose(np.concatenate(strokes), ref[f"s{k}"], rtol=0, atol=1e-12)
+        extent = text_extent(text, **params)
+        got = np.concatenate([[extent.width, extent.height], np.asarray(extent.corners).ravel()])
+        np.testing.assert_allclose(got, ref[f"e{k}"], rtol=0, atol=1e-12)
