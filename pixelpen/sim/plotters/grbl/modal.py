@@ -1,4 +1,4 @@
-"""The G-code parser's state, the checked block it produces, and GRBL 1.1's status codes.
+"""The G-code parser's state, the checked block it produces, GRBL 1.1's status codes and number formats.
 
 Written from gnea/grbl ``doc/markdown/commands.md`` (modal groups, defaults) and
 ``doc/csv/error_codes_en_US.csv`` (error numbers).  :mod:`~pixelpen.sim.plotters.grbl.gcode` fills these;
@@ -23,6 +23,7 @@ __all__ = [
     "GBlock",
     "GcodeState",
     "Persistent",
+    "fmt_float",
     "read_float",
 ]
 
@@ -155,3 +156,14 @@ def read_float(line: str, i: int) -> tuple[float, int] | None:
         return None
     value = float(intval) * (10.0 ** exp) if intval else 0.0
     return (-value if negative else value), i
+
+
+def fmt_float(n: float, decimals: int) -> str:
+    """GRBL's printFloat: sign, then the value rounded half-up to ``decimals`` places."""
+    sign = "-" if n < 0 else ""
+    n = abs(n) * (10 ** decimals) + 0.5
+    digits = str(int(n))
+    if decimals:
+        digits = digits.rjust(decimals + 1, "0")
+        return f"{sign}{digits[:-decimals]}.{digits[-decimals:]}"
+    return sign + digits

@@ -37,7 +37,7 @@ class AxisLimits:
 def limit_by_axis(values: tuple[float, float, float], unit: np.ndarray) -> float:
     """GRBL's limit_value_by_axis_maximum: the largest scalar whose per-axis share stays within ``values``."""
     limit = math.inf
-    for v, u in zip(values, unit):
+    for v, u in zip(values, unit, strict=True):
         if abs(u) > _EPS:
             limit = min(limit, abs(v / u))
     return limit
@@ -95,10 +95,8 @@ class Profile:
             v_end = math.sqrt(max(v0 * v0 - 2 * a * length, 0.0))
             return cls(v0, v0, v_end, a, 0.0, 0.0, (v0 - v_end) / a, length)
         v1 = min(v1, math.sqrt(v0 * v0 + 2 * a * length))
-        if v0 <= vn:
-            vp = min(vn, math.sqrt(max((2 * a * length + v0 * v0 + v1 * v1) / 2.0, 0.0)))
-        else:  # entering above the cruise speed (an override lowered it): slow down to it first
-            vp = vn
+        # entering above the cruise speed (an override lowered it): slow down to it first
+        vp = min(vn, math.sqrt(max((2 * a * length + v0 * v0 + v1 * v1) / 2.0, 0.0))) if v0 <= vn else vn
         vp = max(vp, v1)
         d1 = abs(vp * vp - v0 * v0) / (2 * a)
         d3 = (vp * vp - v1 * v1) / (2 * a)

@@ -392,7 +392,7 @@ def test_faults():
     rig.dev.inject("reset")
     assert rig.dev.take_output() == WELCOME
     assert rig.status().startswith("<Idle|MPos:0.000,0.000,0.000")  # reboot: position lost
-    with pytest.raises(ConfigError, match="paper-lever.*known"):
+    with pytest.raises(ConfigError, match=r"paper-lever.*known"):
         rig.dev.inject("paper-lever")
 
 
@@ -400,7 +400,7 @@ def test_factory_options():
     dev = create_simulator("grbl", clock=SimulatedClock(), size="200x100", pen="z", rx_buffer="256", planner="8")
     assert dev.rx_free == 256 and dev.planner.capacity == 7
     assert dev.paper.width_mm == 200 and dev.settings[131] == 100
-    with pytest.raises(URLError, match="unknown option.*colour.*known:"):
+    with pytest.raises(URLError, match=r"unknown option.*colour.*known:"):
         create_simulator("grbl", colour="red")
     with pytest.raises(URLError, match="pen='pencil'"):
         create_simulator("grbl", pen="pencil")
