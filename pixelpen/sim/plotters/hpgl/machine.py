@@ -356,7 +356,7 @@ class Machine:
             else:
                 period = max(g.pattern_pct / 100.0 * self.p1p2_diagonal(), length / MAX_DASHES_PER_VECTOR, 1e-9)
                 pattern = np.asarray(LINE_PATTERNS[g.line_type]) / 100.0 * period
-                piece = _pieces_to_segments(dash_polylines([seg.reshape(2, 2)], pattern, offset=g.dash_pos))
+                piece = _pieces_to_segments(dash_polylines([seg.reshape(2, 2)], pattern.tolist(), offset=g.dash_pos))
                 g.dash_pos = (g.dash_pos + length) % period
             pieces.append(piece)
             owners += [i] * len(piece)

@@ -1,4 +1,4 @@
-"""HP-GL execution errors and parameter checks, and the shape of the instruction tables (mnemonic -> counts, handler)."""
+"""HP-GL execution errors, parameter checks, and the shape of the instruction tables (mnemonic -> counts, handler)."""
 
 from __future__ import annotations
 

@@ -187,7 +187,8 @@ class InstructionReader:
     def _instruction(self, data: bytes | bytearray, full: bool) -> tuple[int, Instruction | None]:
         first = data[0]
         if first not in _LETTERS:
-            return 1, Instruction(f"\\x{first:02x}" if not 0x20 < first < 0x7F else chr(first), error=1, offset=self.offset)
+            shown = f"\\x{first:02x}" if not 0x20 < first < 0x7F else chr(first)
+            return 1, Instruction(shown, error=1, offset=self.offset)
         if len(data) < 2:
             return (1, Instruction(chr(first).upper(), error=1, offset=self.offset)) if full else (0, None)
         if data[1] not in _LETTERS:
@@ -215,7 +216,9 @@ class InstructionReader:
             return self._char(mnemonic, data, full)
         return self._numbers(mnemonic, syntax, data, full)
 
-    def _numbers(self, mnemonic: str, syntax: Syntax, data: bytes | bytearray, full: bool) -> tuple[int, Instruction | None]:
+    def _numbers(
+        self, mnemonic: str, syntax: Syntax, data: bytes | bytearray, full: bool
+    ) -> tuple[int, Instruction | None]:
         try:
             params, end = self._number_list(data, 2, syntax.max_params)
         except _Need:
@@ -263,7 +266,9 @@ class InstructionReader:
 
     # -- streamed forms: pairs and label text -------------------------------------------------
 
-    def _next_pair(self, data: bytes | bytearray, full: bool, first_pair: bool = False) -> tuple[int, Instruction | None]:
+    def _next_pair(
+        self, data: bytes | bytearray, full: bool, first_pair: bool = False
+    ) -> tuple[int, Instruction | None]:
         mnemonic = self._pairs
         assert mnemonic is not None
         i = 0
@@ -358,7 +363,9 @@ def _number(data: bytes | bytearray, i: int) -> tuple[float, int]:
     return float(m.group()), end
 
 
-def parse_hpgl(data: bytes, known: Collection[str] | None = None, recognised: Collection[str] = ()) -> list[Instruction]:
+def parse_hpgl(
+    data: bytes, known: Collection[str] | None = None, recognised: Collection[str] = ()
+) -> list[Instruction]:
     """Read a complete HP-GL byte string into Instructions (label terminator changes by DT are followed).
 
     Device-control sequences are not HP-GL and must not be in ``data``.  The end of the data ends the

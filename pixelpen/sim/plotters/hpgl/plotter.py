@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, Final
@@ -112,7 +112,9 @@ class HPGLPlotter(SimulatedDevice):
     the parameter count and calls the handler on the instruction class that owns what it changes.
     """
 
-    FAULTS: ClassVar[frozenset[Fault]] = frozenset({Fault.POWER_LOSS, Fault.RESET, Fault.PAPER_LEVER, Fault.PAUSE_BUTTON})
+    FAULTS: ClassVar[frozenset[Fault]] = frozenset(
+        {Fault.POWER_LOSS, Fault.RESET, Fault.PAPER_LEVER, Fault.PAUSE_BUTTON}
+    )
 
     def __init__(
         self,
@@ -513,7 +515,7 @@ _PLOTTER_CONTROL: Final[dict[str, Callable[[HPGLPlotter, DeviceControl], None]]]
     "(": HPGLPlotter._esc_on, "Y": HPGLPlotter._esc_on, ")": HPGLPlotter._esc_off, "Z": HPGLPlotter._esc_off,
     "B": HPGLPlotter._esc_b, "L": HPGLPlotter._esc_l, "O": HPGLPlotter._esc_o, "K": HPGLPlotter._esc_k,
 }
-"""Device-control letter -> handler for the sequences about the plotter's buffer and state (the rest: the interface's)."""
+"""Device-control letter -> handler for the sequences about the buffer and the plotter (the rest: the interface's)."""
 
 
 def _bind(owner: Any, table: CommandTable[Any]) -> dict[str, tuple[Command[Any], Callable[[Instruction], None]]]:

@@ -67,7 +67,8 @@ def test_model_instruction_sets_decide_what_is_unknown():
     assert parse_hpgl(b"OT;", known={"OT"})[0].error == 0
     # recognised-but-unsimulated mnemonics are read (not error 1) with their parameters
     assert summary(b"OT;") == [("OT", (), "", 0)]
-    assert [(i.mnemonic, i.error) for i in parse_hpgl(b"PG1;SP1;", known={"SP"}, recognised={"PG"})] == [("PG", 0), ("SP", 0)]
+    items = parse_hpgl(b"PG1;SP1;", known={"SP"}, recognised={"PG"})
+    assert [(i.mnemonic, i.error) for i in items] == [("PG", 0), ("SP", 0)]
 
 
 def test_wrong_parameter_count_and_illegal_characters():
@@ -105,7 +106,8 @@ def test_offsets_point_at_each_instruction():
 valid_instruction = st.one_of(
     st.sampled_from([b"IN;", b"DF;", b"SP1;", b"PU;", b"PD;", b"OS;", b"OI;", b"SC;", b"LT;", b"CI50;"]),
     st.builds(lambda a, b: b"PA%d,%d;" % (a, b), st.integers(-3000, 3000), st.integers(-3000, 3000)),
-    st.builds(lambda xs: b"PD" + b",".join(b"%d" % x for x in xs) + b";", st.lists(st.integers(-99, 99), min_size=2, max_size=8).filter(lambda v: len(v) % 2 == 0)),
+    st.builds(lambda xs: b"PD" + b",".join(b"%d" % x for x in xs) + b";",
+              st.lists(st.integers(-99, 99), min_size=2, max_size=8).filter(lambda v: len(v) % 2 == 0)),
     st.builds(lambda t: b"LB" + t + b"\x03", st.text("ABCxyz 012,;.", max_size=12).map(str.encode)),
 )
 
@@ -134,7 +136,7 @@ def test_any_chunking_reads_the_same_instructions(parts, data):
                 got.append((item.mnemonic, item.params, item.text, item.error))
         return True
 
-    for a, b in zip([0] + cuts, cuts + [len(stream)]):
+    for a, b in zip([0, *cuts], [*cuts, len(stream)], strict=True):
         buf += stream[a:b]
         while take(False):
             pass
