@@ -32,7 +32,7 @@ from pixelpen.display.picture import (
     Style,
     Text,
 )
-from pixelpen.errors import InvalidArgument
+from pixelpen.errors import InvalidArgument, InvalidArgumentType
 
 log = logging.getLogger(__name__)
 
@@ -160,7 +160,7 @@ def _world_paths(prim: Primitive, tol: float) -> tuple[list[np.ndarray], bool]:
             slant=prim.slant, align=prim.align, valign=prim.valign,
         )
         return list(strokes), False
-    raise TypeError(f"cannot flatten a {type(prim).__name__}")
+    raise InvalidArgumentType(f"cannot flatten a {type(prim).__name__}")
 
 
 def _arc(center: tuple[float, float], rx: float, ry: float, start: float, end: float, angle: float,

@@ -137,10 +137,11 @@ def align_region(fmt: str | PixelFormat, region: Region | None, width: int, heig
         return (0, 0, width, height)
     try:
         x0, y0, x1, y1 = (int(v) for v in region)
-        if any(int(v) != v for v in region):
-            raise ValueError
-    except (TypeError, ValueError):
-        raise ConfigError(f"region must be four integers (x0, y0, x1, y1), found {region!r}") from None
+        exact = all(int(v) == v for v in region)
+    except (TypeError, ValueError, OverflowError):
+        exact = False
+    if not exact:
+        raise ConfigError(f"region must be four integers (x0, y0, x1, y1), found {region!r}")
     if not (0 <= x0 <= x1 <= width and 0 <= y0 <= y1 <= height):
         raise ConfigError(
             f"region {region!r} (x0, y0, x1, y1, half-open) does not lie inside the {width}x{height} image"

@@ -58,10 +58,11 @@ def _integers(values: Sequence[int], count: int, what: str) -> tuple[int, ...]:
     """``count`` integers (floats with a fractional part are refused), else a ConfigError naming ``what``."""
     try:
         out = tuple(int(v) for v in values)
-        if len(out) != count or any(isinstance(v, bool) or int(v) != v for v in values):
-            raise ValueError
-    except (TypeError, ValueError):
-        raise ConfigError(f"{what}, found {values!r}") from None
+        exact = len(out) == count and not any(isinstance(v, bool) or int(v) != v for v in values)
+    except (TypeError, ValueError, OverflowError):
+        exact = False
+    if not exact:
+        raise ConfigError(f"{what}, found {values!r}")
     return out
 
 
