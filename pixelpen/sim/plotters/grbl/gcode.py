@@ -35,22 +35,8 @@ from pixelpen.sim.plotters.grbl.modal import (
     read_float,
 )
 
-__all__ = [
-    "MM_PER_INCH",
-    "MOTION_CCW",
-    "MOTION_CW",
-    "MOTION_LINEAR",
-    "MOTION_NONE",
-    "MOTION_SEEK",
-    "PROBES",
-    "STATUS",
-    "GBlock",
-    "GcodeState",
-    "Persistent",
-    "arc_points",
-    "parse_block",
-    "read_float",
-]
+__all__ = ["arc_points", "parse_block"]
+"""The parser; the state and block types it uses (``GcodeState``, ``GBlock``, ``STATUS``...) import from here too."""
 
 _G_GROUP = {  # G integer -> modal group (GRBL numbering: 0 non-modal, 1 motion, 2 plane, ...)
     4: 0, 10: 0, 28: 0, 30: 0, 53: 0, 92: 0,

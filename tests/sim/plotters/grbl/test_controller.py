@@ -489,3 +489,32 @@ def test_pushing_the_carriage_home_by_hand_realigns_it_with_a_rebooted_controlle
     rig.send("M3S1000\nG1X10F3000\nM5\n")
     rig.until_idle()
     assert np.allclose(rig.dev.paper.strokes()[-1][1][[0, -1]], [[0, 0], [10, 0]])  # pushed to the origin: they agree
+
+
+def test_is_a_simulated_device_with_the_shared_faults():
+    from pixelpen.sim.base import Fault, SimulatedDevice
+
+    rig = Rig()
+    assert isinstance(rig.dev, SimulatedDevice)
+    assert rig.dev.FAULTS == {Fault.RESET, Fault.POWER_LOSS, Fault.PAUSE_BUTTON}
+    rig.dev.inject(Fault.RESET, at=14)  # falls due inside the second line
+    assert rig.send("G1X100F3000\n") == b"ok\r\n"
+    rig.run(0.5)
+    assert rig.send("G1Y10\n") == WELCOME + b"ok\r\n"  # the board rebooted after "G1"; "Y10" is a G0 move
+    assert [entry for _, entry in rig.dev.log[-2:]] == ["<reset>", "Y10"]
+    with pytest.raises(ConfigError, match="known: pause-button, power-loss, reset"):
+        rig.dev.inject(Fault.PAPER_LEVER)
+
+
+def test_url_options_are_declared_as_specs():
+    from pixelpen.options import OptionSpec, describe
+    from pixelpen.sim.plotters.grbl.controller import OPTIONS
+
+    assert all(isinstance(spec, OptionSpec) for spec in OPTIONS)
+    names = [name for name, _ in describe(OPTIONS)]
+    assert names == ["size", "pen", "pen_threshold", "rx_buffer", "planner", "pen_colour", "pen_width"]
+    for spec in OPTIONS:  # every declared option is one the factory takes
+        create_simulator("grbl", clock=SimulatedClock(), **{spec.name: {"size": "100x100", "pen": "z",
+                         "pen_colour": "steelblue"}.get(spec.name, "20")})
+    with pytest.raises(URLError, match=r"sim:grbl: option pen_width='-1' is not valid"):
+        create_simulator("grbl", pen_width="-1")

@@ -173,3 +173,16 @@ def test_arc_points_lie_on_the_circle(r, a0, a1, cw, tol):
     rel = chain - centre[:2]
     cross = rel[:-1, 0] * rel[1:, 1] - rel[:-1, 1] * rel[1:, 0]
     assert np.all(cross <= 1e-9) if cw else np.all(cross >= -1e-9)
+
+
+@pytest.mark.parametrize(("line", "code"), [
+    ("N99999999G1X1", 27),  # [0] line number before [3] feed rate
+    ("G1X1", 22),  # [3] feed rate before [20] motion
+    ("G4G1X1", 28),  # [10] dwell's P before the motion checks
+    ("G43.1X1", 37),  # [14] G43.1 takes Z only
+    ("G10L2P7X1", 29),  # [19]
+    ("G80X1", 31),  # [20]
+    ("G0X1I1", 36),  # [0] unused words last
+])
+def test_step_3_checks_run_in_the_order_of_execution(line, code):
+    assert parse_block(line, GcodeState(), Persistent()) == code
