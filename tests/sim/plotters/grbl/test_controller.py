@@ -496,7 +496,7 @@ def test_is_a_simulated_device_with_the_shared_faults():
 
     rig = Rig()
     assert isinstance(rig.dev, SimulatedDevice)
-    assert rig.dev.FAULTS == {Fault.RESET, Fault.POWER_LOSS, Fault.PAUSE_BUTTON}
+    assert set(rig.dev.FAULTS) == {Fault.RESET, Fault.POWER_LOSS, Fault.PAUSE_BUTTON}
     rig.dev.inject(Fault.RESET, at=14)  # falls due inside the second line
     assert rig.send("G1X100F3000\n") == b"ok\r\n"
     rig.run(0.5)

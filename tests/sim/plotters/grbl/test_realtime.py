@@ -20,7 +20,7 @@ class Rig(DeviceRig):
 
 def test_the_table_holds_grbls_real_time_bytes():
     assert set(REALTIME) == CMD_BYTES
-    assert ASCII_REALTIME == {0x18, ord("?"), ord("~"), ord("!")}
+    assert set(ASCII_REALTIME) == {0x18, ord("?"), ord("~"), ord("!")}
     assert {b for b, c in REALTIME.items() if c.always} == {0x18, RT_STATUS}
     for command in REALTIME.values():
         assert getattr(GrblSimulator, command.handler.__name__) is command.handler
