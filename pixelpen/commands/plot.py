@@ -26,11 +26,8 @@ import argparse
 import contextlib
 import logging
 import math
-import os
-import select
 import shlex
 import sys
-import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator, Sequence
@@ -40,6 +37,7 @@ from typing import IO, TYPE_CHECKING
 import numpy as np
 
 from pixelpen import geometry as geo
+from pixelpen.commands.keys import KeyControl
 from pixelpen.devices.plotters.layout import CUT_REPORT_MM, Layout, Placement, home_of, sheet_to_device
 from pixelpen.display.registry import display_class, open_display
 from pixelpen.errors import ConfigError, PixelpenError, PlotInterrupted, PositionUnknown
@@ -55,8 +53,6 @@ EXIT_INTERRUPTED = 3
 """Exit status of a plot stopped by a fault that retries did not overcome (resume with --resume)."""
 DEMO_MODELS = ("hp7475a", "grbl", "axidraw")
 """The simulated plotters ``plot_demo`` draws the reference scene on."""
-PAUSE_KEYS = b"p "
-ENTER_KEYS = b"\r\n"
 SHEET_COLOURS = ("#999999", "#6fa8dc", "#f6b26b")
 """Colours of the page outline, the plotter's limits and the margin box on a ``--sheet`` drawing."""
 
@@ -153,78 +149,6 @@ class _EndLine(logging.Filter):
     def filter(self, record: logging.LogRecord) -> bool:
         self.bar.end()
         return True
-
-
-class KeyControl:
-    """Keys typed while a plot runs, read from ``fd`` by a thread: ``p`` or space toggles a pause, Enter answers.
-
-    A terminal is put in cbreak mode (keys arrive without Enter, Ctrl-C still interrupts) and restored by
-    :meth:`close`.  The pause is only a request: the plotter stops at its next pen-up.
-    """
-
-    def __init__(self, fd: int, on_toggle: Callable[[bool], None] | None = None) -> None:
-        self.fd = fd
-        self.on_toggle = on_toggle
-        self.paused = False
-        self.eof = False
-        self._enters = 0
-        self._typed = threading.Condition()
-        self._stop = threading.Event()
-        self._saved: list | None = None
-        if os.isatty(fd):
-            import termios
-            import tty
-
-            self._saved = termios.tcgetattr(fd)
-            tty.setcbreak(fd)
-        self._thread = threading.Thread(target=self._run, name="pixelpen plot keys", daemon=True)
-        self._thread.start()
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            ready, _, _ = select.select([self.fd], [], [], 0.1)
-            if not ready:
-                continue
-            try:
-                data = os.read(self.fd, 64)
-            except OSError:
-                data = b""
-            if not data:
-                with self._typed:
-                    self.eof = True
-                    self._typed.notify_all()
-                return
-            for byte in data:
-                if byte in PAUSE_KEYS:
-                    self.paused = not self.paused
-                    if self.on_toggle is not None:
-                        self.on_toggle(self.paused)
-                elif byte in ENTER_KEYS:
-                    with self._typed:
-                        self._enters += 1
-                        self._typed.notify_all()
-
-    def pause_requested(self) -> bool:
-        """True while the operator wants the plot paused."""
-        return self.paused
-
-    def wait_enter(self) -> bool:
-        """Wait for Enter typed from now on (an earlier one does not count); False when the input ended instead."""
-        with self._typed:
-            before = self._enters
-            while self._enters == before and not self.eof:
-                self._typed.wait(0.1)  # with a timeout, so that Ctrl-C gets through
-            return self._enters != before
-
-    def close(self) -> None:
-        """Stop reading and restore the terminal."""
-        self._stop.set()
-        self._thread.join(timeout=1.0)
-        if self._saved is not None:
-            import termios
-
-            termios.tcsetattr(self.fd, termios.TCSADRAIN, self._saved)
-            self._saved = None
 
 
 class PenPrompt:

@@ -98,7 +98,8 @@ def _outside(dl: DisplayList, size: tuple[float, float]) -> DisplayList:
     lo, hi = dl.points.min(axis=0), dl.points.max(axis=0)
     big = float(max(np.abs(lo).max(), np.abs(hi).max(), w, h)) * 2.0 + 1.0
     bands = [(-big, -big, 0.0, big), (w, -big, big, big), (0.0, -big, w, 0.0), (0.0, h, w, big)]
-    pieces, owners = [], []
+    pieces: list[np.ndarray] = []
+    owners: list[np.ndarray] = []
     for band in bands:
         got, owner = geo.clip_polylines(list(dl.strokes()), band, return_index=True)
         pieces += got
