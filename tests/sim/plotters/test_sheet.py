@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pixelpen.errors import URLError
-from pixelpen.sim.plotters.sheet import Paper, clamp_path, read_options
+from pixelpen.errors import ConfigError, URLError
+from pixelpen.sim.plotters.sheet import Paper, blank_sheet, clamp_path, draw_segments, read_options
 
 LO = np.array([0.0, 0.0])
 HI = np.array([100.0, 50.0])
@@ -74,6 +74,22 @@ def test_paper_image_draws_ink_where_the_strokes_are():
     row = 50 - 1 - 10  # y up: 10 mm from the bottom
     assert tuple(img[row, 50]) == (255, 0, 0)
     assert tuple(img[5, 5]) == (255, 255, 255)
+
+
+def test_blank_sheet_is_white_at_the_page_size_and_checks_the_dpi():
+    canvas, scale = blank_sheet((25.4, 50.8), 10.0)
+    assert (canvas.width, canvas.height) == (10, 20) and scale == pytest.approx(10 / 25.4)
+    assert np.all(np.asarray(canvas.array) == 255)
+    with pytest.raises(ConfigError, match="dpi"):
+        blank_sheet((10.0, 10.0), 0)
+
+
+def test_draw_segments_inks_each_pen_in_its_colour_and_a_pen_without_one_plots_dry():
+    canvas, _ = blank_sheet((25.4, 25.4), 20.0)
+    pixels = np.array([[2, 2, 17, 2], [2, 10, 17, 10], [2, 15, 17, 15]])
+    draw_segments(canvas, pixels, np.array([1, 2, 3]), np.array([1, 3, 1]), {1: "red", 2: "blue"}, cap="round")
+    img = np.asarray(canvas.array)
+    assert tuple(img[2, 9]) == (255, 0, 0) and tuple(img[11, 9]) == (0, 0, 255) and tuple(img[15, 9]) == (255, 255, 255)
 
 
 def test_read_options_names_the_bad_option_and_lists_the_known():
