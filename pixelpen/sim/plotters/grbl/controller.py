@@ -52,7 +52,7 @@ import numpy as np
 
 from pixelpen.clock import Clock
 from pixelpen.errors import ConfigError, URLError
-from pixelpen.options import OptionSpec, colour, integer, non_negative, read_options
+from pixelpen.options import OptionSpec, choice, colour, integer, non_negative, read_options
 from pixelpen.sim.base import Fault, register_simulator
 from pixelpen.sim.plotters.grbl.machine import PEN_MODES, RESUMED, ROOM, SYNC, Wait, log
 from pixelpen.sim.plotters.grbl.modal import STATUS, fmt_float
@@ -326,18 +326,10 @@ def _size(text: str) -> tuple[float, float]:
     return (w, h)
 
 
-def _pen_mode(text: str) -> str:
-    """servo, servo-inverted or z."""
-    value = text.strip().lower()
-    if value not in PEN_MODES:
-        raise ValueError("expected servo, servo-inverted or z")
-    return value
-
-
 OPTIONS: tuple[OptionSpec[Any], ...] = (
     OptionSpec("size", _size, None,
                "travel WxH in mm: sets $130/$131 and the paper (default: the grbl profile's paper)"),
-    OptionSpec("pen", _pen_mode, None,
+    OptionSpec("pen", choice(*PEN_MODES), None,
                "servo, servo-inverted (down below pen_threshold) or z (down at work Z <= 0) (default: the profile's)"),
     OptionSpec("pen_threshold", non_negative, None,
                "servo output dividing pen up from down (default: half-way between the profile's up and down S)"),
@@ -396,16 +388,13 @@ def _machine_defaults(profile: str) -> tuple[tuple[str, object], ...]:
 def create(clock: Clock | None = None, **options: str) -> GrblSimulator:
     """Simulator factory for ``sim:grbl?...`` URLs: the grbl profile's machine unless options say otherwise."""
     values = read_options(OPTIONS, options, "sim:grbl")
-    machine = machine_defaults()
-    fallback = {"rx_buffer": 128, "pen_colour": "black"}
-    chosen: dict[str, Any] = {name: value if value is not None else machine.get(name, fallback.get(name))
-              for name, value in values.items()}
+    machine: dict[str, Any] = {"rx_buffer": 128, "pen_colour": "black", **machine_defaults()}
+    chosen = {name: machine[name] if value is None else value for name, value in values.items()}
     try:
         device = GrblSimulator(clock, **chosen)
     except ConfigError as exc:
         raise URLError(f"sim:grbl: {exc}") from None
-    baud = machine.get("baud", GrblSimulator.default_baud)
-    device.default_baud = int(baud) if isinstance(baud, (int, float, str)) else GrblSimulator.default_baud
+    device.default_baud = int(machine.get("baud", GrblSimulator.default_baud))
     return device
 
 
