@@ -51,9 +51,9 @@ def test_every_display_a_devices_module_registers_is_in_the_builtin_table():
         module, _, name = target.partition(":")
         found[scheme] = getattr(importlib.import_module(module), name)
         assert issubclass(found[scheme], Display) and scheme in found[scheme].schemes
-    registered = {s: c for s, c in registry._DISPLAYS.items() if c.__module__.startswith("pixelpen.devices.")}
-    assert registered == found
     assert registry.known_schemes().items() >= found.items()
+    registered = {s: c for s, c in registry._DISPLAYS.items() if c.__module__.startswith("pixelpen.devices.")}
+    assert registered == found  # a scheme registered by a devices module but missing from the table fails here
 
 
 def test_display_class_and_sim_urls():
