@@ -28,10 +28,10 @@ def test_old_names_work_in_a_new_interpreter_with_from_imports() -> None:
             "from pixelpen.vector.profiles import load_profile\n"
             "from pixelpen.devices.plotter import PlotterDisplay\n"
             "import pixelpen.sim.urlhandler.protocol_sim as p\n"
-            "print(load_profile.__module__, PlotterDisplay.__module__, p.__name__)")
+            "import pixelpen.profiles, pixelpen.devices.plotters.base as base\n"
+            "print(load_profile is pixelpen.profiles.load_profile, PlotterDisplay is base.PlotterDisplay, p.__name__)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
-    assert out == ["pixelpen.profiles.model", "pixelpen.devices.plotters.base",
-                   "pixelpen.sim.transports.urlhandler.protocol_sim"]
+    assert out == ["True", "True", "pixelpen.sim.transports.urlhandler.protocol_sim"]
 
 
 def test_unmoved_names_are_not_found_by_the_alias_finder() -> None:
