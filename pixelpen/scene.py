@@ -60,7 +60,17 @@ def reference_scene() -> Picture:
     pic.add(Ellipse((170, 110), 20, 9, angle=np.pi / 6, style=Style(colour=GREEN, fill=Fill("solid", outline=True))))
     pic.add(Arc((135, 75), 12, 12, 0.0, 1.5 * np.pi, style=blue))
     pic.add(Arc((165, 75), 14, 10, np.pi / 4, 5 * np.pi / 4, close="chord", style=red))
-    pic.add(Arc((185, 75), 10, 10, 0.0, np.pi / 2, close="pie", style=Style(colour="saddlebrown", fill=Fill("hatch", spacing=1.0))))
+    pic.add(
+        Arc(
+            (185, 75),
+            10,
+            10,
+            0.0,
+            np.pi / 2,
+            close="pie",
+            style=Style(colour="saddlebrown", fill=Fill("hatch", spacing=1.0)),
+        )
+    )
 
     # curves: a cubic Bezier path, a degree-5 Bezier, a B-spline with its control polygon
     pic.add(Bezier([[6, 20], [20, 55], [40, -5], [55, 30], [70, 65], [80, 10], [95, 35]], degree=3, style=red))

@@ -67,10 +67,7 @@ def flatten_picture(
     A primitive the geometry cannot draw (its device coordinates overflow, a dash pattern far finer than
     the device, an arc needing millions of points) raises ``InvalidArgument`` naming the item.
     """
-    if isinstance(picture, Picture):
-        items = picture.walk()
-    else:
-        items = iter([(picture, np.eye(3), None)])
+    items = picture.walk() if isinstance(picture, Picture) else iter([(picture, np.eye(3), None)])
     rect = pipeline.clip_rect if clip else None
     for index, (prim, seg_transform, segment) in enumerate(items):
         try:

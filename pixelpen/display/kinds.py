@@ -18,10 +18,15 @@ class RasterDisplay(Display):
     """A display refreshed from a pixel buffer; devices implement ``_show`` to send changed pixels."""
 
     def __init__(
-        self, capabilities: Capabilities, *, mode: str = "RGB", background: object = "white", deferral: Deferral = "asap"
+        self,
+        capabilities: Capabilities,
+        *,
+        mode: str = "RGB",
+        background: object = "white",
+        deferral: Deferral = "asap",
     ) -> None:
         super().__init__(capabilities, deferral=deferral)
-        width, height = (int(round(v)) for v in capabilities.size)
+        width, height = (round(float(v)) for v in capabilities.size)
         self.canvas = Canvas(width, height, mode)
         self.background = self.canvas.colour_value(parse_colour(background))
         self.canvas.fill(self.background)

@@ -97,7 +97,12 @@ def picture_to_dict(picture: Picture) -> dict[str, Any]:
             })
         else:
             items.append(_prim_to_dict(item))
-    return {"format": FORMAT, "version": VERSION, "window": list(picture.window) if picture.window else None, "items": items}
+    return {
+        "format": FORMAT,
+        "version": VERSION,
+        "window": list(picture.window) if picture.window else None,
+        "items": items,
+    }
 
 
 def _prim_to_dict(prim: Primitive) -> dict[str, Any]:
@@ -142,7 +147,9 @@ def _style_to_dict(style: Style) -> dict[str, Any]:
 
 def save_picture(picture: Picture, path: str | Path) -> None:
     """Write a picture file (a file name no file system takes is a ConfigError)."""
-    check_path(path, "picture file").write_text(json.dumps(picture_to_dict(picture), separators=(",", ":")), encoding="utf-8")
+    check_path(path, "picture file").write_text(
+        json.dumps(picture_to_dict(picture), separators=(",", ":")), encoding="utf-8"
+    )
 
 
 # -- reading ---------------------------------------------------------------------------------
@@ -211,12 +218,17 @@ def _first_too_deep(raw: bytes, limit: int, chunk: int = 1 << 22) -> int | None:
         depth, inside = int(levels[-1]), bool(in_string[-1])
         run = len(a) - 1 - int(plain[-1]) + (run if plain[-1] < 0 else 0)
     return None
+
+
 def picture_from_dict(doc: Any, source: str = "<picture>") -> Picture:
     """Build a Picture from its JSON dict, checking every field (limits MAX_ITEMS, MAX_POINTS, MAX_PIXELS)."""
     r = _Reader(source)
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
-        raise r.error("$", f"not a pixelpen picture (expected an object with \"format\": \"{FORMAT}\")",
-                      doc.get("format") if isinstance(doc, dict) else type(doc).__name__)
+        raise r.error(
+            "$",
+            f'not a pixelpen picture (expected an object with "format": "{FORMAT}")',
+            doc.get("format") if isinstance(doc, dict) else type(doc).__name__,
+        )
     version = doc.get("version")
     if type(version) is not int or version != VERSION:
         raise r.error("$.version", f"unsupported version (this pixelpen reads version {VERSION})", version)
@@ -270,11 +282,15 @@ class _Reader:
     def known(self, obj: dict, where: str, allowed: set[str]) -> None:
         extra = sorted(set(obj) - allowed)
         if extra:
-            raise self.error(where, f"unknown field(s) {', '.join(extra)}; expected some of {', '.join(sorted(allowed))}"[:400])
+            raise self.error(
+                where, f"unknown field(s) {', '.join(extra)}; expected some of {', '.join(sorted(allowed))}"[:400]
+            )
 
     def numbers(self, value: Any, where: str, count: int | None = None) -> list[float]:
-        if not isinstance(value, list) or (count is not None and len(value) != count) or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value
+        if (
+            not isinstance(value, list)
+            or (count is not None and len(value) != count)
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
         ):
             raise self.error(where, f"expected a list of {count or 'some'} numbers", value)
         out = [math.inf if isinstance(v, int) and v.bit_length() > 1000 else float(v) for v in value]
@@ -289,7 +305,9 @@ class _Reader:
         if not (isinstance(transform, list) and len(transform) == 3):
             raise self.error(where + ".transform", "expected a 3x3 matrix", transform)
         matrix = np.array([self.numbers(row, f"{where}.transform[{k}]", 3) for k, row in enumerate(transform)])
-        seg = self.build(Segment, where, item.get("name"), [], matrix, item.get("visible", True), item.get("pickable", True))
+        seg = self.build(
+            Segment, where, item.get("name"), [], matrix, item.get("visible", True), item.get("pickable", True)
+        )
         for k, prim in enumerate(self.items(item.get("items", []), where + ".items")):
             self.add(seg, self.primitive(prim, f"{where}.items[{k}]"), f"{where}.items[{k}]")
         return seg

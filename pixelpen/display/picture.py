@@ -13,10 +13,11 @@ TypeError), a bad value ``ConfigError`` (also a ValueError). Limits (module attr
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Literal, Union
+from typing import Literal
 
 import numpy as np
 
@@ -165,7 +166,9 @@ class Style:
                 raise InvalidArgumentType(f"a dash pattern is a sequence of lengths, got {type(self.dash).__name__}")
             dash = tuple(_number(d, f"dash[{i}] (mm)", 0.0) for i, d in enumerate(self.dash))
             if not dash or len(dash) % 2 or sum(dash) <= 0:
-                raise ConfigError(f"dash pattern must be an even number of lengths >= 0 with a positive sum, got {dash!r}"[:300])
+                raise ConfigError(
+                    f"dash pattern must be an even number of lengths >= 0 with a positive sum, got {dash!r}"[:300]
+                )
             _set(self, dash=dash)
         if self.pen is not None:
             _set(self, pen=_integer(self.pen, "pen number", 1, MAX_PEN))
@@ -212,7 +215,9 @@ class Polygon:
     def __post_init__(self) -> None:
         rings = self.rings
         if isinstance(rings, (str, bytes, dict)) or not hasattr(rings, "__len__"):
-            raise InvalidArgumentType(f"polygon rings must be a sequence of (N, 2) point arrays, got {type(rings).__name__}")
+            raise InvalidArgumentType(
+                f"polygon rings must be a sequence of (N, 2) point arrays, got {type(rings).__name__}"
+            )
         if isinstance(rings, np.ndarray) or (len(rings) and np.ndim(rings[0]) == 1):
             rings = (rings,)
         object.__setattr__(self, "rings", tuple(_points(r, "polygon ring", 3) for r in rings))
@@ -257,8 +262,13 @@ class Ellipse:
     style: Style = Style()
 
     def __post_init__(self) -> None:
-        _set(self, center=_pair(self.center, "ellipse center"), rx=_number(self.rx, "ellipse rx", 0.0),
-             ry=_number(self.ry, "ellipse ry", 0.0), angle=_number(self.angle, "ellipse angle"))
+        _set(
+            self,
+            center=_pair(self.center, "ellipse center"),
+            rx=_number(self.rx, "ellipse rx", 0.0),
+            ry=_number(self.ry, "ellipse ry", 0.0),
+            angle=_number(self.angle, "ellipse angle"),
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -275,9 +285,15 @@ class Arc:
     style: Style = Style()
 
     def __post_init__(self) -> None:
-        _set(self, center=_pair(self.center, "arc center"), rx=_number(self.rx, "arc rx", 0.0),
-             ry=_number(self.ry, "arc ry", 0.0), start=_number(self.start, "arc start"),
-             end=_number(self.end, "arc end"), angle=_number(self.angle, "arc angle"))
+        _set(
+            self,
+            center=_pair(self.center, "arc center"),
+            rx=_number(self.rx, "arc rx", 0.0),
+            ry=_number(self.ry, "arc ry", 0.0),
+            start=_number(self.start, "arc start"),
+            end=_number(self.end, "arc end"),
+            angle=_number(self.angle, "arc angle"),
+        )
         _choice(self.close, "arc close", ("open", "chord", "pie"))
 
 
@@ -311,14 +327,18 @@ class BSpline:
         object.__setattr__(self, "control_points", pts)
         _integer(self.degree, "B-spline degree", 1, MAX_DEGREE)
         if not 1 <= self.degree < len(pts):
-            raise ConfigError(f"a B-spline of degree {self.degree} needs more than {self.degree} control points, got {len(pts)}")
+            raise ConfigError(
+                f"a B-spline of degree {self.degree} needs more than {self.degree} control points, got {len(pts)}"
+            )
         if self.knots is not None:
             if not isinstance(self.knots, (list, tuple, np.ndarray)):
                 raise InvalidArgumentType(f"B-spline knots are a sequence of numbers, got {type(self.knots).__name__}")
             knots = tuple(_number(k, f"knots[{i}]") for i, k in enumerate(self.knots))
             if len(knots) != len(pts) + self.degree + 1:
-                raise ConfigError(f"a B-spline needs n + degree + 1 = {len(pts) + self.degree + 1} knots, got {len(knots)}")
-            if any(b < a for a, b in zip(knots, knots[1:])):
+                raise ConfigError(
+                    f"a B-spline needs n + degree + 1 = {len(pts) + self.degree + 1} knots, got {len(knots)}"
+                )
+            if any(b < a for a, b in itertools.pairwise(knots)):
                 raise ConfigError("B-spline knots must not decrease")
             object.__setattr__(self, "knots", knots)
 
@@ -356,8 +376,13 @@ class Text:
             raise InvalidArgumentType(f"text must be a string, got {type(self.text).__name__}")
         if len(self.text) > MAX_TEXT:
             raise ConfigError(f"text of {len(self.text)} characters is longer than {MAX_TEXT}")
-        _set(self, position=_pair(self.position, "text position"), height=_number(self.height, "text height", 0.0, above=True),
-             angle=_number(self.angle, "text angle"), slant=_number(self.slant, "text slant"))
+        _set(
+            self,
+            position=_pair(self.position, "text position"),
+            height=_number(self.height, "text height", 0.0, above=True),
+            angle=_number(self.angle, "text angle"),
+            slant=_number(self.slant, "text slant"),
+        )
         _choice(self.align, "text align", ("left", "center", "right"))
         _choice(self.valign, "text valign", ("bottom", "baseline", "middle", "top"))
 
@@ -373,13 +398,15 @@ class Image:
     def __post_init__(self) -> None:
         px = np.asarray(self.pixels)
         if px.dtype != np.uint8 or not (px.ndim == 2 or (px.ndim == 3 and px.shape[2] in (3, 4))) or px.size == 0:
-            raise ConfigError(f"image pixels must be a non-empty uint8 HxW, HxWx3 or HxWx4 array, got {px.dtype} {px.shape}")
+            raise ConfigError(
+                f"image pixels must be a non-empty uint8 HxW, HxWx3 or HxWx4 array, got {px.dtype} {px.shape}"
+            )
         if isinstance(self.rect, (str, bytes, dict)) or not hasattr(self.rect, "__len__") or len(self.rect) != 4:
             raise InvalidArgumentType(f"image rect must be (x0, y0, x1, y1), got {type(self.rect).__name__}")
         _set(self, pixels=px, rect=tuple(_number(v, f"image rect[{i}]") for i, v in enumerate(self.rect)))
 
 
-Primitive = Union[Polyline, Polygon, Rectangle, Circle, Ellipse, Arc, Bezier, BSpline, Marker, Text, Image]
+Primitive = Polyline | Polygon | Rectangle | Circle | Ellipse | Arc | Bezier | BSpline | Marker | Text | Image
 PRIMITIVE_TYPES = (Polyline, Polygon, Rectangle, Circle, Ellipse, Arc, Bezier, BSpline, Marker, Text, Image)
 
 

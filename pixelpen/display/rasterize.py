@@ -30,7 +30,7 @@ def rasterize(canvas: Canvas, shapes: list[DeviceShape], unit_mm: float) -> None
 def _stroke(canvas: Canvas, shape: DeviceShape, value, unit_mm: float) -> None:
     segments = [np.hstack([p[:-1], p[1:]]) if len(p) > 1 else np.hstack([p, p]) for p in shape.paths]
     seg = np.floor(np.concatenate(segments)).astype(np.int64)
-    width = max(1, int(round(shape.style.width / unit_mm)))
+    width = max(1, round(float(shape.style.width / unit_mm)))
     canvas.lines(seg, value, width=width)
 
 
@@ -71,7 +71,9 @@ def _image(canvas: Canvas, shape: DeviceShape) -> None:
     corners = geo.apply(img_to_dev, np.array([[0, 0], [w, 0], [w, h], [0, h]], float))
     x_lo, y_lo, x_hi, y_hi = shape.clip_rect or (0, 0, canvas.width, canvas.height)
     bound_lo = np.maximum([np.ceil(x_lo - 0.5), np.ceil(y_lo - 0.5)], 0).astype(int)
-    bound_hi = np.minimum([np.floor(x_hi - 0.5) + 1, np.floor(y_hi - 0.5) + 1], [canvas.width, canvas.height]).astype(int)
+    bound_hi = np.minimum([np.floor(x_hi - 0.5) + 1, np.floor(y_hi - 0.5) + 1], [canvas.width, canvas.height]).astype(
+        int
+    )
     lo = np.clip(np.floor(corners.min(axis=0)).astype(int), bound_lo, bound_hi)
     hi = np.clip(np.ceil(corners.max(axis=0)).astype(int), bound_lo, bound_hi)
     if (hi <= lo).any():
@@ -89,5 +91,5 @@ def _as_rgba(px: np.ndarray) -> np.ndarray:
     if px.ndim == 2:
         px = np.repeat(px[..., None], 3, axis=2)
     if px.shape[2] == 3:
-        px = np.concatenate([px, np.full(px.shape[:2] + (1,), 255, np.uint8)], axis=2)
+        px = np.concatenate([px, np.full((*px.shape[:2], 1), 255, np.uint8)], axis=2)
     return px

@@ -1,4 +1,6 @@
-"""Device-independent 2D/3D geometry: homogeneous transforms, viewing, clipping, curves. Imports nothing of pixelpen but its errors.
+"""Device-independent 2D/3D geometry: homogeneous transforms, viewing, clipping, curves, hatching, dashes.
+
+Imports nothing of pixelpen but its errors.
 
 Bad arguments raise ``InvalidArgument`` (a PixelpenError and a ValueError) or ``InvalidArgumentType``
 (a PixelpenError and a TypeError), so callers may catch either family.

@@ -293,7 +293,7 @@ class _ConvexWindow:
         begins = np.concatenate([[0], ends[:-1] + 1])
         real = ends > begins
         begins, ends = begins[real], ends[real]
-        chains = [ring[b:e + 1] for b, e in zip(begins, ends)]
+        chains = [ring[b:e + 1] for b, e in zip(begins, ends, strict=False)]
         s_begin = self.perimeter_coordinate(ring[begins], on[begins])
         s_end = self.perimeter_coordinate(ring[ends], on[ends])
         order = np.argsort(s_begin, kind="stable")

@@ -107,7 +107,7 @@ def bezier_point(control_points: ArrayLike, t: ArrayLike) -> np.ndarray:
     """Points at parameters t of the Bézier curve with (n+1, d) control points (de Casteljau, vectorised over t)."""
     ctrl = _control_array(control_points, min_rows=1)
     tt, scalar = _parameters(t)
-    pts = _de_casteljau(np.broadcast_to(ctrl, (len(tt),) + ctrl.shape), tt)
+    pts = _de_casteljau(np.broadcast_to(ctrl, (len(tt), *ctrl.shape)), tt)
     return pts[0] if scalar else pts
 
 
@@ -135,8 +135,8 @@ def _flatness(ctrl: np.ndarray) -> np.ndarray:
     safe = np.where(length2 > 0, length2, 1.0)
     for point in ctrl[1:-1]:
         v = point - a
-        u = np.clip(sum(vc * abc for vc, abc in zip(v, ab)) / safe, 0.0, 1.0)
-        np.maximum(worst, sum((vc - u * abc) ** 2 for vc, abc in zip(v, ab)), out=worst)
+        u = np.clip(sum(vc * abc for vc, abc in zip(v, ab, strict=False)) / safe, 0.0, 1.0)
+        np.maximum(worst, sum((vc - u * abc) ** 2 for vc, abc in zip(v, ab, strict=False)), out=worst)
     return np.sqrt(worst)
 
 
@@ -193,7 +193,7 @@ def flatten_beziers(curves: Sequence[ArrayLike], tolerance: float) -> list[np.nd
     for index, arr in enumerate(arrays):
         groups.setdefault(arr.shape, []).append(index)
     for members in groups.values():
-        for index, polyline in zip(members, _flatten_stack(np.stack([arrays[i] for i in members]), tol)):
+        for index, polyline in zip(members, _flatten_stack(np.stack([arrays[i] for i in members]), tol), strict=False):
             result[index] = polyline
     return result
 
@@ -379,7 +379,9 @@ def flatten_bspline(
     values, multiplicity = np.unique(k[degree + 1:n], return_counts=True)
     if (multiplicity > degree).any():
         bad = float(values[np.argmax(multiplicity > degree)])
-        raise InvalidArgument(f"interior knot {bad} repeats more than degree={degree} times: the curve is discontinuous")
+        raise InvalidArgument(
+            f"interior knot {bad} repeats more than degree={degree} times: the curve is discontinuous"
+        )
     j = np.arange(degree, n)
     spans = j[k[j] < k[j + 1]]
     a, b = k[spans], k[spans + 1]

@@ -114,7 +114,9 @@ def _hatch_pass(rings: list[np.ndarray], spacing: float, angle: float, join: boo
     if join:
         # position of each crossing walking along its ring: edges in order, along each edge from its start
         ring_pos = np.where(v[b] < v[a], first[edge] + count[edge] - 1 - local, np.arange(total))
-        path_pts, path_starts = _zigzag(left, right, seg_k, edge, ring_pos, k, cross_pts, u, v, ring_of, ring_start, ring_len)
+        path_pts, path_starts = _zigzag(
+            left, right, seg_k, edge, ring_pos, k, cross_pts, u, v, ring_of, ring_start, ring_len
+        )
     else:
         flip = seg_k % 2 == 1  # alternate directions: the natural boustrophedon order
         first_end = np.where(flip, right, left)
@@ -125,7 +127,7 @@ def _hatch_pass(rings: list[np.ndarray], spacing: float, angle: float, join: boo
         [path_pts[:, 0] * cos_a - path_pts[:, 1] * sin_a, path_pts[:, 0] * sin_a + path_pts[:, 1] * cos_a]
     )
     ends = np.r_[path_starts[1:], len(world)]
-    return [world[a:b] for a, b in zip(path_starts.tolist(), ends.tolist())]
+    return [world[a:b] for a, b in zip(path_starts.tolist(), ends.tolist(), strict=False)]
 
 
 def _zigzag(

@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
-from typing import Union
+from typing import Any
 
 import numpy as np
 
 from pixelpen.errors import InvalidArgument, InvalidArgumentType
 
-ArrayLike = Union[np.ndarray, Sequence]
+ArrayLike = np.ndarray | Sequence[Any]
 
 # A homogeneous matrix whose linear part has |det| below this fraction of the product of its
 # row norms is treated as singular: its inverse would be dominated by rounding error.
@@ -38,8 +39,8 @@ def as_points(points: ArrayLike, name: str = "points", *, min_rows: int = 0) -> 
 
 def split_rows(array: np.ndarray, starts: np.ndarray) -> list[np.ndarray]:
     """Cut an array into consecutive row blocks beginning at the given (increasing) row offsets, as views."""
-    bounds = starts.tolist() + [len(array)]
-    return [array[begin:end] for begin, end in zip(bounds[:-1], bounds[1:])]
+    bounds = [*starts.tolist(), len(array)]
+    return [array[begin:end] for begin, end in itertools.pairwise(bounds)]
 
 
 def as_matrix(m: ArrayLike, name: str = "matrix") -> np.ndarray:
@@ -121,7 +122,9 @@ def reflect(axis: str | Sequence[Sequence[float]]) -> np.ndarray:
     """Reflection about "x", "y", "origin", "y=x", "y=-x", or the line through two points ((x0, y0), (x1, y1))."""
     if isinstance(axis, str):
         if axis not in _NAMED_REFLECTIONS:
-            raise InvalidArgument(f"unknown reflection axis {axis!r}: use one of {sorted(_NAMED_REFLECTIONS)} or two points")
+            raise InvalidArgument(
+                f"unknown reflection axis {axis!r}: use one of {sorted(_NAMED_REFLECTIONS)} or two points"
+            )
         m = np.eye(3)
         m[:2, :2] = _NAMED_REFLECTIONS[axis]
         return m
@@ -150,11 +153,13 @@ def shear(shx: float = 0.0, shy: float = 0.0, ref: Sequence[float] = (0.0, 0.0))
     """
     shx, shy = as_number(shx, "shx"), as_number(shy, "shy")
     xref, yref = as_pair(ref, "ref")
-    return np.array([
-        [1.0, shx, -shx * yref],
-        [shy, 1.0, -shy * xref],
-        [0.0, 0.0, 1.0],
-    ])
+    return np.array(
+        [
+            [1.0, shx, -shx * yref],
+            [shy, 1.0, -shy * xref],
+            [0.0, 0.0, 1.0],
+        ]
+    )
 
 
 def place(position: Sequence[float], angle: float = 0.0) -> np.ndarray:
@@ -178,7 +183,7 @@ def compose(*matrices: ArrayLike) -> np.ndarray:
 
 
 def apply(m: ArrayLike, points: ArrayLike) -> np.ndarray:
-    """Map an (N, 2) array (or a single (2,) point) through the homogeneous matrix m; InvalidArgument if it overflows."""
+    """Map an (N, 2) array (or one (2,) point) through the homogeneous matrix m; InvalidArgument if it overflows."""
     mat = as_matrix(m)
     pts, single = as_points(points)
     with np.errstate(over="ignore", invalid="ignore"):
@@ -187,7 +192,9 @@ def apply(m: ArrayLike, points: ArrayLike) -> np.ndarray:
             w = pts @ mat[2, :2] + mat[2, 2]
             if (np.abs(w) < 1e-300).any():
                 row = int(np.flatnonzero(np.abs(w) < 1e-300)[0])
-                raise InvalidArgument(f"point {pts[row].tolist()} (row {row}) maps to infinity (w = 0) under this matrix")
+                raise InvalidArgument(
+                    f"point {pts[row].tolist()} (row {row}) maps to infinity (w = 0) under this matrix"
+                )
             out = out / w[:, None]
     if not np.isfinite(out).all():
         row = int(np.flatnonzero(~np.isfinite(out).all(axis=1))[0])

@@ -23,7 +23,7 @@ from pixelpen.raster.lines import COORD_LIMIT, ragged
 
 def wu_line(x0: float, y0: float, x1: float, y1: float) -> tuple[np.ndarray, np.ndarray]:
     """Wu's anti-aliased line, pure Python: ((N, 2) int pixels in plotting order, (N,) coverages in 0..1)."""
-    for name, v in zip(("x0", "y0", "x1", "y1"), (x0, y0, x1, y1)):
+    for name, v in zip(("x0", "y0", "x1", "y1"), (x0, y0, x1, y1), strict=False):
         if not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
             raise ConfigError(f"wu_line: {name} must be a finite number, found {v!r}")
     steep = abs(y1 - y0) > abs(x1 - x0)
@@ -87,7 +87,12 @@ def wu_coverage(segments: ArrayLike, width: int, height: int, dash: tuple[np.nda
     seg = as_float_segments(segments)
     x0, y0, x1, y1 = seg.T.copy()
     steep = np.abs(y1 - y0) > np.abs(x1 - x0)
-    x0, y0, x1, y1 = (np.where(steep, y0, x0), np.where(steep, x0, y0), np.where(steep, y1, x1), np.where(steep, x1, y1))
+    x0, y0, x1, y1 = (
+        np.where(steep, y0, x0),
+        np.where(steep, x0, y0),
+        np.where(steep, y1, x1),
+        np.where(steep, x1, y1),
+    )
     swap = x0 > x1
     x0, y0, x1, y1 = np.where(swap, x1, x0), np.where(swap, y1, y0), np.where(swap, x0, x1), np.where(swap, y0, y1)
     dx, dy = x1 - x0, y1 - y0

@@ -335,10 +335,7 @@ class Canvas:
 
         The dash pattern runs on across vertices; options as for :meth:`lines`.
         """
-        if antialias:
-            pts = np.asarray(points, dtype=np.float64)
-        else:
-            pts = lines.as_int_array(points, 2, "points")
+        pts = np.asarray(points, dtype=np.float64) if antialias else lines.as_int_array(points, 2, "points")
         if pts.ndim != 2 or pts.shape[1] != 2:
             raise ConfigError(f"points must be an (N, 2) array, found shape {pts.shape}")
         if closed and pts.shape[0] > 1:
@@ -384,13 +381,18 @@ class Canvas:
 
     def _inside(self, c: np.ndarray, rx: np.ndarray, ry: np.ndarray) -> bool:
         """Whether every curve's box lies on the canvas (then nothing needs clipping)."""
-        return bool(((c[:, 0] >= rx) & (c[:, 1] >= ry) & (c[:, 0] + rx < self.width) & (c[:, 1] + ry < self.height)).all())
+        inside = (c[:, 0] >= rx) & (c[:, 1] >= ry) & (c[:, 0] + rx < self.width) & (c[:, 1] + ry < self.height)
+        return bool(inside.all())
 
     def _curve_damage(self, c: np.ndarray, rx: np.ndarray, ry: np.ndarray) -> None:
         """Record the clipped bounding box of all curves."""
         if c.shape[0]:
-            self._damage.add(int((c[:, 0] - rx).min()), int((c[:, 1] - ry).min()),
-                             int((c[:, 0] + rx).max()) + 1, int((c[:, 1] + ry).max()) + 1)
+            self._damage.add(
+                int((c[:, 0] - rx).min()),
+                int((c[:, 1] - ry).min()),
+                int((c[:, 0] + rx).max()) + 1,
+                int((c[:, 1] + ry).max()) + 1,
+            )
 
     def _spans(self, row: np.ndarray, start: np.ndarray, end: np.ndarray, v: np.ndarray, inside: bool) -> None:
         """Paint spans (clipping them unless all lie on the canvas)."""
@@ -400,8 +402,9 @@ class Canvas:
         stride = self.width + 1
         polygons.paint_cells(self.array, row * stride + start, row * stride + end, v)
 
-    def _outline(self, c: np.ndarray, owner: np.ndarray, x: np.ndarray, y: np.ndarray, octants: bool,
-                 v: np.ndarray, inside: bool) -> None:
+    def _outline(
+        self, c: np.ndarray, owner: np.ndarray, x: np.ndarray, y: np.ndarray, octants: bool, v: np.ndarray, inside: bool
+    ) -> None:
         """Scatter the symmetric images of curve points (flat indices directly when nothing is clipped)."""
         if inside:
             w = self.width
@@ -412,7 +415,7 @@ class Canvas:
             for along, across in pairs:
                 for rows in (base + across, base - across):
                     for sign in (1, -1):
-                        np.add(rows, along if sign > 0 else -along, out=idx[k * x.shape[0]:(k + 1) * x.shape[0]])
+                        np.add(rows, along if sign > 0 else -along, out=idx[k * x.shape[0] : (k + 1) * x.shape[0]])
                         k += 1
             self._flat()[idx] = v
             return
@@ -451,7 +454,9 @@ class Canvas:
         polygons.paint_cells(self.array, starts, ends, v)
         lo = np.floor(t.reshape(-1, 2).min(axis=0))
         hi = np.ceil(t.reshape(-1, 2).max(axis=0)) + 1
-        self._damage.add(int(max(lo[0], 0)), int(max(lo[1], 0)), int(min(hi[0], self.width)), int(min(hi[1], self.height)))
+        self._damage.add(
+            int(max(lo[0], 0)), int(max(lo[1], 0)), int(min(hi[0], self.width)), int(min(hi[1], self.height))
+        )
 
     def flood_fill(self, seed: Sequence[int], value: object, connectivity: int = 4) -> int:
         """Replace the connected region of the seed pixel's value (4- or 8-connected); returns pixels filled."""
@@ -500,5 +505,6 @@ class Canvas:
 
     def damage_from(self, previous: np.ndarray, tile: int | tuple[int, int] = 16) -> list[Rect]:
         """Tile-aligned rectangles where ``canvas.array`` differs from a previous frame (vectorised compare)."""
-        return tile_damage(self.array, np.asarray(previous), tile, self._damage.merge_cost, self._damage.bytes_per_pixel)
-
+        return tile_damage(
+            self.array, np.asarray(previous), tile, self._damage.merge_cost, self._damage.bytes_per_pixel
+        )

@@ -208,15 +208,18 @@ def as_radii(radii: ArrayLike, n: int, what: str) -> np.ndarray:
     if arr.ndim == 0:
         arr = np.full(n, arr)
     if arr.ndim != 1 or arr.shape[0] != n:
-        raise ConfigError(f"{what} must be a scalar or an array of {n} values (one per centre), found shape {arr.shape}")
+        raise ConfigError(
+            f"{what} must be a scalar or an array of {n} values (one per centre), found shape {arr.shape}"
+        )
     arr = as_int_array(arr[:, None], 1, what, RADIUS_LIMIT)[:, 0]
     if arr.size and arr.min() < 0:
         raise ConfigError(f"{what} must be >= 0, found {int(arr.min())} at index {int(np.argmin(arr))}")
     return arr
 
 
-def symmetric_points(centres: np.ndarray, owner: np.ndarray, x: np.ndarray, y: np.ndarray,
-                     octants: bool) -> tuple[np.ndarray, np.ndarray]:
+def symmetric_points(
+    centres: np.ndarray, owner: np.ndarray, x: np.ndarray, y: np.ndarray, octants: bool
+) -> tuple[np.ndarray, np.ndarray]:
     """Absolute pixel coordinates of the 4 (quadrant) or 8 (octant) symmetric images of each point."""
     cx, cy = centres[owner, 0], centres[owner, 1]
     pairs = [(x, y), (-x, y), (x, -y), (-x, -y)]
@@ -227,8 +230,9 @@ def symmetric_points(centres: np.ndarray, owner: np.ndarray, x: np.ndarray, y: n
     return px, py
 
 
-def symmetric_spans(centres: np.ndarray, owner: np.ndarray, x: np.ndarray, y: np.ndarray,
-                    octants: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def symmetric_spans(
+    centres: np.ndarray, owner: np.ndarray, x: np.ndarray, y: np.ndarray, octants: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Row spans (row, x_start, x_end exclusive) joining each row's symmetric outline pixels."""
     cx, cy = centres[owner, 0], centres[owner, 1]
     rows = [cy + y, cy - y]

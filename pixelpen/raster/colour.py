@@ -200,4 +200,4 @@ def rgb565_to_rgb888(values: ArrayLike) -> np.ndarray:
         for channel, shift, bits in ((0, 11, 5), (1, 5, 6), (2, 0, 5)):
             field = ((part >> shift) & ((1 << bits) - 1)).astype(np.uint8)
             np.copyto(rgb[:, channel], (field << (8 - bits)) | (field >> (2 * bits - 8)))
-    return out.reshape(v.shape + (3,))
+    return out.reshape((*v.shape, 3))

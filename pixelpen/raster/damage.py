@@ -67,12 +67,17 @@ class Rect(NamedTuple):
         """Grown outwards to multiples (e.g. 8 rows for SSD1306 pages), clipped to width x height."""
         if x_multiple < 1 or y_multiple < 1:
             raise ConfigError(f"alignment multiples must be >= 1, found {x_multiple}, {y_multiple}")
-        return Rect(self.x0 - self.x0 % x_multiple, self.y0 - self.y0 % y_multiple,
-                    min(-(-self.x1 // x_multiple) * x_multiple, width), min(-(-self.y1 // y_multiple) * y_multiple, height))
+        return Rect(
+            self.x0 - self.x0 % x_multiple,
+            self.y0 - self.y0 % y_multiple,
+            min(-(-self.x1 // x_multiple) * x_multiple, width),
+            min(-(-self.y1 // y_multiple) * y_multiple, height),
+        )
 
 
-def merge_rects(rects: Iterable[Rect], merge_cost: float, bytes_per_pixel: float,
-                max_count: int | None = None) -> list[Rect]:
+def merge_rects(
+    rects: Iterable[Rect], merge_cost: float, bytes_per_pixel: float, max_count: int | None = None
+) -> list[Rect]:
     """Greedy cost-model merge (cheapest pair first) while a merge saves bytes or more than max_count remain."""
     boxes = np.array([tuple(r) for r in rects if r.area > 0], dtype=np.int64).reshape(-1, 4)
     while boxes.shape[0] > 1:
@@ -96,8 +101,9 @@ def merge_rects(rects: Iterable[Rect], merge_cost: float, bytes_per_pixel: float
 class DamageTracker:
     """Collects the bounding boxes of drawing operations on a width x height canvas."""
 
-    def __init__(self, width: int, height: int, merge_cost: float = DEFAULT_MERGE_COST,
-                 bytes_per_pixel: float = 1.0) -> None:
+    def __init__(
+        self, width: int, height: int, merge_cost: float = DEFAULT_MERGE_COST, bytes_per_pixel: float = 1.0
+    ) -> None:
         if not (isinstance(merge_cost, (int, float)) and merge_cost >= 0):
             raise ConfigError(f"merge_cost must be a number of bytes >= 0, found {merge_cost!r}")
         if not (isinstance(bytes_per_pixel, (int, float)) and bytes_per_pixel > 0):
@@ -145,22 +151,30 @@ def _tile_size(tile: int | tuple[int, int]) -> tuple[int, int]:
     return int(tw), int(th)
 
 
-def tile_damage(current: np.ndarray, previous: np.ndarray, tile: int | tuple[int, int] = 16,
-                merge_cost: float = DEFAULT_MERGE_COST, bytes_per_pixel: float = 1.0) -> list[Rect]:
+def tile_damage(
+    current: np.ndarray,
+    previous: np.ndarray,
+    tile: int | tuple[int, int] = 16,
+    merge_cost: float = DEFAULT_MERGE_COST,
+    bytes_per_pixel: float = 1.0,
+) -> list[Rect]:
     """Tile-aligned rectangles (clipped to the frame) covering every pixel where the two frames differ.
 
     Vectorised: one comparison, ``logical_or.reduceat`` over tile rows and columns, then runs of changed
     tiles per tile row, merged by the cost model.
     """
     if current.shape != previous.shape or current.dtype != previous.dtype:
-        raise ConfigError(f"previous frame is {previous.shape} {previous.dtype}, the canvas is {current.shape} {current.dtype}")
+        raise ConfigError(
+            f"previous frame is {previous.shape} {previous.dtype}, the canvas is {current.shape} {current.dtype}"
+        )
     tw, th = _tile_size(tile)
     height, width = current.shape[:2]
     diff = current != previous
     if diff.ndim == 3:
         diff = diff.any(axis=2)
-    changed = np.logical_or.reduceat(np.logical_or.reduceat(diff, np.arange(0, height, th), axis=0),
-                                     np.arange(0, width, tw), axis=1)
+    changed = np.logical_or.reduceat(
+        np.logical_or.reduceat(diff, np.arange(0, height, th), axis=0), np.arange(0, width, tw), axis=1
+    )
     return merge_rects(_tile_runs(changed, tw, th, width, height), merge_cost, bytes_per_pixel, _MAX_PENDING)
 
 
@@ -172,7 +186,9 @@ def _tile_runs(changed: np.ndarray, tw: int, th: int, width: int, height: int) -
     """
     rows, starts, ends = _runs(changed)
     if rows.size > _MAX_PENDING:
-        rows, starts, ends = _runs(np.maximum.accumulate(changed, axis=1) & np.maximum.accumulate(changed[:, ::-1], axis=1)[:, ::-1])
+        rows, starts, ends = _runs(
+            np.maximum.accumulate(changed, axis=1) & np.maximum.accumulate(changed[:, ::-1], axis=1)[:, ::-1]
+        )
     order = np.lexsort((rows, ends, starts))
     rows, starts, ends = rows[order], starts[order], ends[order]
     new = np.ones(rows.shape[0], dtype=bool)
@@ -181,8 +197,10 @@ def _tile_runs(changed: np.ndarray, tw: int, th: int, width: int, height: int) -
     first = rows[new]
     last = np.zeros_like(first)
     last[group] = rows
-    return [Rect(int(a) * tw, int(r0) * th, min(int(b) * tw, width), min((int(r1) + 1) * th, height))
-            for a, b, r0, r1 in zip(starts[new], ends[new], first, last)]
+    return [
+        Rect(int(a) * tw, int(r0) * th, min(int(b) * tw, width), min((int(r1) + 1) * th, height))
+        for a, b, r0, r1 in zip(starts[new], ends[new], first, last, strict=False)
+    ]
 
 
 def _runs(changed: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

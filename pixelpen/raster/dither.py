@@ -155,14 +155,14 @@ def _diffuse(pixels: np.ndarray, choose: Chooser, label_shape: tuple[int, ...]) 
     independent of the order they are added in, so the result is exactly the sequential one.
     """
     h, w, c = pixels.shape
-    labels = np.zeros((h, w + 2) + label_shape, dtype=np.int64)
+    labels = np.zeros((h, w + 2, *label_shape), dtype=np.int64)
     if h == 0 or w == 0:
         return labels[:, 1:-1]
     stride = w + 2
     source = np.zeros((h, stride, c), dtype=np.int64)
     source[:, 1:-1] = pixels
     source = source.reshape(-1, c)
-    flat_labels = labels.reshape((-1,) + label_shape)
+    flat_labels = labels.reshape((-1, *label_shape))
     errors = np.zeros(((h + 1) * stride, c), dtype=np.int64)
     offsets = (1, stride - 1, stride, stride + 1)  # right, below-left, below, below-right
     weights = np.array([7, 3, 5, 1]).reshape(4, 1, 1)

@@ -169,7 +169,7 @@ def as_uint8_image(array: ArrayLike, what: str = "this operation") -> np.ndarray
 def as_rgb_image(array: ArrayLike, what: str = "this operation") -> np.ndarray:
     """An RGB, grey or bitmap image as HxWx3 uint8 RGB (grey is broadcast, not copied)."""
     arr = as_uint8_image(array, what)
-    return arr if arr.ndim == 3 else np.broadcast_to(arr[..., None], arr.shape + (3,))
+    return arr if arr.ndim == 3 else np.broadcast_to(arr[..., None], (*arr.shape, 3))
 
 
 def _lit(view: np.ndarray, kind: str) -> np.ndarray:
@@ -209,7 +209,7 @@ def _reordered(pixels: np.ndarray, order: tuple[int, ...], pad: int | None = Non
 
     Channel by channel (np.copyto): several times faster than copying a ``[..., ::-1]`` view.
     """
-    out = np.empty(pixels.shape[:2] + (len(order) + (pad is not None),), dtype=np.uint8)
+    out = np.empty((*pixels.shape[:2], len(order) + (pad is not None)), dtype=np.uint8)
     for i, channel in enumerate(order):
         np.copyto(out[..., i], pixels[..., channel])
     if pad is not None:

@@ -130,7 +130,7 @@ def _apply_axis(values: np.ndarray, weights: sparse.csr_matrix, axis: int) -> np
     """Resample float ``values`` along axis 0 or 1 with a (dst, src) weight matrix."""
     moved = np.moveaxis(values, axis, 0)
     flat = moved.reshape(moved.shape[0], -1)
-    out = np.asarray(weights @ flat).reshape((weights.shape[0],) + moved.shape[1:])
+    out = np.asarray(weights @ flat).reshape((weights.shape[0], *moved.shape[1:]))
     return np.moveaxis(out, 0, axis)
 
 
@@ -362,7 +362,7 @@ def _layer(item: Layer | Sequence[object], position: int) -> tuple[Layer, np.nda
     if not isinstance(layer.z, (int, float, np.integer, np.floating)) or not math.isfinite(layer.z):
         raise ConfigError(f"layer {position}: z must be a finite number, found {layer.z!r}")
     alpha = (arr[..., 3] / 255.0 if arr.shape[2] == 4 else np.ones(arr.shape[:2])) * layer.opacity
-    rgba = np.empty(arr.shape[:2] + (4,))
+    rgba = np.empty((*arr.shape[:2], 4))
     rgba[..., :3] = arr[..., :3] / 255.0 * alpha[..., None]
     rgba[..., 3] = alpha
     return layer, rgba

@@ -42,7 +42,7 @@ _MAX_RUN = 2 * _CHUNK
 def int_args(values: tuple[object, ...], what: str) -> list[int]:
     """The arguments as Python ints, or ConfigError naming the one that is not integral."""
     out = []
-    for name, v in zip(("x0", "y0", "x1", "y1", "xc", "yc", "r"), values):
+    for name, v in zip(("x0", "y0", "x1", "y1", "xc", "yc", "r"), values, strict=False):
         try:
             iv = int(v)  # type: ignore[call-overload]
         except (TypeError, ValueError, OverflowError):
@@ -273,14 +273,28 @@ class LineRuns:
             mask = np.zeros((self.width, self.height), dtype=np.uint8)
             _scatter_fast(mask.reshape(-1), _subset(self, steep_runs), precise[steep_runs], np.uint8(1))
             where = mask.T.view(bool)
-            np.copyto(target, np.asarray(value, dtype=target.dtype), where=where[..., None] if target.ndim == 3 else where)
+            mask = where[..., None] if target.ndim == 3 else where
+            np.copyto(target, np.asarray(value, dtype=target.dtype), where=mask)
 
 
 def _subset(runs: LineRuns, pick: np.ndarray) -> LineRuns:
     """The runs selected by the index array ``pick``."""
-    fields = {name: getattr(runs, name)[pick] for name in (
-        "segment", "steep", "major_start", "minor_start", "step_major", "step_minor", "major", "minor", "phase",
-        "count", "first")}
+    fields = {
+        name: getattr(runs, name)[pick]
+        for name in (
+            "segment",
+            "steep",
+            "major_start",
+            "minor_start",
+            "step_major",
+            "step_minor",
+            "major",
+            "minor",
+            "phase",
+            "count",
+            "first",
+        )
+    }
     return LineRuns(width=runs.width, height=runs.height, **fields)
 
 
@@ -310,7 +324,7 @@ def _schedule(key: np.ndarray, count: np.ndarray) -> list[tuple[int, int, int]]:
     group, part = ragged(pieces)
     lo = starts[group] + part * per[group]
     hi = np.minimum(lo + per[group], ends[group])
-    return list(zip(lo.tolist(), hi.tolist(), count[lo].tolist()))
+    return list(zip(lo.tolist(), hi.tolist(), count[lo].tolist(), strict=False))
 
 
 def _scatter_fast(plane: np.ndarray, runs: LineRuns, precise: np.ndarray, value: object) -> None:
@@ -356,15 +370,23 @@ def _scatter_fast(plane: np.ndarray, runs: LineRuns, precise: np.ndarray, value:
         plane[idx] = value
 
 
-def _clip_parameters(p0: np.ndarray, p1: np.ndarray, lo: np.ndarray, hi: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _clip_parameters(
+    p0: np.ndarray, p1: np.ndarray, lo: np.ndarray, hi: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Liang–Barsky parameters (t0, t1, keep) of each segment p0-p1 inside the box lo..hi (geometry's clipper)."""
     cols = np.stack([p0[:, 0], p0[:, 1], p1[:, 0], p1[:, 1]])
     return liang_barsky_parameters(cols, (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1])))
 
 
-def stroke_triangles(segments: np.ndarray, width: int, cap: str, canvas_width: int, canvas_height: int,
-                     dash: tuple[np.ndarray, int] | None = None, phase: np.ndarray | None = None) -> np.ndarray:
+def stroke_triangles(
+    segments: np.ndarray,
+    width: int,
+    cap: str,
+    canvas_width: int,
+    canvas_height: int,
+    dash: tuple[np.ndarray, int] | None = None,
+    phase: np.ndarray | None = None,
+) -> np.ndarray:
     """(M, 3, 2) triangles outlining thick segments (see ``Canvas.lines``); clipped near the canvas first.
 
     Each (piece of a) segment becomes a rectangle ``width`` wide (two triangles), extended by width/2 for

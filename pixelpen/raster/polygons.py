@@ -72,7 +72,9 @@ def as_polygons(polygons: object) -> list[list[np.ndarray]]:
     if arr is not None and arr.ndim == 3:
         return [[_ring(arr[i], f"polygon {i} ring 0")] for i in range(arr.shape[0])]
     if not isinstance(polygons, Sequence) or isinstance(polygons, (str, bytes)):
-        raise ConfigError(f"polygons must be a ring, an (M, N, 2) array or a list of polygons, found {type(polygons).__name__}")
+        raise ConfigError(
+            f"polygons must be a ring, an (M, N, 2) array or a list of polygons, found {type(polygons).__name__}"
+        )
     out = []
     for i, poly in enumerate(polygons):
         try:
@@ -100,15 +102,17 @@ def _row_range(y_top: np.ndarray, y_bottom: np.ndarray, height: int) -> tuple[np
     return np.clip(first, 0, height).astype(np.int64), np.clip(end, 0, height).astype(np.int64)
 
 
-def _crossing(x_top: np.ndarray, y_top: np.ndarray, dx: np.ndarray, dy: np.ndarray, row: np.ndarray,
-              width: int) -> np.ndarray:
+def _crossing(
+    x_top: np.ndarray, y_top: np.ndarray, dx: np.ndarray, dy: np.ndarray, row: np.ndarray, width: int
+) -> np.ndarray:
     """First pixel column right of (or on) an edge at a scanline, clamped to 0..width (exact, see module)."""
     num = x_top * dy + (row * SUBPIXEL - y_top) * dx
     return np.clip(np.ceil(num / (dy * SUBPIXEL)), 0, width).astype(np.int64)
 
 
-def polygon_spans(polygons: object, width: int, height: int, rule: str = "evenodd"
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def polygon_spans(
+    polygons: object, width: int, height: int, rule: str = "evenodd"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Filled spans (row, x_start, x_end exclusive) of polygons on a width x height canvas."""
     if rule not in RULES:
         raise ConfigError(f"unknown fill rule {rule!r}: use one of {', '.join(RULES)}")
@@ -167,7 +171,9 @@ def as_triangles(tris: ArrayLike) -> np.ndarray:
     bad = ~np.isfinite(arr).all(axis=(1, 2)) | (np.abs(arr) > VERTEX_LIMIT).any(axis=(1, 2))
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
-        raise ConfigError(f"triangle {i} {arr[i].tolist()} has a vertex that is not finite or beyond ±{VERTEX_LIMIT} px")
+        raise ConfigError(
+            f"triangle {i} {arr[i].tolist()} has a vertex that is not finite or beyond ±{VERTEX_LIMIT} px"
+        )
     return arr
 
 
@@ -197,16 +203,28 @@ def triangle_cells(tris: ArrayLike, width: int, height: int) -> tuple[np.ndarray
         return empty, empty
     live = live[np.argsort(count[live], kind="stable")]
     count, r0, b_left = count[live], r0[live].astype(np.float64), b_left[live]
-    inside = ((np.minimum(top_s[live, 0], bot_s[live, 0]) >= 0) & (np.maximum(top_s[live, 0], bot_s[live, 0]) <= width * SUBPIXEL)
-              & (np.minimum(top_l[live, 0], bot_l[live, 0]) >= 0) & (np.maximum(top_l[live, 0], bot_l[live, 0]) <= width * SUBPIXEL))
+    inside = (
+        (np.minimum(top_s[live, 0], bot_s[live, 0]) >= 0)
+        & (np.maximum(top_s[live, 0], bot_s[live, 0]) <= width * SUBPIXEL)
+        & (np.minimum(top_l[live, 0], bot_l[live, 0]) >= 0)
+        & (np.maximum(top_l[live, 0], bot_l[live, 0]) <= width * SUBPIXEL)
+    )
     edges = []
     for top, bottom in ((top_s[live], bot_s[live]), (top_l[live], bot_l[live])):
         dx, dy = bottom[:, 0] - top[:, 0], bottom[:, 1] - top[:, 1]
         n0 = top[:, 0] * dy + (r0 * SUBPIXEL - top[:, 1]) * dx
         edges.append((n0[:, None], (dx * SUBPIXEL)[:, None], (dy * SUBPIXEL)[:, None]))
     (sn, ss, sd), (ln, lstep, ld) = edges
-    left = [np.where(b_left, sn[:, 0], ln[:, 0]), np.where(b_left, ss[:, 0], lstep[:, 0]), np.where(b_left, sd[:, 0], ld[:, 0])]
-    right = [np.where(b_left, ln[:, 0], sn[:, 0]), np.where(b_left, lstep[:, 0], ss[:, 0]), np.where(b_left, ld[:, 0], sd[:, 0])]
+    left = [
+        np.where(b_left, sn[:, 0], ln[:, 0]),
+        np.where(b_left, ss[:, 0], lstep[:, 0]),
+        np.where(b_left, sd[:, 0], ld[:, 0]),
+    ]
+    right = [
+        np.where(b_left, ln[:, 0], sn[:, 0]),
+        np.where(b_left, lstep[:, 0], ss[:, 0]),
+        np.where(b_left, ld[:, 0], sd[:, 0]),
+    ]
     left = [x[:, None] for x in left]
     right = [x[:, None] for x in right]
     row_base = (r0 * (width + 1))[:, None]
@@ -215,12 +233,14 @@ def triangle_cells(tris: ArrayLike, width: int, height: int) -> tuple[np.ndarray
     cum = np.cumsum(count)
     bounds = np.searchsorted(cum, np.arange(_CHUNK, int(cum[-1]) + _CHUNK, _CHUNK), side="right")
     bounds = np.unique(np.concatenate(([0], np.minimum(bounds + 1, live.size), [live.size])))
-    total = int(sum(int(count[hi - 1]) * (hi - lo) for lo, hi in zip(bounds[:-1].tolist(), bounds[1:].tolist())))
+    total = int(
+        sum(int(count[hi - 1]) * (hi - lo) for lo, hi in zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=False))
+    )
     starts = np.empty(total, dtype=np.int64)
     ends = np.empty(total, dtype=np.int64)
     pos = 0
     steps = np.arange(int(count[-1]), dtype=np.float64)
-    for lo, hi in zip(bounds[:-1].tolist(), bounds[1:].tolist()):
+    for lo, hi in zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=False):
         rows = int(count[hi - 1])
         size = (hi - lo) * rows
         j = steps[:rows]
@@ -236,7 +256,7 @@ def triangle_cells(tris: ArrayLike, width: int, height: int) -> tuple[np.ndarray
             if clip:
                 np.clip(x, 0, width, out=x)
             x += base
-            np.copyto(out[pos:pos + size].reshape(hi - lo, rows), x, casting="unsafe")
+            np.copyto(out[pos : pos + size].reshape(hi - lo, rows), x, casting="unsafe")
         pos += size
     return starts, ends
 
@@ -271,8 +291,9 @@ def paint_cells(target: np.ndarray, starts: np.ndarray, ends: np.ndarray, value:
     target[first:last][mask] = value
 
 
-def paint_spans(target: np.ndarray, row: np.ndarray, start: np.ndarray, end: np.ndarray,
-                value: object) -> tuple[int, int, int, int] | None:
+def paint_spans(
+    target: np.ndarray, row: np.ndarray, start: np.ndarray, end: np.ndarray, value: object
+) -> tuple[int, int, int, int] | None:
     """Set the union of spans (row, start..end−1, already clipped to the canvas) to value; return its bbox.
 
     Few pixels: expanded and scattered directly; many: a row-wise difference array over the spans'

@@ -208,7 +208,7 @@ def _resolve_overlaps(p0: np.ndarray, p1: np.ndarray, group: np.ndarray, tol: fl
         _paint_line(members, t0[members], t1[members], p0, p1, tol, keep, pieces)
     if not pieces:
         return keep, empty
-    idx, pos, a, b = zip(*pieces)
+    idx, pos, a, b = zip(*pieces, strict=False)
     return keep, (np.asarray(idx, np.int64), np.asarray(pos), np.asarray(a), np.asarray(b))
 
 
@@ -260,7 +260,7 @@ def _paint_line(members, t0, t1, p0, p1, tol, keep, pieces) -> None:
         # runs of stretches this segment still draws, as sub-segments in its own direction
         edges = np.diff(np.concatenate([[0], mine.astype(np.int8), [0]]))
         run_starts, run_stops = np.flatnonzero(edges == 1) + ilo[k], np.flatnonzero(edges == -1) + ilo[k]
-        for r0, r1 in zip(run_starts.tolist(), run_stops.tolist()):
+        for r0, r1 in zip(run_starts.tolist(), run_stops.tolist(), strict=False):
             a = lo_pt[k] if r0 == ilo[k] else rep_pts[r0]
             b = hi_pt[k] if r1 == ihi[k] else rep_pts[r1]
             start, stop = (a, b) if t1[k] >= t0[k] else (b, a)

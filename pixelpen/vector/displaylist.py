@@ -37,7 +37,9 @@ class DisplayList:
         self.pens = np.asarray(self.pens, dtype=np.int32).reshape(-1)
         self.layers = np.asarray(self.layers, dtype=np.int32).reshape(-1)
         if n < 0 or self.offsets[0] != 0 or self.offsets[-1] != len(self.points) or np.any(np.diff(self.offsets) < 1):
-            raise ConfigError("display list offsets must start at 0, end at the point count and give each stroke >= 1 point")
+            raise ConfigError(
+                "display list offsets must start at 0, end at the point count and give each stroke >= 1 point"
+            )
         if len(self.pens) != n or len(self.layers) != n:
             raise ConfigError(f"display list has {n} strokes but {len(self.pens)} pens and {len(self.layers)} layers")
         if self.page is not None:
@@ -66,8 +68,12 @@ class DisplayList:
         lengths = np.array([len(polys[i]) for i in keep], dtype=np.int64)
         offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
         points = np.concatenate([polys[i] for i in keep]) if keep else np.zeros((0, 2))
-        pen_arr = np.broadcast_to(np.asarray(pens, dtype=np.int32), (len(polys),))[keep] if polys else np.zeros(0, np.int32)
-        layer_arr = np.broadcast_to(np.asarray(layers, dtype=np.int32), (len(polys),))[keep] if polys else np.zeros(0, np.int32)
+        pen_arr = (
+            np.broadcast_to(np.asarray(pens, dtype=np.int32), (len(polys),))[keep] if polys else np.zeros(0, np.int32)
+        )
+        layer_arr = (
+            np.broadcast_to(np.asarray(layers, dtype=np.int32), (len(polys),))[keep] if polys else np.zeros(0, np.int32)
+        )
         return cls(points, offsets, pen_arr, layer_arr, dict(layer_names or {}), unit_mm, dict(pen_colours or {}), page)
 
     def __len__(self) -> int:
@@ -137,8 +143,13 @@ class DisplayList:
         src_len = lengths[stroke_of_point]
         idx = np.where(rev[stroke_of_point], src_start + src_len - 1 - k, src_start + k)
         return replace(
-            self, points=self.points[idx], offsets=new_offsets, pens=self.pens[order], layers=self.layers[order],
-            layer_names=dict(self.layer_names), pen_colours=dict(self.pen_colours),
+            self,
+            points=self.points[idx],
+            offsets=new_offsets,
+            pens=self.pens[order],
+            layers=self.layers[order],
+            layer_names=dict(self.layer_names),
+            pen_colours=dict(self.pen_colours),
         )
 
     def select(self, mask: np.ndarray) -> DisplayList:
@@ -158,8 +169,13 @@ class DisplayList:
             colours.update(d.pen_colours)
         pts = np.concatenate([d.points for d in lists])
         base = np.cumsum([0] + [len(d.points) for d in lists[:-1]])
-        offsets = np.concatenate([[0]] + [d.offsets[1:] + b for d, b in zip(lists, base)])
+        offsets = np.concatenate([[0]] + [d.offsets[1:] + b for d, b in zip(lists, base, strict=False)])
         return replace(
-            lists[0], points=pts, offsets=offsets, pens=np.concatenate([d.pens for d in lists]),
-            layers=np.concatenate([d.layers for d in lists]), layer_names=names, pen_colours=colours,
+            lists[0],
+            points=pts,
+            offsets=offsets,
+            pens=np.concatenate([d.pens for d in lists]),
+            layers=np.concatenate([d.layers for d in lists]),
+            layer_names=names,
+            pen_colours=colours,
         )

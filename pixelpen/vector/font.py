@@ -62,7 +62,9 @@ class TextExtent(NamedTuple):
 def decode_glyph(code: str, source: str = "glyph", line: int | None = None) -> Glyph:
     """Decode one glyph in the Hershey character-pair encoding (``ord(c) - ord('R')``, ``" R"`` = pen up)."""
     if len(code) < 2 or len(code) % 2:
-        raise ParseError("a Hershey glyph needs an even number (>= 2) of characters", source=source, line=line, token=code)
+        raise ParseError(
+            "a Hershey glyph needs an even number (>= 2) of characters", source=source, line=line, token=code
+        )
     if not all(" " <= ch <= "~" for ch in code):
         raise ParseError("a Hershey glyph holds printable ASCII characters only", source=source, line=line, token=code)
     vals = np.frombuffer(code.encode("ascii"), dtype=np.uint8).astype(np.int64) - ord("R")
@@ -94,14 +96,21 @@ def parse_fonts(text: str, source: str = FONT_FILE, first_line: int = 1) -> dict
         if line.startswith("font "):
             parts = line.split(" ", 5)
             if len(parts) < 5:
-                raise ParseError("a font line reads 'font NAME cap=C base=B bottom=D DESCRIPTION'", source=source, line=number, token=line)
+                raise ParseError(
+                    "a font line reads 'font NAME cap=C base=B bottom=D DESCRIPTION'",
+                    source=source,
+                    line=number,
+                    token=line,
+                )
             metrics = {}
             for item in parts[2:5]:
                 key, _, value = item.partition("=")
                 try:
                     metrics[key] = int(value)
                 except ValueError:
-                    raise ParseError(f"font metric {key!r} must be an integer", source=source, line=number, token=item) from None
+                    raise ParseError(
+                        f"font metric {key!r} must be an integer", source=source, line=number, token=item
+                    ) from None
             if set(metrics) != {"cap", "base", "bottom"} or not metrics["cap"] < metrics["base"] <= metrics["bottom"]:
                 raise ParseError("a font needs cap < base <= bottom", source=source, line=number, token=line)
             current = {"name": parts[1], "description": parts[5] if len(parts) > 5 else "", **metrics, "glyphs": {}}
@@ -115,7 +124,9 @@ def parse_fonts(text: str, source: str = FONT_FILE, first_line: int = 1) -> dict
         try:
             char = chr(int(hexcode, 16))
         except (ValueError, OverflowError):
-            raise ParseError("a glyph line starts with a hex code point", source=source, line=number, token=hexcode) from None
+            raise ParseError(
+                "a glyph line starts with a hex code point", source=source, line=number, token=hexcode
+            ) from None
         if not sep:
             raise ParseError("a glyph line reads 'XXXX GLYPH'", source=source, line=number, token=line)
         current["glyphs"][char] = decode_glyph(code, source, number)
@@ -138,7 +149,7 @@ def _shipped_sections() -> dict[str, tuple[int, str]]:
     starts = [i for i, line in enumerate(lines) if line.startswith("font ")]
     return {
         lines[a].split(" ", 2)[1]: (a + 1, "\n".join(lines[a:b]))
-        for a, b in zip(starts, starts[1:] + [len(lines)])
+        for a, b in zip(starts, [*starts[1:], len(lines)], strict=False)
     }
 
 
@@ -162,7 +173,7 @@ def _replacement(font: Font) -> Glyph:
     half = font.cap_height // 3
     c, b = font.cap, font.base
     box = [[-half, b], [half, b], [half, c], [-half, c], [-half, b], [half, c]]
-    pts = np.array(box + [[half, b], [-half, c]], dtype=np.float64)
+    pts = np.array([*box, [half, b], [-half, c]], dtype=np.float64)
     return Glyph(-half - 4, half + 4, pts, np.array([0, 6, 8], dtype=np.int64))
 
 
@@ -191,7 +202,8 @@ def _layout(text: str, font: Font, spacing: float) -> _Layout:
     if missing:
         log.warning(
             "font %s has no glyph for %s; drawn as a box",
-            font.name, ", ".join(f"{c!r} (U+{ord(c):04X})" for c in sorted(missing)),
+            font.name,
+            ", ".join(f"{c!r} (U+{ord(c):04X})" for c in sorted(missing)),
         )
     advance = np.array([g.right - g.left for g in glyphs], dtype=np.float64) * spacing
     line_arr = np.array(line_of, dtype=np.int64)
@@ -276,7 +288,9 @@ def text_strokes(
     local[:, 1] += -layout.line_of[owner] * line_spacing * height + y_shift
     world = geo.apply(geo.place(position, angle), local)
     point_base = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    cuts = np.concatenate([g.offsets[1:-1] + b for g, b in zip(layout.glyphs, point_base)] + [point_base[1:]])
+    cuts = np.concatenate(
+        [g.offsets[1:-1] + b for g, b in zip(layout.glyphs, point_base, strict=False)] + [point_base[1:]]
+    )
     return [s for s in np.split(world, np.unique(cuts)) if len(s)]
 
 

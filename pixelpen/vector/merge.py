@@ -45,7 +45,7 @@ def link_ends(n: int, p: np.ndarray, q: np.ndarray, gap: np.ndarray, reverse: bo
     lo_list, hi_list = (key[order] // (2 * n)).tolist(), (key[order] % (2 * n)).tolist()
     link = [-1] * (2 * n)
     parent = list(range(n))
-    for a, b in zip(lo_list, hi_list):
+    for a, b in zip(lo_list, hi_list, strict=False):
         if link[a] >= 0 or link[b] >= 0:
             continue
         ra, rb = a >> 1, b >> 1

@@ -101,13 +101,18 @@ def order_paths(
     :data:`AUTO_BUDGET_MAX_S`) and kicks follow while the call is within :func:`auto_budget` of the stroke
     count. With a ``profile`` a hop costs its pen-up travel time under the profile's motion limits instead of
     its length. Groups (see :func:`stroke_groups`) keep their order. The result never has more pen-up travel,
-    nor with a profile more pen-up time, than the input's strokes taken group by group in their given order, which is the
-    input itself whenever its layers and pens already come in runs.
+    nor with a profile more pen-up time, than the input's strokes taken group by group in their given order,
+    which is the input itself whenever its layers and pens already come in runs.
     """
-    if time_budget is not None and (isinstance(time_budget, bool) or not isinstance(time_budget, (int, float))
-                                    or not time_budget >= 0 or not math.isfinite(time_budget)):
-        raise ConfigError(f"order_paths: time_budget must be None or a finite number of seconds >= 0, "
-                          f"got {time_budget!r}")
+    if time_budget is not None and (
+        isinstance(time_budget, bool)
+        or not isinstance(time_budget, (int, float))
+        or not time_budget >= 0
+        or not math.isfinite(time_budget)
+    ):
+        raise ConfigError(
+            f"order_paths: time_budget must be None or a finite number of seconds >= 0, got {time_budget!r}"
+        )
     home_xy = np.asarray(home, dtype=np.float64).reshape(-1)
     if home_xy.shape != (2,) or not np.all(np.isfinite(home_xy)):
         raise ConfigError(f"order_paths: home must be a finite (x, y) pair, got {home!r}")
@@ -136,8 +141,9 @@ def order_paths(
     order = np.concatenate(order_parts)
     flips = np.concatenate(flip_parts)
     given = np.concatenate(groups)
-    if _worse_than((starts[order], ends[order], flips), (starts[given], ends[given], np.zeros(len(dl), bool)),
-                   home_xy, cost_scalar):
+    if _worse_than(
+        (starts[order], ends[order], flips), (starts[given], ends[given], np.zeros(len(dl), bool)), home_xy, cost_scalar
+    ):
         order, flips = given, None
     return dl.reordered(order, flips)
 
@@ -147,6 +153,7 @@ def _worse_than(candidate, baseline, home: np.ndarray, cost_scalar) -> bool:
 
     Each is (starts, ends, reversed) of strokes in plotting order.
     """
+
     def hops(starts, ends, rev):
         entry, exit_ = np.where(rev[:, None], ends, starts), np.where(rev[:, None], starts, ends)
         return np.hypot(*(entry - np.vstack([home[None], exit_[:-1]])).T)
@@ -420,7 +427,7 @@ def _local_search(xy, home, entries, nb, dist, reverse, deadlines, cost_scalar, 
                                 return gain
                     if x == HIN:
                         break
-            if q == HOUT or q == HIN:
+            if q in (HOUT, HIN):
                 break
             v = q ^ 1
         return 0.0
@@ -499,4 +506,3 @@ def _apply(cost_scalar, d: np.ndarray) -> np.ndarray:
     if cost_scalar is float:
         return np.asarray(d, dtype=np.float64)
     return cost_scalar.vector(np.asarray(d, dtype=np.float64))
-

@@ -154,17 +154,29 @@ def format_stats(stats: dict[str, Any]) -> str:
             str(entry["pen_lifts"]), str(entry["pen_changes"]), _fmt_time(entry["time"]),
         ))
     widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
-    lines = ["  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths))) for r in rows]
+    lines = [
+        "  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths, strict=True)))
+        for r in rows
+    ]
     lines.insert(1, "-" * len(lines[0]))
     lines.insert(len(lines) - 1, "-" * len(lines[0]))
     b = stats["bounds_mm"]
     extent = "empty" if b is None else f"{b[2] - b[0]:.1f} x {b[3] - b[1]:.1f} mm at ({b[0]:.1f}, {b[1]:.1f})"
     t, changes = between["time"], between["pen_changes"]
-    lines.append(f"between layers: {changes} pen change{'s' * (changes != 1)}, {between['pen_up_mm']:.1f} mm travel"
-                 + (f", {t['total_s']:.1f} s" if t else "")
-                 + (" (from home, from layer to layer, back home)" if stats["return_home"] else
-                    " (from home, from layer to layer)") + "; total = the layers + between layers")
-    lines.append(f"extent: {extent}; time estimate: " + (f"profile {stats['profile']}" if stats["profile"] else "none (no profile)"))
+    lines.append(
+        f"between layers: {changes} pen change{'s' * (changes != 1)}, {between['pen_up_mm']:.1f} mm travel"
+        + (f", {t['total_s']:.1f} s" if t else "")
+        + (
+            " (from home, from layer to layer, back home)"
+            if stats["return_home"]
+            else " (from home, from layer to layer)"
+        )
+        + "; total = the layers + between layers"
+    )
+    lines.append(
+        f"extent: {extent}; time estimate: "
+        + (f"profile {stats['profile']}" if stats["profile"] else "none (no profile)")
+    )
     return "\n".join(lines)
 
 
