@@ -30,6 +30,7 @@ MAX_FILL_LINES: Final = 50_000
 
 
 def _chord_count(sweep_deg: float, chord: float) -> int:
+    """Chords an arc of ``sweep_deg`` is drawn with at chord angle ``chord`` (HP-GL's tolerance reading)."""
     chord = abs(chord)
     if chord > 360:
         chord %= 360
@@ -40,6 +41,7 @@ def _chord_count(sweep_deg: float, chord: float) -> int:
 
 
 def _chord_param(params: tuple[float, ...], index: int) -> float:
+    """The chord-angle parameter at ``index`` (default 5 degrees)."""
     return in_range(params[index], -32768, 32767, "chord angle") if len(params) > index else 5.0
 
 
@@ -63,6 +65,7 @@ class GraphicsInstructions:
         self.pen_colours = pen_colours
 
     def _in(self, item: Instruction) -> None:
+        """IN: initialize (pen up, RO 0, graphics defaults, errors and masks cleared)."""
         m = self.machine
         m.pen_down = False
         m.pen_to(False)
@@ -78,6 +81,7 @@ class GraphicsInstructions:
         self.status.masks = (DEFAULT_E_MASK, 0, 0)
 
     def _df(self, item: Instruction) -> None:
+        """DF: default graphics state (P1/P2 and the position stay)."""
         m = self.machine
         g = m.default_graphics()
         g.p1, g.p2 = m.g.p1, m.g.p2
@@ -87,6 +91,7 @@ class GraphicsInstructions:
         self.reader.label_terminator = ETX
 
     def _ip(self, item: Instruction) -> None:
+        """IP: input P1 and P2 (none: the paper's defaults; two: P1 moves, P2 keeps the offset)."""
         m = self.machine
         params = item.params
         if not params:
@@ -102,6 +107,7 @@ class GraphicsInstructions:
         self.status.p1p2_changed = True
 
     def _sc(self, item: Instruction) -> None:
+        """SC: scale user units onto P1-P2 (none: plotter units)."""
         m = self.machine
         params = item.params
         if not params:
@@ -113,6 +119,7 @@ class GraphicsInstructions:
         m.g.scale = (xmin, xmax, ymin, ymax)
 
     def _iw(self, item: Instruction) -> None:
+        """IW: input the clipping window (none: the hard-clip limits)."""
         m = self.machine
         params = item.params
         w, h = m.logical_limits()
@@ -125,6 +132,7 @@ class GraphicsInstructions:
         m.g.window = (max(x0, 0.0), max(y0, 0.0), min(x1, float(w)), min(y1, float(h)))
 
     def _ro(self, item: Instruction) -> None:
+        """RO: rotate the coordinate system by 0 or 90 degrees."""
         m = self.machine
         params = item.params
         angle = params[0] if params else 0.0
@@ -140,6 +148,7 @@ class GraphicsInstructions:
         self.status.p1p2_changed = True
 
     def _im(self, item: Instruction) -> None:
+        """IM: input the e-, s- and p-masks."""
         params = item.params
         masks = [DEFAULT_E_MASK, 0, 0]
         for i, v in enumerate(params):
@@ -147,6 +156,7 @@ class GraphicsInstructions:
         self.status.masks = (masks[0], masks[1], masks[2])
 
     def _ps(self, item: Instruction) -> None:
+        """PS: paper size (0: A3/B, 4: A4/A)."""
         m = self.machine
         (size,) = item.params
         metric = m.paper.name in ("a4", "a3")
@@ -156,6 +166,7 @@ class GraphicsInstructions:
         m.load_paper(self.spec.papers[names[int(size)]])
 
     def _sp(self, item: Instruction) -> None:
+        """SP: select a pen from the carousel (0: put it away)."""
         m = self.machine
         params = item.params
         pen = int(params[0]) if params else 0
@@ -171,6 +182,7 @@ class GraphicsInstructions:
         m.g.dash_pos = 0.0
 
     def _vs(self, item: Instruction) -> None:
+        """VS: pen-down velocity for all pens or one (0.38 cm/s steps; the slower acceleration follows)."""
         m = self.machine
         params = item.params
         spec = self.spec
@@ -194,17 +206,20 @@ class GraphicsInstructions:
         m.g.slow_accel = True
 
     def _fs(self, item: Instruction) -> None:
+        """FS: pen force (accepted, no visible effect)."""
         params = item.params
         if params:
             in_range(params[0], 1, 8, "force")
         log.info("%s: %s accepted (pen force has no visible effect in the simulator)", self.spec.name, item)
 
     def _pt(self, item: Instruction) -> None:
+        """PT: pen thickness for solid fills (mm)."""
         m = self.machine
         params = item.params
         m.g.pen_thickness_mm = in_range(params[0], 0.1, 5.0, "pen thickness (mm)") if params else 0.3
 
     def _lt(self, item: Instruction) -> None:
+        """LT: line type and pattern length (none: solid)."""
         m = self.machine
         params = item.params
         g = m.g
@@ -221,12 +236,14 @@ class GraphicsInstructions:
         g.dash_pos = 0.0
 
     def _pa(self, item: Instruction) -> None:
+        """PA / PR: plot absolute or relative (a pair moves with the pen as it is)."""
         m = self.machine
         m.g.relative = item.mnemonic == "PR"
         if item.params:
             self._vector(item, m.pen_down)
 
     def _pu(self, item: Instruction) -> None:
+        """PU / PD: pen up or down, then move through the pairs (a bare PD leaves a dot)."""
         m = self.machine
         m.pen_down = item.mnemonic == "PD"
         if not item.params:
@@ -240,6 +257,7 @@ class GraphicsInstructions:
         self._vector(item, m.pen_down)
 
     def _vector(self, item: Instruction, draw: bool) -> None:
+        """One X,Y pair of PA/PR/PU/PD: the move, then SM's symbol if one is set."""
         m = self.machine
         x, y = item.params
         if m.g.relative:
@@ -266,6 +284,7 @@ class GraphicsInstructions:
         return np.array([m.user_to_plotter(float(a), float(b)) for a, b in zip(ux, uy, strict=True)])
 
     def _ci(self, item: Instruction) -> None:
+        """CI: circle around the pen position (the pen returns to the centre)."""
         m = self.machine
         params = item.params
         radius = coord(params[0])
@@ -281,6 +300,7 @@ class GraphicsInstructions:
         m.restore_pen(pos, down)
 
     def _aa(self, item: Instruction) -> None:
+        """AA / AR: arc around an absolute or relative centre, drawn if the pen is down."""
         m = self.machine
         params = item.params
         cx, cy = coord(params[0]), coord(params[1])
@@ -298,6 +318,7 @@ class GraphicsInstructions:
         m.g.cr_point = m.pos
 
     def _rect_corner(self, item: Instruction) -> tuple[float, float]:
+        """The opposite corner of EA/ER/RA/RR in logical plotter units."""
         m = self.machine
         x, y = (coord(v) for v in item.params)
         if item.mnemonic in ("ER", "RR"):
@@ -306,6 +327,7 @@ class GraphicsInstructions:
         return m.user_to_plotter(x, y)
 
     def _ea(self, item: Instruction) -> None:
+        """EA / ER: edge a rectangle (absolute or relative corner)."""
         m = self.machine
         x1, y1 = m.check_position(*self._rect_corner(item))
         (x0, y0), down = m.pos, m.pen_down
@@ -315,6 +337,7 @@ class GraphicsInstructions:
         m.restore_pen((x0, y0), down)
 
     def _ra(self, item: Instruction) -> None:
+        """RA / RR: fill a rectangle with the FT pattern."""
         m = self.machine
         x1, y1 = m.check_position(*self._rect_corner(item))
         (x0, y0), down = m.pos, m.pen_down
@@ -322,6 +345,7 @@ class GraphicsInstructions:
         m.restore_pen((x0, y0), down)
 
     def _wedge_ring(self, item: Instruction) -> np.ndarray:
+        """The outline of EW/WG's wedge around the pen position."""
         m = self.machine
         params = item.params
         radius = coord(params[0])
@@ -339,6 +363,7 @@ class GraphicsInstructions:
         return ring
 
     def _ew(self, item: Instruction) -> None:
+        """EW: edge a wedge."""
         m = self.machine
         ring = self._wedge_ring(item)
         pos, down = m.pos, m.pen_down
@@ -347,6 +372,7 @@ class GraphicsInstructions:
         m.restore_pen(pos, down)
 
     def _wg(self, item: Instruction) -> None:
+        """WG: fill a wedge with the FT pattern."""
         m = self.machine
         ring = self._wedge_ring(item)
         pos, down = m.pos, m.pen_down
@@ -354,6 +380,7 @@ class GraphicsInstructions:
         m.restore_pen(pos, down)
 
     def _ft(self, item: Instruction) -> None:
+        """FT: fill type, spacing and angle (none: solid bidirectional)."""
         m = self.machine
         params = item.params
         g = m.g
@@ -389,6 +416,7 @@ class GraphicsInstructions:
             m.pen_to(False)
 
     def _tl(self, item: Instruction) -> None:
+        """TL: tick lengths (percent of P2-P1), positive and negative."""
         m = self.machine
         params = item.params
         if not params:
@@ -399,6 +427,7 @@ class GraphicsInstructions:
         m.g.ticks = (tp, tn)
 
     def _xt(self, item: Instruction) -> None:
+        """XT / YT: an X or Y tick at the pen position."""
         m = self.machine
         tp, tn = m.g.ticks
         (p1x, p1y), (p2x, p2y) = m.g.p1, m.g.p2
@@ -421,6 +450,7 @@ class GraphicsInstructions:
         self.status.digitized = (x, y, int(m.pen_down))
 
     def _dc(self, item: Instruction) -> None:
+        """DC: digitize clear."""
         self.status.digitized = None
 
 

@@ -35,6 +35,7 @@ def _glyph(char: str) -> tuple[np.ndarray, ...]:
 
 
 def _h_width() -> float:
+    """Width of 'H' in the stroke font at cap height 1 (HP's character width)."""
     pts = np.concatenate(text_strokes("H", height=1.0))
     return float(pts[:, 0].max() - pts[:, 0].min())
 
@@ -67,6 +68,7 @@ class LabelInstructions:
         return w, h, math.atan2(rise, run)
 
     def _lb(self, item: Instruction) -> None:
+        """LB: draw label text character by character (CR, LF, BS, SO/SI handled)."""
         m = self.machine
         w, h, theta = self._char_frame()
         c, s = math.cos(theta), math.sin(theta)
@@ -136,13 +138,16 @@ class LabelInstructions:
             m.pen_to(True)
 
     def _dt(self, item: Instruction) -> None:
+        """DT: the label terminator (none: ETX)."""
         self.reader.label_terminator = ord(item.text) if item.text else ETX
 
     def _sm(self, item: Instruction) -> None:
+        """SM: the symbol drawn at each plotted point (none: off)."""
         m = self.machine
         m.g.symbol = item.text
 
     def _di(self, item: Instruction) -> None:
+        """DI / DR: label direction, absolute or relative to P1-P2."""
         m = self.machine
         params = item.params
         if not params:
@@ -155,6 +160,7 @@ class LabelInstructions:
         m.g.cr_point = m.pos
 
     def _si(self, item: Instruction) -> None:
+        """SI / SR: character size, absolute (cm) or relative to P1-P2 (percent)."""
         m = self.machine
         params = item.params
         if item.mnemonic == "SI":
@@ -168,11 +174,13 @@ class LabelInstructions:
             m.g.char_size = ("rel", w, h)
 
     def _sl(self, item: Instruction) -> None:
+        """SL: character slant (tangent of the angle)."""
         m = self.machine
         params = item.params
         m.g.slant = in_range(params[0], -128, 127.9999, "slant") if params else 0.0
 
     def _cp(self, item: Instruction) -> None:
+        """CP: character plot (move by spaces and lines; none: carriage return and line feed)."""
         m = self.machine
         params = item.params
         w, h, theta = self._char_frame()
@@ -193,6 +201,7 @@ class LabelInstructions:
             m.pen_to(True)
 
     def _charset(self, item: Instruction) -> None:
+        """CA / CS: designate the alternate or standard character set."""
         m = self.machine
         params = item.params
         n = int(params[0]) if params else 0
@@ -206,6 +215,7 @@ class LabelInstructions:
             log.info("%s: character set %d is drawn with the standard glyphs", self.spec.name, n)
 
     def _select_set(self, item: Instruction) -> None:
+        """SA / SS: select the alternate or standard set."""
         m = self.machine
         m.g.alternate = item.mnemonic == "SA"
 

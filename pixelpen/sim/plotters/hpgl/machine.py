@@ -153,6 +153,7 @@ class Machine:
         self.g.window = (0.0, 0.0, float(w), float(h))
 
     def default_graphics(self) -> Graphics:
+        """Graphics as IN sets them up for the current paper and rotation."""
         p1, p2 = self.default_p1p2()
         w, h = self.logical_limits()
         g = Graphics(p1=p1, p2=p2, window=(0.0, 0.0, float(w), float(h)))
@@ -161,6 +162,7 @@ class Machine:
         return g
 
     def default_p1p2(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """The paper's default P1 and P2 in the current coordinate system."""
         (ax, ay), (bx, by) = self.paper.p1, self.paper.p2
         if self.rotation == 90:
             w = self.hard_clip[0]
@@ -176,6 +178,7 @@ class Machine:
     # -- coordinates -------------------------------------------------------------------------------
 
     def logical_limits(self) -> tuple[int, int]:
+        """The hard-clip corner in the current coordinate system (RO 90 swaps the axes)."""
         w, h = self.hard_clip
         return (h, w) if self.rotation == 90 else (w, h)
 
@@ -189,11 +192,13 @@ class Machine:
         return out
 
     def to_logical(self, x: float, y: float) -> tuple[float, float]:
+        """One physical point in logical plotter units."""
         if self.rotation != 90:
             return x, y
         return y, self.hard_clip[0] - x
 
     def user_to_plotter(self, x: float, y: float) -> tuple[float, float]:
+        """User units (SC) -> logical plotter units."""
         sc = self.g.scale
         if sc is None:
             return x, y
@@ -202,6 +207,7 @@ class Machine:
         return p1x + (x - xmin) * (p2x - p1x) / (xmax - xmin), p1y + (y - ymin) * (p2y - p1y) / (ymax - ymin)
 
     def plotter_to_user(self, x: float, y: float) -> tuple[float, float]:
+        """Logical plotter units -> user units (SC)."""
         sc = self.g.scale
         if sc is None:
             return x, y
@@ -210,6 +216,7 @@ class Machine:
         return xmin + (x - p1x) * (xmax - xmin) / (p2x - p1x), ymin + (y - p1y) * (ymax - ymin) / (p2y - p1y)
 
     def user_delta(self, dx: float, dy: float) -> tuple[float, float]:
+        """A relative move in user units -> plotter units."""
         sc = self.g.scale
         if sc is None:
             return dx, dy
@@ -218,11 +225,13 @@ class Machine:
         return dx * (p2x - p1x) / (xmax - xmin), dy * (p2y - p1y) / (ymax - ymin)
 
     def check_position(self, x: float, y: float) -> tuple[float, float]:
+        """HP-GL error 6 for a position outside the numeric range; the position otherwise."""
         if not (math.isfinite(x) and math.isfinite(y)) or max(abs(x), abs(y)) > 32768:
             raise HPGLError(6, f"position {x:.1f},{y:.1f} is outside the plotter's -32768..32767 range")
         return x, y
 
     def p1p2_diagonal(self) -> float:
+        """Length of the P1-P2 diagonal (plotter units)."""
         (p1x, p1y), (p2x, p2y) = self.g.p1, self.g.p2
         return math.hypot(p2x - p1x, p2y - p1y)
 
@@ -250,6 +259,7 @@ class Machine:
         return v * per_cm, a * per_cm
 
     def pen_to(self, down: bool) -> None:
+        """Lift or lower the pen if it is not there already (a timed motion)."""
         if self.phys_down != down:
             if down and not self.pen:
                 log.warning("%s: pen down with no pen in the holder (select one with SP): nothing is inked",

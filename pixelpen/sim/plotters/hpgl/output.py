@@ -141,6 +141,7 @@ class Interface:
             self._send_ack()
 
     def _enquiry(self) -> None:
+        """The ENQ character arrived: acknowledge now if there is room, else once there is."""
         link = self.link
         if link.mode == 1 and link.xoff:  # ESC.N immediate response string goes out at once
             self._send(link.xoff)
@@ -152,6 +153,7 @@ class Interface:
     # -- the sending side ----------------------------------------------------------------------------
 
     def _send_ack(self) -> None:
+        """The ENQ acknowledgement (echoed with the terminator in ESC.H mode)."""
         link = self.link
         if link.mode == 1:
             self._queue(link.ack + link.terminator, trigger=True, echo=True, reply=False)
@@ -164,6 +166,7 @@ class Interface:
             self._outputs.append(_Output(self._now(), data, False, False, False))
 
     def _queue(self, data: bytes, *, trigger: bool, echo: bool, reply: bool) -> None:
+        """A reply or acknowledgement, due after the turnaround and intercharacter delays."""
         link = self.link
         delay = link.turnaround_s + len(data) * link.char_delay_s
         self._outputs.append(_Output(self._now() + delay, data, trigger and bool(link.trigger), echo, reply))
@@ -235,6 +238,7 @@ class Interface:
             log.warning("%s: monitor mode (ESC.@ bit 3) is not simulated; no echo to a terminal", self.model)
 
     def _handshake(self, seq: DeviceControl, mode: int) -> None:
+        """ESC.H/ESC.I: block size, ENQ character and acknowledgement string."""
         p = [*seq.params, None, None]
         link = self.link
         block = p[0]
@@ -312,10 +316,12 @@ INTERFACE_CONTROL: Final[dict[str, Callable[[Interface, DeviceControl], None]]] 
 
 
 def _fmt(v: float) -> str:
+    """An integer answer field."""
     return str(round(v))
 
 
 def _fmt_user(v: float) -> str:
+    """A user-unit answer field (at most 4 decimals, no trailing zeros)."""
     if float(v).is_integer():
         return str(int(v))
     return f"{v:.4f}".rstrip("0").rstrip(".")
@@ -333,6 +339,7 @@ class OutputInstructions:
         self.pen_colours = pen_colours
 
     def _answer(self, item: Instruction, text: str) -> None:
+        """Reply to ``item`` with ``text``."""
         self.interface.reply(text, str(item))
 
     def _here(self) -> str:

@@ -172,6 +172,7 @@ class HPGLPlotter(SimulatedDevice):
         self._machine.power_up()
 
     def _power_loss(self) -> None:
+        """Power fails: the move under way is inked as far as it got, then everything is lost until reset."""
         if self._active is not None:
             partial_ink = self._active.drawn_until(self._now - self._active_start)
             if partial_ink is not None and self._active.pen in self.pen_colours:
@@ -449,6 +450,7 @@ class HPGLPlotter(SimulatedDevice):
             self._hpgl_fault(3, item, f"cannot be executed: {exc}")
 
     def _hpgl_fault(self, code: int, item: Instruction, message: str) -> None:
+        """An HP-GL error: the status (OE, the OS error bit by the e-mask), the log and the counters."""
         self._status.fault(code)
         self.stats.hpgl_errors += 1
         self.error_log.append((self._now, "HP-GL", code, str(item)))
@@ -527,6 +529,7 @@ def _bind(owner: Any, table: CommandTable[Any]) -> dict[str, tuple[Command[Any],
 
 
 def _paper_reader(spec: ModelSpec) -> Callable[[str], str]:
+    """The ``paper`` option's converter for one model (names and aliases it takes)."""
     def convert(value: str) -> str:
         name = value.strip().lower()
         name = PAPER_ALIASES.get(name, name)
@@ -538,6 +541,7 @@ def _paper_reader(spec: ModelSpec) -> Callable[[str], str]:
 
 
 def _pens_reader(stalls: int) -> Callable[[str], tuple[str, ...]]:
+    """The ``pens`` option's converter for a carousel of ``stalls``."""
     def convert(value: str) -> tuple[str, ...]:
         names = [v.strip() for v in value.split(",")]
         if not value.strip() or any(not n for n in names):
@@ -577,6 +581,7 @@ def create(model: str, /, *, clock: Clock | None = None, **options: str) -> HPGL
 
 
 def _factory(model: str) -> Callable[..., HPGLPlotter]:
+    """The registered factory of ``model``."""
     return partial(create, model)
 
 
