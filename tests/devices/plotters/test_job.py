@@ -11,7 +11,6 @@ import json
 import shutil
 import subprocess
 import sys
-import uuid
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +21,7 @@ from pixelpen.clock import SimulatedClock
 from pixelpen.devices.plotters.base import PlotterDisplay
 from pixelpen.devices.plotters.job import PlotJob, PlotResult, drawing_file, plotter_for
 from pixelpen.errors import ConfigError, PlotInterrupted
-from pixelpen.sim.base import create_simulator, forget_simulator, named_simulator
+from pixelpen.sim.base import create_simulator
 from pixelpen.sim.transports.port import Faults
 from pixelpen.sim.transports.pty import PtyBridge
 from pixelpen.vector.displaylist import DisplayList
@@ -38,22 +37,6 @@ print(result.strokes, result.confirmed, result.retries)
 """The documented call, run in a new process: ``python -c RESUME STATE URL``."""
 
 
-@pytest.fixture
-def sim():
-    """Unique simulator ids for one test, forgotten afterwards; ``sim(model, **opts)`` gives the URL and the id."""
-    made = []
-
-    def url(model, **options):
-        ident = f"job-{uuid.uuid4().hex[:10]}"
-        made.append(ident)
-        query = "&".join(f"{k}={v}" for k, v in {"speed": "fast", "id": ident, **options}.items())
-        return f"sim:{model}?{query}", ident
-
-    yield url
-    for ident in made:
-        forget_simulator(ident)
-
-
 def ladder(tmp_path: Path, n: int = 24, pitch: float = 6.0) -> str:
     """An SVG of n vertical 40 mm rungs, and two diagonals across them (strokes longer than a buffer's worth)."""
     lines = [f'<path d="M{10 + pitch * i},20 L{10 + pitch * i},60" stroke="black" fill="none"/>' for i in range(n)]
@@ -64,30 +47,30 @@ def ladder(tmp_path: Path, n: int = 24, pitch: float = 6.0) -> str:
     return str(path)
 
 
-def reference_paper(svg: str, sim, tmp_path: Path):
+def reference_paper(svg: str, make_sim_plotter, tmp_path: Path) -> DisplayList:
     """The paper of the same plot, uninterrupted."""
-    url, ident = sim("hp7475a", buffer=256)
-    PlotJob.prepare(svg, to=url, optimize=False, state=tmp_path / "reference.json").run()
-    return named_simulator(ident).display_list()
+    plotter = make_sim_plotter("hp7475a", buffer=256)
+    PlotJob.prepare(svg, to=plotter.url, optimize=False, state=tmp_path / "reference.json").run()
+    return plotter.device.display_list()
 
 
-def interrupted(svg: str, sim, state: Path, **faults: int) -> str:
-    """Plot ``svg`` on a simulator that fails as ``faults`` say, with no retries; the simulator's id."""
-    url, ident = sim("hp7475a", buffer=256, **faults)
+def interrupted(svg: str, make_sim_plotter, state: Path, **faults: int):
+    """Plot ``svg`` on a simulator that fails as ``faults`` say, with no retries; the SimPlotter."""
+    plotter = make_sim_plotter("hp7475a", buffer=256, **faults)
     with pytest.raises(PlotInterrupted):
-        PlotJob.prepare(svg, to=url, optimize=False, state=state, retries=0).run()
+        PlotJob.prepare(svg, to=plotter.url, optimize=False, state=state, retries=0).run()
     saved = json.loads(state.read_text())
     assert 0 < saved["confirmed"] < saved["strokes"]
-    return ident
+    return plotter
 
 
 # -- resuming in a new process ---------------------------------------------------------------------------
 
 
-def test_a_plot_stopped_by_a_dropped_link_resumes_in_a_new_process_each_stroke_once(tmp_path, sim):
+def test_a_plot_stopped_by_a_dropped_link_resumes_in_a_new_process_each_stroke_once(tmp_path, make_sim_plotter):
     # about 20 s: the new process asks the plotter where it stopped in real time (hpgl.SETTLE_S and the longest move)
     svg = ladder(tmp_path)
-    reference = reference_paper(svg, sim, tmp_path)
+    reference = reference_paper(svg, make_sim_plotter, tmp_path)
     clock = SimulatedClock()
     device = create_simulator("hp7475a", clock=clock, buffer="256")
     state = tmp_path / "plot.state"
@@ -111,11 +94,11 @@ def test_a_plot_stopped_by_a_dropped_link_resumes_in_a_new_process_each_stroke_o
     assert not state.exists() and not drawing_file(state).exists()
 
 
-def test_a_job_run_again_after_an_interruption_continues_it(tmp_path, sim):
+def test_a_job_run_again_after_an_interruption_continues_it(tmp_path, make_sim_plotter):
     svg = ladder(tmp_path)
-    reference = reference_paper(svg, sim, tmp_path)
-    url, ident = sim("hp7475a", buffer=256, drop_after=700)  # every connection drops after 700 bytes
-    job = PlotJob.prepare(svg, to=url, optimize=False, state=tmp_path / "again.json", retries=1)
+    reference = reference_paper(svg, make_sim_plotter, tmp_path)
+    plotter = make_sim_plotter("hp7475a", buffer=256, drop_after=700)  # every connection drops after 700 bytes
+    job = PlotJob.prepare(svg, to=plotter.url, optimize=False, state=tmp_path / "again.json", retries=1)
     heard: list[tuple[str, int]] = []
     job.on_interrupted = lambda failure, attempt: heard.append(("stopped", attempt))
     job.on_retry = lambda attempt: heard.append(("retry", attempt))
@@ -129,25 +112,26 @@ def test_a_job_run_again_after_an_interruption_continues_it(tmp_path, sim):
         pytest.fail("the plot never finished")
     assert isinstance(result, PlotResult) and result.strokes == result.confirmed == 25
     assert ("stopped", 0) in heard and ("retry", 1) in heard
-    assert compare(reference, named_simulator(ident).display_list()) == Tally()
+    assert compare(reference, plotter.device.display_list()) == Tally()
     assert not job.state_file.exists() and not drawing_file(job.state_file).exists()
 
 
-def test_resume_takes_the_plotter_the_plot_was_started_on(tmp_path, sim):
+def test_resume_takes_the_plotter_the_plot_was_started_on(tmp_path, make_sim_plotter):
     state = tmp_path / "plot.state"
-    ident = interrupted(ladder(tmp_path), sim, state, drop_after=700)
+    plotter = interrupted(ladder(tmp_path), make_sim_plotter, state, drop_after=700)
     job = PlotJob.resume(state)
-    assert isinstance(job.display, PlotterDisplay) and f"id={ident}" in (job.url or "")
+    assert isinstance(job.display, PlotterDisplay) and job.url == plotter.url
     assert job.resuming and job.state_file == state and job.placement is None
 
 
 # -- refusing to resume, before any device is opened ------------------------------------------------------
 
 
-def test_resuming_a_missing_or_mistyped_state_file_names_it_and_opens_nothing(tmp_path, sim):
+def test_resuming_a_missing_or_mistyped_state_file_names_it_and_opens_nothing(tmp_path, make_sim_plotter):
     state = tmp_path / "plot.state"
-    interrupted(ladder(tmp_path), sim, state, drop_after=700)
-    url, ident = sim("hp7475a")
+    interrupted(ladder(tmp_path), make_sim_plotter, state, drop_after=700)
+    fresh = make_sim_plotter("hp7475a")
+    url = fresh.url
     typo = tmp_path / "plot.stat"
     with pytest.raises(ConfigError, match=f"no plot state file {typo}"):
         PlotJob.resume(typo, to=url)
@@ -156,40 +140,34 @@ def test_resuming_a_missing_or_mistyped_state_file_names_it_and_opens_nothing(tm
         PlotJob.resume(typo, to=url)
     with pytest.raises(ConfigError, match=f"cannot read {drawing_file(state)}"):  # a state without its drawing
         PlotJob.resume(state, to=url)
-    with pytest.raises(KeyError):  # the plotter was never opened
-        named_simulator(ident)
+    assert not fresh.opened  # the plotter was never opened
 
 
 @pytest.mark.parametrize("content", ["not json at all", '{"version": 99}', '["a", "list"]',
                                      '{"version": 2, "url": "x", "fingerprint": "y", "strokes": 3, "confirmed": 9}'])
-def test_resuming_a_file_that_is_no_plot_state_names_it_and_opens_nothing(tmp_path, sim, content):
+def test_resuming_a_file_that_is_no_plot_state_names_it_and_opens_nothing(tmp_path, make_sim_plotter, content):
     state = tmp_path / "notes.json"
     state.write_text(content)
-    url, ident = sim("hp7475a")
+    fresh = make_sim_plotter("hp7475a")
     with pytest.raises(ConfigError, match="nothing to resume") as info:
-        PlotJob.resume(state, to=url)
-    assert str(state) in str(info.value)
-    with pytest.raises(KeyError):
-        named_simulator(ident)
+        PlotJob.resume(state, to=fresh.url)
+    assert str(state) in str(info.value) and not fresh.opened
 
 
-def test_resuming_a_state_file_of_another_drawing_or_plotter_is_refused(tmp_path, sim):
+def test_resuming_a_state_file_of_another_drawing_or_plotter_is_refused(tmp_path, make_sim_plotter):
     one, other = tmp_path / "one.state", tmp_path / "other.state"
-    interrupted(ladder(tmp_path), sim, one, drop_after=700)
+    interrupted(ladder(tmp_path), make_sim_plotter, one, drop_after=700)
     (tmp_path / "b").mkdir()
-    interrupted(ladder(tmp_path / "b", 30), sim, other, drop_after=700)
+    interrupted(ladder(tmp_path / "b", 30), make_sim_plotter, other, drop_after=700)
     shutil.copyfile(drawing_file(other), drawing_file(one))  # one's state beside another plot's drawing
-    url, ident = sim("hp7475a")
+    hp, grbl = make_sim_plotter("hp7475a"), make_sim_plotter("grbl")
     with pytest.raises(ConfigError, match="does not match the drawing saved beside it") as info:
-        PlotJob.resume(one, to=url)
+        PlotJob.resume(one, to=hp.url)
     assert str(one) in str(info.value)
-    grbl, grbl_ident = sim("grbl")
     with pytest.raises(ConfigError, match="planned for a hp7475a") as info:  # a plan in HP-GL units on a GRBL
-        PlotJob.resume(other, to=grbl)
+        PlotJob.resume(other, to=grbl.url)
     assert str(other) in str(info.value)
-    for never_opened in (ident, grbl_ident):
-        with pytest.raises(KeyError):
-            named_simulator(never_opened)
+    assert not hp.opened and not grbl.opened
 
 
 def one_line() -> DisplayList:
