@@ -33,7 +33,6 @@ still read the position from the counters.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 from collections import deque
@@ -66,8 +65,8 @@ from pixelpen.display.registry import register_display
 from pixelpen.drivers.discovery import list_serial_ports
 from pixelpen.drivers.stream import Link
 from pixelpen.errors import ConfigError, Disconnected, LinkError, LinkTimeout, ParseError, ProtocolError
+from pixelpen.options import OptionSpec, OptionValues, choice, number
 from pixelpen.profiles.model import DeviceProfile, load_profile
-from pixelpen.urls import Options
 
 log = logging.getLogger(__name__)
 
@@ -110,24 +109,11 @@ class _Sent:
 
 
 def _model(text: str) -> str:
-    value = text.strip().lower().replace("-", "_")
-    if value not in MODELS:
-        raise ValueError(f"expected one of {', '.join(MODELS)}")
-    return value
+    """An AxiDraw model name (``se-a3`` spelled either way)."""
+    return _MODEL_NAMES(text.replace("-", "_"))
 
 
-def _moves(text: str) -> str:
-    value = text.strip().lower()
-    if value not in ("sm", "xm", "lm"):
-        raise ValueError("expected sm, xm or lm")
-    return value
-
-
-def _percent(text: str) -> float:
-    value = float(text)
-    if not (math.isfinite(value) and 0 <= value <= 100):
-        raise ValueError("expected a percentage 0..100")
-    return value
+_MODEL_NAMES = choice(*MODELS)
 
 
 @register_display("axidraw")
@@ -137,13 +123,15 @@ class AxiDrawPlotter(PlotterDisplay):
     profile_name: ClassVar[str] = "axidraw_v3"
     family: ClassVar[str] = "axidraw"
     reports_position: ClassVar[bool] = True
-    url_options: ClassVar[dict[str, str]] = {
-        **PlotterDisplay.url_options,
-        "model": f"AxiDraw model: {', '.join(MODELS)}; default v3",
-        "moves": "motion commands: sm (default), xm (mixed-axis, fw >= 2.3.0) or lm (accelerated, fw >= 2.7.0)",
-        "pen_up": "pen-up servo position in percent of the profile's servo range; default the profile's",
-        "pen_down": "pen-down servo position in percent; default the profile's",
-    }
+    OPTIONS = (
+        *PlotterDisplay.OPTIONS,
+        OptionSpec("model", _model, "v3", f"AxiDraw model: {', '.join(MODELS)}"),
+        OptionSpec("moves", choice("sm", "xm", "lm"), "sm",
+                   "motion commands: sm, xm (mixed-axis, fw >= 2.3.0) or lm (accelerated, fw >= 2.7.0)"),
+        OptionSpec("pen_up", number(0.0, 100.0), None,
+                   "pen-up servo position in percent of the profile's servo range; default the profile's"),
+        OptionSpec("pen_down", number(0.0, 100.0), None, "pen-down servo position in percent; default the profile's"),
+    )
 
     def __init__(
         self,
@@ -183,29 +171,27 @@ class AxiDrawPlotter(PlotterDisplay):
 
     # -- URL hooks -------------------------------------------------------------------------------
     @classmethod
-    def default_profile(cls, options: Options) -> DeviceProfile:
+    def default_profile(cls, options: OptionValues) -> DeviceProfile:
         """``model=`` picks among the AxiDraw profiles."""
-        return load_profile(MODELS[options.get("model", _model, "v3")])
+        return load_profile(MODELS[options["model"]])
 
     @classmethod
-    def family_options(cls, options: Options, profile: DeviceProfile) -> dict[str, object]:
+    def family_options(cls, options: OptionValues, profile: DeviceProfile) -> dict[str, Any]:
         """Read moves, pen_up and pen_down from the URL."""
-        return {
-            "moves": options.get("moves", _moves, "sm"),
-            "pen_up_percent": options.get("pen_up", _percent, None),
-            "pen_down_percent": options.get("pen_down", _percent, None),
-        }
+        return {"moves": options["moves"], "pen_up_percent": options["pen_up"], "pen_down_percent": options["pen_down"]}
 
     @classmethod
-    def simulator_options(cls, sim_options: dict[str, str], options: Options, profile: DeviceProfile) -> dict[str, str]:
+    def simulator_options(
+        cls, sim_options: dict[str, str], options: OptionValues, profile: DeviceProfile,
+    ) -> dict[str, str]:
         """The simulated AxiDraw of the same model (the EBB simulator has no paper option: it is the travel).
 
         The board is USB CDC: its simulated line runs at ``USB_BAUD`` unless the URL gives ``baud``.
         """
         out = {k: v for k, v in sim_options.items() if k != "paper"}
         out.setdefault("baud", str(USB_BAUD))
-        if "model" in options:
-            out.setdefault("model", options.get("model", _model, "v3"))
+        if "model" in options.given:
+            out.setdefault("model", options["model"])
         return out
 
     def _make_link(self) -> Link:
@@ -358,8 +344,8 @@ class AxiDrawPlotter(PlotterDisplay):
         if lost:
             return DeviceWhere(None, None, position_lost=True, detail=lost)
         self._adopt = steps
-        return _device_where((float(steps[0]), float(steps[1])), not pen_up, tolerance=1.0, reached=reached,
-                             detail=f"EBB at {steps.tolist()} steps, pen {'up' if pen_up else 'down'}")
+        return DeviceWhere((float(steps[0]), float(steps[1])), not pen_up, tolerance=1.0, reached=reached,
+                           detail=f"EBB at {steps.tolist()} steps, pen {'up' if pen_up else 'down'}")
 
     def _pen_position(self) -> tuple[float, float] | None:
         """Where the carriage will be once everything sent has run (steps = device units), the next travel's start."""
@@ -616,12 +602,6 @@ def _fields_pair(data: str) -> tuple[int, int]:
     if len(fields) != 2 or not all(f.strip().isascii() and f.strip().isdecimal() and len(f.strip()) <= 3 for f in fields):
         raise ParseError("QE reply must be two numbers", source="ebb QE", token=data)
     return int(fields[0]), int(fields[1])
-
-
-def _device_where(position: tuple[float, float] | None, pen_down: bool | None, **fields: Any) -> DeviceWhere:
-    """A DeviceWhere with the optional fields the base knows (``reached`` is proposed, see the notes)."""
-    known = {f.name for f in dataclasses.fields(DeviceWhere)}
-    return DeviceWhere(position, pen_down, **{k: v for k, v in fields.items() if k in known})
 
 
 def _name(command: str) -> str:

@@ -40,262 +40,62 @@ Limits: the strokes in doubt are those sent since the last confirmation (bounded
 confirmation interval); :func:`locate` costs one pass over their points.  A display opened with an
 unfinished state file asks the device where it stopped before its handshake (HP-GL: at least
 ``hpgl.SETTLE_S`` seconds).
+
+Beside this module: ``resume`` (DeviceWhere, locate, ResumePoint), ``state`` (the state file, fingerprint),
+``progress`` (PlotProgress and the ETA); their names are importable from here too.  URL options are
+declared as specs (``OPTIONS``; each family adds its own) and ``sim:`` URLs are split by the generic
+``Display.split_sim_url`` (``SIM_SHARED``: paper; ``SIM_TRANSPORT``: baud, flow).
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
 import logging
-import math
-import os
 from abc import abstractmethod
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
 from pixelpen.clock import REAL_CLOCK, Clock
+from pixelpen.devices.plotters.progress import (
+    PlotProgress,
+    ProgressCallback,
+    cumulative_pen_down_mm,
+    estimate_seconds,
+)
+from pixelpen.devices.plotters.resume import DeviceWhere, ResumePoint, in_full_stroke, locate
+from pixelpen.devices.plotters.state import STATE_VERSION, PlotState, fingerprint
 from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.kinds import VectorDisplay
 from pixelpen.drivers.serial import SerialLink
 from pixelpen.drivers.stream import Link
-from pixelpen.errors import (  # noqa: F401  (PlotInterrupted, DeviceFault, PositionUnknown re-exported)
-    ConfigError, DeviceFault, LinkError, ParseError, PixelpenError, PlotInterrupted, PositionUnknown, ProtocolError,
+from pixelpen.errors import (
+    ConfigError,
+    DeviceFault,
+    LinkError,
+    ParseError,
+    PixelpenError,
+    PlotInterrupted,
+    PositionUnknown,
+    ProtocolError,
     URLError,
 )
+from pixelpen.options import OptionSpec, OptionValues, choice, describe, integer, positive, text
 from pixelpen.profiles.model import DeviceProfile, load_profile
-from pixelpen.urls import DeviceURL, Options, check_path, format_url
+from pixelpen.urls import DeviceURL, check_path, format_url
 from pixelpen.vector.displaylist import DisplayList
-from pixelpen.vector.motion import estimate_time
+
+__all__ = [  # the names importers find here; resume, state file and progress live in their own modules
+    "STATE_VERSION", "DeviceFault", "DeviceWhere", "PauseCallback", "PenChange", "PlotInterrupted", "PlotProgress",
+    "PlotState", "PlotterDisplay", "PositionUnknown", "ProgressCallback", "ResumePoint", "fingerprint", "locate",
+]
 
 log = logging.getLogger(__name__)
-
-STATE_VERSION = 2
-_STATE_VERSIONS = (1, 2)
-"""State file versions read (version 1 lacks ``sent`` and ``position_lost``)."""
-
-
-@dataclass
-class PlotProgress:
-    """Where a plot stands, for progress bars: strokes and pen-down millimetres done, time and ETA."""
-
-    strokes_done: int
-    strokes_total: int
-    pen_down_mm_done: float
-    pen_down_mm_total: float
-    elapsed_s: float
-    eta_s: float
-
-    @property
-    def fraction(self) -> float:
-        """Share of the pen-down distance confirmed, 0..1."""
-        return self.pen_down_mm_done / self.pen_down_mm_total if self.pen_down_mm_total else 1.0
-
-
-@dataclass(frozen=True)
-class DeviceWhere:
-    """What a device says after a fault: where the pen is (device units of the sent points) and whether it knows."""
-
-    position: tuple[float, float] | None
-    pen_down: bool | None
-    settled: bool = True
-    """The device will not move any more on bytes of the old connection (drained or aborted)."""
-    position_lost: bool = False
-    """The device restarted or lost steps: its position says nothing about the job."""
-    tolerance: float = 0.5
-    """Device units within which the position counts as on a vertex or a segment."""
-    detail: str = ""
-    """What the device said, for messages."""
-    reached: tuple[int, int] | None = None
-    """(stroke, k): acknowledgements prove the device ran at least to point k of the points given to ``_send_stroke``
-    for that stroke (k = 0: the pen-up travel to points[0]); None: no such lower bound."""
-
-
-@dataclass(frozen=True)
-class ResumePoint:
-    """Where drawing stopped: strokes < ``stroke`` done, stroke ``stroke`` drawn to vertex ``vertex`` (then to ``at``)."""
-
-    stroke: int
-    vertex: int = 0
-    at: tuple[float, float] | None = None
-    """A point inside segment vertex..vertex+1 where the pen stopped (None: at the vertex)."""
-
-    def remainder(self, points: np.ndarray) -> np.ndarray | None:
-        """The stroke's points still to draw (None: the whole stroke)."""
-        if self.vertex == 0 and self.at is None:
-            return None
-        if self.at is None:
-            return points[self.vertex:]
-        head = np.rint(np.asarray([self.at], float)).astype(points.dtype)
-        return np.concatenate([head, points[self.vertex + 1:]])
-
-
-def locate(
-    window: list[tuple[int, np.ndarray]], where: DeviceWhere, before: np.ndarray | None, *,
-    lifts: Callable[[int], bool] = lambda stroke: True, down_at_start: bool = True,
-) -> list[ResumePoint]:
-    """Every distinct place in the strokes ``window`` ((index, sent points) in order) the device state may be, earliest first.
-
-    ``before`` is the pen position before the window's first stroke (the end of the stroke before it), or None.
-    ``lifts(s)``: the device may rest with the pen lifted at stroke s's end (False where lifting and travelling
-    to the next stroke are one instruction); ``down_at_start``: it may rest with the pen down at a stroke's
-    first point before drawing (False where lowering and drawing are one instruction).  A pen reported up
-    rests only between strokes (the base lifts it nowhere else); a device that lifts by itself inside a
-    stroke must report ``pen_down=None``.  ``where.reached`` (stroke, k) drops every place before point k of that
-    stroke (in the window's points).
-    """
-    if where.position is None:
-        return []
-    q = np.asarray(where.position, float)
-    tol = float(where.tolerance)
-    found: list[ResumePoint] = []
-    up_ok, down_ok = where.pen_down is not True, where.pen_down is not False
-    prev, prev_index = before, None
-    for index, pts in window:
-        p = np.asarray(pts, float)
-        t = _near_segment(q, prev, p[0], tol) if prev is not None and up_ok else None
-        if t is not None and not (prev_index is not None and not lifts(prev_index)
-                                  and np.hypot(*(q - prev)) <= tol and np.hypot(*(q - p[0])) > tol):
-            found.append(ResumePoint(index))  # travelling to the stroke's start, or there with the pen still up
-        if len(p) == 1:
-            if np.hypot(*(q - p[0])) <= tol:
-                if up_ok:
-                    found.append(ResumePoint(index))
-                if down_ok or lifts(index):
-                    found.append(ResumePoint(index + 1))
-        else:
-            for j in range(len(p) - 1):
-                t = _near_segment(q, p[j], p[j + 1], tol)
-                if t is None:
-                    continue
-                length = float(np.hypot(*(p[j + 1] - p[j])))
-                if t * length >= length - tol:
-                    last = j + 1 == len(p) - 1
-                    if not down_ok and not (last and lifts(index)):
-                        continue  # the pen is lifted only between strokes, where the family says it may rest
-                    found.append(ResumePoint(index + 1) if last else ResumePoint(index, j + 1))
-                elif t * length <= tol:
-                    if (j == 0 and not up_ok and not down_at_start) or (j > 0 and not down_ok):
-                        continue  # not down on a start before drawing (if the family says so), not up inside
-                    found.append(ResumePoint(index, j))
-                elif down_ok:
-                    found.append(ResumePoint(index, j, (float(q[0]), float(q[1]))))
-        prev, prev_index = p[-1], index
-    if where.reached is not None:
-        floor = where.reached
-        found = [r for r in found if (r.stroke, r.vertex) >= floor]
-    return _distinct(found, tol)
-
-
-def _near_segment(q: np.ndarray, a: np.ndarray, b: np.ndarray, tol: float) -> float | None:
-    """Parameter t in 0..1 of the point of segment a-b nearest q, if q lies within ``tol`` of it."""
-    d = b - a
-    dd = float(d @ d)
-    t = 0.0 if dd == 0 else min(1.0, max(0.0, float((q - a) @ d) / dd))
-    return t if float(np.hypot(*(a + t * d - q))) <= tol else None
-
-
-def _distinct(points: list[ResumePoint], tol: float) -> list[ResumePoint]:
-    out: list[ResumePoint] = []
-    for r in sorted(points, key=lambda r: (r.stroke, r.vertex, r.at is not None)):
-        if not any(o.stroke == r.stroke and o.vertex == r.vertex and (o.at is None) == (r.at is None)
-                   and (o.at is None or np.hypot(o.at[0] - r.at[0], o.at[1] - r.at[1]) <= 2 * tol) for o in out):
-            out.append(r)
-    return out
-
-
-def fingerprint(dl: DisplayList) -> str:
-    """A hash of a display list's strokes and pens, to tell a state file's drawing from another."""
-    h = hashlib.sha256()
-    for arr in (np.round(dl.points, 6), dl.offsets, dl.pens):
-        h.update(np.ascontiguousarray(arr).tobytes())
-    return h.hexdigest()[:32]
-
-
-@dataclass
-class PlotState:
-    """The resumable state of a plot, saved as JSON after every confirmation."""
-
-    url: str
-    fingerprint: str
-    strokes: int
-    confirmed: int
-    sent: int | None = None
-    """One past the last stroke whose bytes went out (None: unknown, every unconfirmed stroke is in doubt)."""
-    position_lost: bool = False
-    """The device said it lost its position; a resume needs ``position_confirmed``."""
-    damaged: list[int] | None = None
-    """[start, stop) of strokes the device reported it did not draw as sent; a resume draws them again."""
-    lifts: list[int] | None = None
-    """Unconfirmed strokes after which the pen was lifted in place (None: unknown)."""
-    stopped_at: list[float] | None = None
-    """[x, y, pen down 1/0/-1 unknown, tolerance]: where the device stopped, asked before the safe stop parked it."""
-    start: list[float] | None = None
-    """[stroke, x, y]: the pen position before that stroke's travel, the first stroke of the run (None: unknown)."""
-    version: int = STATE_VERSION
-
-    def save(self, path: Path) -> None:
-        """Write the state atomically (temp file + rename), so a crash never leaves half a file."""
-        tmp = path.with_name(path.name + ".tmp")
-        with open(tmp, "w", encoding="utf-8") as fh:
-            json.dump(asdict(self), fh)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-
-    @classmethod
-    def load(cls, path: Path) -> PlotState:
-        """Read a state file; a ParseError names the file and the field that is wrong."""
-        try:
-            data = json.loads(Path(path).read_text(encoding="utf-8"))
-        except OSError as exc:
-            raise ParseError(f"cannot read plot state: {exc.strerror}", source=str(path)) from None
-        except json.JSONDecodeError as exc:
-            raise ParseError(f"plot state is not JSON: {exc.msg}", source=str(path), line=exc.lineno, column=exc.colno) from None
-        if not isinstance(data, dict) or data.get("version") not in _STATE_VERSIONS:
-            raise ParseError(f"not a version-{STATE_VERSION} pixelpen plot state", source=str(path))
-        try:
-            state = cls(**{**data, "version": STATE_VERSION})
-        except TypeError as exc:
-            raise ParseError(f"plot state has wrong fields: {exc}", source=str(path)) from None
-        if not (isinstance(state.strokes, int) and isinstance(state.confirmed, int) and 0 <= state.confirmed <= state.strokes):
-            raise ParseError("plot state field 'confirmed' is out of range", source=str(path), token=state.confirmed)
-        if state.sent is not None and not (isinstance(state.sent, int) and state.confirmed <= state.sent <= state.strokes):
-            raise ParseError("plot state field 'sent' is out of range", source=str(path), token=state.sent)
-        if state.damaged is not None and not (
-            isinstance(state.damaged, list) and len(state.damaged) == 2 and all(isinstance(v, int) for v in state.damaged)
-            and 0 <= state.damaged[0] <= state.damaged[1] <= state.strokes
-        ):
-            raise ParseError("plot state field 'damaged' is not a [start, stop] stroke range", source=str(path),
-                             token=state.damaged)
-        if state.lifts is not None and not (
-            isinstance(state.lifts, list) and all(isinstance(v, int) and 0 <= v < state.strokes for v in state.lifts)
-        ):
-            raise ParseError("plot state field 'lifts' is not a list of stroke numbers", source=str(path), token=state.lifts)
-        if state.stopped_at is not None and not (
-            isinstance(state.stopped_at, list) and len(state.stopped_at) == 4
-            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in state.stopped_at)
-            and state.stopped_at[2] in (-1, 0, 1) and state.stopped_at[3] >= 0
-        ):
-            raise ParseError("plot state field 'stopped_at' is not [x, y, pen -1/0/1, tolerance]", source=str(path),
-                             token=state.stopped_at)
-        if state.start is not None and not (
-            isinstance(state.start, list) and len(state.start) == 3
-            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in state.start)
-            and isinstance(state.start[0], int) and 0 <= state.start[0] <= state.strokes
-        ):
-            raise ParseError("plot state field 'start' is not [stroke, x, y]", source=str(path), token=state.start)
-        if not isinstance(state.position_lost, bool):
-            raise ParseError("plot state field 'position_lost' is not true or false", source=str(path), token=state.position_lost)
-        return state
 
 
 PenChange = Callable[[int], None]
 """Called on single-pen devices when the next stroke needs another pen; returns when it is in."""
-ProgressCallback = Callable[[PlotProgress], None]
 PauseCallback = Callable[[bool], None]
 """Called with True once the device has actually paused (idle, pen up), with False when it goes on."""
 
@@ -315,14 +115,21 @@ class PlotterDisplay(VectorDisplay):
     reports_position: ClassVar[bool] = False
     """True when the family implements ``_where``; otherwise a resume restarts at the last confirmed stroke
     (strokes drawn since are drawn again) without asking the device."""
-    url_options = {
-        "paper": "paper size known to the profile (a4, a3, letter, ...); default the profile's",
-        "baud": "serial speed; default the profile's",
-        "flow": "flow control: none, rtscts or xonxoff; default the profile's",
-        "timeout": "seconds to wait for any reply; default the profile's",
-        "profile": "a device profile TOML file instead of the built-in one",
-        "state": "file to keep the plot state in, for resuming after a fault",
-    }
+    OPTIONS: ClassVar[tuple[OptionSpec[Any], ...]] = (
+        OptionSpec("paper", text, None, "paper size known to the profile (a4, a3, letter, ...); default the profile's"),
+        OptionSpec("baud", integer(1), None, "serial speed; default the profile's"),
+        OptionSpec("flow", choice("none", "rtscts", "xonxoff"), None,
+                   "flow control: none, rtscts or xonxoff; default the profile's"),
+        OptionSpec("timeout", positive, None, "seconds to wait for any reply; default the profile's"),
+        OptionSpec("profile", load_profile, None, "a device profile TOML file instead of the built-in one"),
+        OptionSpec("state", text, None, "file to keep the plot state in, for resuming after a fault"),
+    )
+    SIM_SHARED: ClassVar[frozenset[str]] = frozenset({"paper"})
+    SIM_TRANSPORT: ClassVar[frozenset[str]] = frozenset({"baud", "flow"})
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls.url_options = dict(describe(cls.OPTIONS))  # the help texts ``pixelpen devices`` prints, from the specs
 
     def __init__(
         self,
@@ -400,39 +207,45 @@ class PlotterDisplay(VectorDisplay):
 
     # -- construction ------------------------------------------------------------------------
     @classmethod
-    def from_url(cls, url: DeviceURL, **kwargs: object) -> PlotterDisplay:
+    def from_url(cls, url: DeviceURL, **kwargs: Any) -> PlotterDisplay:
         """``MODEL:PORT?options`` for hardware, ``sim:MODEL?options`` for the simulator."""
-        sim_opts: dict[str, str] | None = None
+        sim_options: dict[str, str] | None = None
         if url.scheme == "sim":
-            model = url.target
-            own = {k: v for k, v in url.options.items() if k in cls.url_options and k not in ("baud", "flow")}
-            sim_opts = {k: v for k, v in url.options.items() if k not in own or k == "paper"}
-            opts, port = DeviceURL(model, "", own, str(url)), ""
-        else:
-            opts, port = url, url.target
-        options = cls.options_of(opts)
-        profile = options.get("profile", load_profile, None) or cls.default_profile(options)
-        if sim_opts is not None:
-            port = format_url("sim", "//" + model, cls.simulator_options(sim_opts, options, profile))
+            url, sim_options = cls.split_sim_url(url)
+        options = cls.read_url_options(url)
+        profile = options["profile"] or cls.default_profile(options)
+        port = url.target
+        if sim_options is not None:
+            port = format_url("sim", "//" + url.scheme, cls.simulator_options(sim_options, options, profile))
+        try:
+            family = cls.family_options(options, profile)
+        except URLError:
+            raise
+        except ConfigError as exc:  # options that do not fit together: named with the URL
+            raise ConfigError(f"{url}: {exc}") from None
         return cls(
-            port, profile=profile, paper=options.get("paper", str, None), baudrate=options.get("baud", int, None),
-            flow=options.get("flow", _flow, None), timeout=options.get("timeout", float, None),
-            state_file=kwargs.pop("state_file", None) or options.get("state", str, None),  # type: ignore[arg-type]
-            **cls.family_options(options, profile), **kwargs,  # type: ignore[arg-type]
+            port, profile=profile, paper=options["paper"], baudrate=options["baud"], flow=options["flow"],
+            timeout=options["timeout"], state_file=kwargs.pop("state_file", None) or options["state"],
+            **family, **kwargs,
         )
 
     @classmethod
-    def default_profile(cls, options: Options) -> DeviceProfile:
+    def options_of(cls, url: DeviceURL) -> OptionValues:  # type: ignore[override]
+        """The URL's options read against ``OPTIONS`` (the older name of ``read_url_options``, kept for its callers)."""
+        return cls.read_url_options(url)
+
+    @classmethod
+    def default_profile(cls, options: OptionValues) -> DeviceProfile:
         """The built-in profile of a URL without ``profile=`` (a family with several models reads its option)."""
         return load_profile(cls.profile_name)
 
     @classmethod
-    def family_options(cls, options: Options, profile: DeviceProfile) -> dict[str, object]:
+    def family_options(cls, options: OptionValues, profile: DeviceProfile) -> dict[str, Any]:
         """Constructor keywords read from the family's own URL options (the base has none)."""
         return {}
 
     @classmethod
-    def simulator_options(cls, sim_options: dict[str, str], options: Options, profile: DeviceProfile) -> dict[str, str]:
+    def simulator_options(cls, sim_options: dict[str, str], options: OptionValues, profile: DeviceProfile) -> dict[str, str]:
         """Options for the simulator of a ``sim:`` URL: as given, paper included (a family translates its own)."""
         return sim_options
 
@@ -607,12 +420,8 @@ class PlotterDisplay(VectorDisplay):
             self._lifts, self._damaged, self._position_lost, self._redo = set(), None, False, range(0)
         self._job = dl
         self._job_state = PlotState(self.port, fp, len(dl), self._redo.start if self._redo else start.stroke)
-        seg = np.hypot(*np.diff(dl.points, axis=0).T) if len(dl.points) > 1 else np.zeros(0)
-        per_stroke = np.add.reduceat(np.append(seg, 0.0), dl.offsets[:-1]) - np.where(
-            dl.offsets[1:] < len(dl.points), np.append(seg, 0.0)[np.minimum(dl.offsets[1:] - 1, len(seg))], 0.0
-        ) if len(dl) else np.zeros(0)
-        self._cum_mm = np.concatenate([[0.0], np.cumsum(per_stroke)]) * dl.unit_mm
-        self._estimate_s = _estimate_seconds(dl, self.profile)
+        self._cum_mm = cumulative_pen_down_mm(dl)
+        self._estimate_s = estimate_seconds(dl, self.profile)
         self._started = self.clock.now()
         self.confirmed = self._redo.start if self._redo else start.stroke
         self._sent_end = self.confirmed
@@ -648,7 +457,7 @@ class PlotterDisplay(VectorDisplay):
             lifts=(lambda s: True) if self.lifts_after_each_stroke or lifts is None else lifts.__contains__,
         )
         if head is not None:
-            found = [_in_full_stroke(r, head[0], len(pts[dl.offsets[head[0]] : dl.offsets[head[0] + 1]]) - len(head[1]), head[2])
+            found = [in_full_stroke(r, head[0], len(pts[dl.offsets[head[0]] : dl.offsets[head[0] + 1]]) - len(head[1]), head[2])
                      for r in found]
         damaged, self._damaged = self._damaged, None
         self._redo = range(0)
@@ -886,29 +695,6 @@ class PlotterDisplay(VectorDisplay):
         raise ConfigError(f"{self.profile.name}: motors off is not supported by this driver")
 
 
-def _in_full_stroke(r: ResumePoint, stroke: int, offset: int, head: ResumePoint) -> ResumePoint:
-    """A place located in the remainder of ``stroke`` that was sent (from ``head``, ``offset`` points short) as one in the whole stroke."""
-    if r.stroke != stroke:
-        return r
-    if r.vertex == 0 and r.at is None:
-        return head  # nothing of the remainder drawn: where the last resume started
-    return ResumePoint(stroke, r.vertex + offset, r.at)
-
 
 def _pen_word(down: bool | None) -> str:
     return "unknown" if down is None else "down" if down else "up"
-
-
-def _flow(text: str) -> str:
-    if text not in ("none", "rtscts", "xonxoff"):
-        raise ValueError("expected none, rtscts or xonxoff")
-    return text
-
-
-def _estimate_seconds(dl: DisplayList, profile: DeviceProfile) -> float:
-    """Estimated plot time of ``dl``, or 0 when the profile has no motion limits to estimate with."""
-    try:
-        return float(estimate_time(dl, profile).total)
-    except (ConfigError, URLError) as exc:
-        log.debug("no time estimate for %s: %s", profile.name, exc)
-        return 0.0

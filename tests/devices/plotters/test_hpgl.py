@@ -444,7 +444,7 @@ def test_garbled_answers_interrupt_the_plot(text, message):
 def test_an_ignored_output_request_interrupts_rather_than_fails():
     # ESC.E 10: a request met an answer on its way out and the plotter ignored it; the exchange is out of
     # step, which a reconnect mends, so it is a link fault (PlotInterrupted), not a drawing error
-    from pixelpen.devices.plotters.hpgl import _Query
+    from pixelpen.devices.plotters.hpgl_stream import Query as _Query
 
     rig = Rig()
     d = rig.display

@@ -1,0 +1,425 @@
+"""The GRBL line protocol: lines sent under character counting, replies dispatched, status reports checked.
+
+:class:`GrblStream` is the layer of :class:`~pixelpen.devices.plotters.grbl.GrblPlotter` that talks to the
+controller (``ok``/``error:N``/``ALARM:N``, status reports against the path sent, real-time commands, ``$``
+queries); the plotter above it connects, encodes strokes, finds where a plot stopped and controls the pen.
+See the plotter's module docstring for how strokes are confirmed and checked.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from pixelpen.devices.plotters.base import PlotterDisplay
+from pixelpen.devices.plotters.grbl_encode import (
+    ALARM_CODES,
+    ERROR_CODES,
+    REALTIME_HOLD,
+    REALTIME_RESET,
+    REALTIME_RESUME,
+    REALTIME_STATUS,
+    CharacterCounter,
+    GrblStatus,
+    PathTrack,
+    PenMotion,
+    parse_code,
+    parse_status,
+    parse_welcome,
+)
+from pixelpen.drivers.stream import Link
+from pixelpen.errors import Disconnected, LinkError, LinkTimeout, ParseError, ProtocolError
+
+log = logging.getLogger("pixelpen.devices.plotters.grbl")  # the family's one logger, as users filter on it
+
+STATUS_INTERVAL_S = 0.2
+"""Least time between two ``?`` polls for pause detection (interface.md: poll at most 5 Hz)."""
+IDLE_POLLS_BEFORE_LOSS = 3
+"""Status polls that find GRBL idle with lines unacknowledged before the bytes are declared lost."""
+STOP_WAIT_S = 10.0
+"""Longest wait for a feed hold to bring the carriage to rest when stopping safely."""
+SETTLE_LIMIT_S = 120.0
+"""Longest wait, after a reconnect, for GRBL to finish the lines it still held from the broken connection."""
+TRACK_TOLERANCE_MM = 0.1
+"""How far a status report's position may lie off the path sent before the driver calls it a corrupted line."""
+GARBLE_ERRORS = frozenset({1, 2, 3, 11, *range(20, 39)})
+"""``error:N`` codes a line pixelpen wrote can only earn by being garbled on the wire (syntax, words): said so."""
+POSITION_LOSING_ALARMS = frozenset({1, 3, 6, 7, 8, 9, 10})
+"""``ALARM:N`` codes after which GRBL's position is likely lost (alarm_codes_en_US.csv: re-homing recommended)."""
+
+
+@dataclass(frozen=True)
+class Tag:
+    """What a line's ``ok`` tells: stroke ``stroke`` reached its vertex ``vertex`` with the pen down; stroke ``done`` is
+    on paper (its lift's dwell ran) and the track may drop the legs before point number ``track``."""
+
+    stroke: int
+    vertex: int | None
+    """None for the travel to the stroke's start (the pen is not down yet)."""
+    done: int | None = None
+    track: int | None = None
+
+
+class GrblStream(PlotterDisplay):
+    """GRBL lines sent and replies handled (the line-protocol layer of GrblPlotter)."""
+
+    stream: str
+    """``counting`` (fill the RX buffer) or ``wait`` (one line at a time)."""
+    pen_motion: PenMotion
+    counter: CharacterCounter
+    track: PathTrack
+    version: tuple[int, int, str] | None
+    last_status: GrblStatus | None
+    _tracking: bool
+    _wco: np.ndarray
+    _lost: str | None
+    _reached: tuple[int, int] | None
+    _held: bool
+    _status_asked: float
+    _idle_polls: int
+    _stale: bool
+    _stale_seen: int
+
+    def _wait_acks(self) -> None:
+        while len(self.counter):
+            self._wait_reply()
+
+
+    # -- public controls -------------------------------------------------------------------------
+    def query_status(self) -> GrblStatus:
+        """Send ``?`` and return the status report (other lines that arrive meanwhile are handled)."""
+        link = self._link()
+        link.write(REALTIME_STATUS)
+        self._status_asked = self.clock.now()
+        before = self.last_status
+        self.last_status = None
+        while self.last_status is None:
+            line = self._read_line(self.timeout)
+            if line is None:
+                self.last_status = before
+                raise LinkTimeout(f"grbl: no status report within {self.timeout}s of '?'")
+            self._dispatch(line)
+        return self.last_status
+
+    def feed_hold(self) -> None:
+        """Real-time ``!``: decelerate to a stop and hold (resume with :meth:`resume`)."""
+        self._link().write(REALTIME_HOLD)
+
+    def resume(self) -> None:
+        """Real-time ``~``: cycle start, resuming a feed hold."""
+        self._link().write(REALTIME_RESUME)
+
+    def soft_reset(self) -> None:
+        """Real-time Ctrl-X: GRBL stops, flushes its buffers and restarts; returns after its welcome line."""
+        link = self._link()
+        link.write(REALTIME_RESET)
+        self.counter.clear()
+        while True:
+            line = self._read_line(self.timeout)
+            if line is None:
+                raise LinkTimeout(f"grbl: no welcome line within {self.timeout}s of the soft reset")
+            version = parse_welcome(line)
+            if version is not None:
+                self._welcomed(version)
+                return
+            if line.startswith("ALARM:"):
+                log.warning("grbl: %s during reset: %s", line, ALARM_CODES.get(parse_code(line), "unknown alarm"))
+            elif line not in ("ok",) and not line.startswith("<"):
+                log.debug("grbl: before the welcome line: %r", line)
+
+    # -- streaming ---------------------------------------------------------------------------------
+    def _send_line(self, line: str, tag: Tag | None = None, *, wait: bool = False) -> None:
+        """Send one G-code line under the streaming mode's flow control; ``tag`` is the stroke it confirms.
+
+        ``wait`` (or ``stream=wait``) sends it alone: everything before it and the line itself acknowledged.
+        """
+        wait = wait or self.stream == "wait"
+        if wait:
+            self._wait_acks()
+        while not self.counter.fits(line):
+            self._wait_reply()
+        self._link().write(line.encode("ascii") + b"\n")
+        self.counter.sent(line, tag)
+        if wait:
+            self._wait_acks()
+
+    def _wait_reply(self) -> None:
+        """Handle one line from GRBL; on silence probe with ``?`` and keep waiting while it works or holds."""
+        line = self._read_line(self.timeout)
+        if line is not None:
+            self._dispatch(line)
+            return
+        status = self.query_status()
+        if status.busy:
+            self._idle_polls = 0
+            if status.held:
+                log.info("grbl: holding (%s); waiting for a resume (~ or cycle start)", status.state)
+            return
+        if len(self.counter):
+            self._idle_polls += 1
+            dwell = max(self.pen_motion.dwell_up, self.pen_motion.dwell_down)  # GRBL is Idle while it dwells
+            if self._idle_polls >= IDLE_POLLS_BEFORE_LOSS + math.ceil(dwell / self.timeout):
+                raise LinkTimeout(
+                    f"grbl: controller is {status.state} but {len(self.counter)} line(s) were never acknowledged "
+                    f"(oldest {self.counter.oldest()!r}): bytes were lost on the line"
+                )
+
+    def _dispatch(self, line: str) -> None:
+        """Act on one line GRBL sent: acknowledgements, errors, alarms, status reports, messages, restarts."""
+        if self._stale and (line == "ok" or line.startswith(("error:", "ALARM:"))):
+            self._stale_seen += 1
+            log.info("grbl: %s from before this connection ignored", line)
+        elif line == "ok":
+            self._idle_polls = 0
+            _, tag = self.counter.acknowledged()
+            if isinstance(tag, Tag):
+                if tag.vertex is not None:
+                    self._reached = (tag.stroke, tag.vertex)
+                if tag.done is not None:
+                    self._confirm(tag.done + 1)
+                    self.track.done_until(tag.track)  # type: ignore[arg-type]
+                    self._link().write(REALTIME_STATUS)  # verify the position at every confirmation point
+        elif line.startswith("error:"):
+            code = parse_code(line)
+            sent, tag = self.counter.acknowledged()
+            garbled = code in GARBLE_ERRORS and self._tracking
+            self._stop_motion()  # the lines behind the rejected one would draw a shortcut
+            if isinstance(tag, Tag):
+                self._mark_damaged(range(tag.stroke, tag.stroke + 1))  # redrawn whole: part of it never ran
+            raise ProtocolError(
+                f"GRBL rejected a line: error:{code} {ERROR_CODES.get(code, 'unknown error code')}"
+                + (" (pixelpen wrote it valid: it was garbled on the line)" if garbled else ""),
+                code=code, command=sent, device="grbl",
+            )
+        elif line.startswith("ALARM:"):
+            code = parse_code(line)
+            meaning = ALARM_CODES.get(code, "unknown alarm code")
+            if code in POSITION_LOSING_ALARMS:
+                self._lost = f"GRBL raised ALARM:{code} ({meaning})"
+            raise ProtocolError(f"GRBL alarm {code}: {meaning}", code=f"ALARM:{code}", command=self.counter.oldest(),
+                                device="grbl")
+        elif line.startswith("<"):
+            self._status_seen(parse_status(line))
+        elif parse_welcome(line) is not None:
+            self.counter.clear()
+            self._lost = "GRBL restarted during the plot (reset, power or USB glitch) and lost its position"
+            raise Disconnected(
+                "grbl: the controller restarted by itself (reset button, power or USB glitch): "
+                "its buffered lines are lost and its position may be wrong"
+            )
+        elif line.startswith(("[", ">")):
+            log.info("grbl: %s", line)
+        else:
+            log.warning("grbl: unexpected line %r", line)
+
+    def _read_line(self, timeout: float) -> str | None:
+        """One non-empty line from GRBL without its ending, or None when ``timeout`` passed in silence."""
+        link = self._link()
+        while True:
+            try:
+                raw = link.read_until(b"\n", timeout=timeout, max_size=256)
+            except LinkTimeout as exc:
+                if getattr(exc, "partial", b""):
+                    raise
+                return None
+            text = raw.decode("ascii", "replace").strip()
+            if text:
+                return text
+
+    # -- status and position -------------------------------------------------------------------------
+    def _status_seen(self, status: GrblStatus) -> None:
+        """Keep a status report: the work offset, the device's own pause, and (plotting) the position check."""
+        self.last_status = status
+        if status.wco is not None:
+            self._wco = np.asarray(status.wco[:3] + (0.0,) * (3 - len(status.wco[:3])), dtype=np.float64)
+        stopped = status.held and status.substate in (0, 1, None)
+        if stopped != self._held and (stopped or not status.held):
+            self._held = stopped
+            self._pause_changed(stopped)
+        if self._tracking and status.state in ("Run", "Idle", "Hold", "Jog"):
+            why = self.track.check(self._work_units(status), self._pen_down_of(status),
+                                   TRACK_TOLERANCE_MM / self.profile.unit_mm)
+            if why is not None:
+                self._stop_motion()
+                self._mark_damaged(range(self.confirmed, max(self._sent_end, self.confirmed + 1)))
+                raise LinkError(
+                    f"grbl: position check failed: {why} (GRBL reports {status.state} at {self._work_units(status)} "
+                    "units): a line was changed on the wire (a dropped byte), so the plot stops here"
+                )
+
+    def _stop_motion(self) -> None:
+        """Feed hold now, so nothing more is drawn after a fault (the reconnect's soft reset clears the rest)."""
+        self._tracking = False
+        link = self.link
+        if link is not None and not link.closed:
+            try:
+                link.write(REALTIME_HOLD)
+                link.flush()  # out before the link is closed for the reconnect
+            except LinkError as exc:
+                log.warning("grbl: could not send the feed hold: %s", exc)
+
+    def _work_units(self, status: GrblStatus) -> tuple[float, float]:
+        """The pen's XY in device units (work coordinates, as the G-code is written) from a status report."""
+        if status.wpos is not None:
+            xy = np.asarray(status.wpos[:2], dtype=np.float64)
+        elif status.mpos is not None:
+            xy = np.asarray(status.mpos[:2], dtype=np.float64) - self._wco[:2]
+        else:
+            raise ParseError("status report has neither MPos nor WPos", source="grbl status report")
+        x, y = (xy / self.profile.unit_mm).tolist()
+        return (round(x, 3), round(y, 3))
+
+    def _pen_down_of(self, status: GrblStatus) -> bool | None:
+        """Whether the pen is down by the report: the spindle output of a servo pen, the work Z of a Z pen."""
+        motion = self.pen_motion
+        if motion.mode == "z":
+            if status.wpos is not None and len(status.wpos) > 2:
+                z = status.wpos[2]
+            elif status.mpos is not None and len(status.mpos) > 2:
+                z = status.mpos[2] - self._wco[2]
+            else:
+                return None
+            return z < (motion.up + motion.down) / 2  # type: ignore[operator]
+        if status.spindle is None:
+            return None
+        up = 0.0 if motion.up is None else motion.up
+        return status.spindle > 0 and abs(status.spindle - motion.down) < abs(status.spindle - up)
+
+    def _settled_status(self) -> GrblStatus:
+        """Poll until GRBL has run everything it received: a completed hold, or at rest and silent for longer than a dwell.
+
+        GRBL reports Idle while it dwells (``G4``) with lines still waiting behind the dwell, so one Idle report is
+        not enough: the state must stay still, with no acknowledgement arriving, for the longest pen dwell and
+        two polls.  Bounded by SETTLE_LIMIT_S.
+        """
+        deadline = self.clock.now() + SETTLE_LIMIT_S
+        quiet_s = max(self.pen_motion.dwell_up, self.pen_motion.dwell_down) + 2 * STATUS_INTERVAL_S
+        since: float | None = None
+        seen = self._stale_seen
+        while True:
+            status = self.query_status()
+            now = self.clock.now()
+            if status.held and status.substate in (0, 1):
+                return status  # nothing runs before a resume, and the reconnect's soft reset discards it
+            if status.busy or self._stale_seen != seen:
+                since, seen = None, self._stale_seen
+            elif since is None:
+                since = now
+            elif now - since >= quiet_s:
+                return status
+            if now >= deadline:
+                raise LinkTimeout(f"grbl: still {status.state} {SETTLE_LIMIT_S}s after reconnecting")
+            self.clock.sleep(STATUS_INTERVAL_S)
+
+    def _settings(self) -> dict[int, float]:
+        """``$$`` as numbers ({100: 80.0, ...}); settings that do not parse are left out."""
+        settings: dict[int, float] = {}
+        for line in self._system_query("$$"):
+            key, eq, value = line.partition("=")
+            if eq and key[1:].isascii() and key[1:].isdecimal() and len(key) <= 4:
+                try:
+                    settings[int(key[1:])] = float(value.split()[0]) if value.split() else 0.0
+                except ValueError:
+                    continue
+        return settings
+
+    def _system_query(self, command: str) -> list[str]:
+        """Send a ``$`` query and return the lines before its ``ok``, waiting while GRBL still runs older lines.
+
+        Acknowledgements of lines queued before the query come first and are skipped.  A half line a broken
+        transfer left in GRBL's line buffer joins the query and makes it an error (a ``$`` inside a G-code line is
+        never valid), so that line never runs; the query is then sent once more.  A silent GRBL is probed with
+        ``?`` (it may be dwelling on a ``G4`` a garbled byte made long); bounded by SETTLE_LIMIT_S.
+        """
+        self._drain()
+        link = self._link()
+        deadline = self.clock.now() + SETTLE_LIMIT_S
+        for attempt in range(2):
+            link.write(command.encode("ascii") + b"\n")
+            lines: list[str] = []
+            probed = False
+            while True:
+                line = self._read_line(self.timeout)
+                if line is None:
+                    if probed or self.clock.now() >= deadline:
+                        raise LinkTimeout(f"grbl: no answer to {command!r} within {self.timeout}s")
+                    link.write(REALTIME_STATUS)
+                    probed = True
+                    continue
+                probed = False
+                if line == "ok":
+                    if lines:
+                        return lines
+                    continue  # the acknowledgement of a line queued before this query
+                if line.startswith("error:"):
+                    if attempt == 0 and not lines:
+                        log.info("grbl: a half line from the broken connection was discarded with %r", command)
+                        break
+                    raise ProtocolError(f"GRBL refused {command}", code=parse_code(line), command=command, device="grbl")
+                if line.startswith("<"):
+                    self._status_seen(parse_status(line))
+                elif line.startswith("ALARM:") or parse_welcome(line) is not None:
+                    self._dispatch(line)
+                elif line.startswith(("[", "$")):
+                    lines.append(line)
+        raise ProtocolError(f"GRBL refused {command} twice", code=None, command=command, device="grbl")
+
+    # -- connection helpers ------------------------------------------------------------------------
+    def _first_answer(self, timeout: float) -> str | None:
+        """After the wake-up ``?``: 'welcome' (GRBL just booted), 'status' (it was running) or None."""
+        while True:
+            line = self._read_line(timeout)
+            if line is None:
+                return None
+            version = parse_welcome(line)
+            if version is not None:
+                self._welcomed(version)
+                return "welcome"
+            if line.startswith("<"):
+                self.last_status = parse_status(line)
+                return "status"
+            log.debug("grbl: stale line at connect ignored: %r", line)
+
+    def _welcomed(self, version: tuple[int, int, str]) -> None:
+        self.version = version
+        if version[:2] < (1, 1):
+            raise ProtocolError(
+                f"GRBL {version[0]}.{version[1]}{version[2]} is not supported: pixelpen speaks the GRBL 1.1 interface "
+                "(status reports, real-time commands and error codes differ before 1.1)",
+                code="version", command=None, device="grbl",
+            )
+
+    def _settle(self, quiet_s: float = 0.1) -> None:
+        """Read what GRBL prints after a (re)start until it is quiet: welcome lines, unlock hint, startup echoes."""
+        while True:
+            line = self._read_line(quiet_s)
+            if line is None:
+                return
+            version = parse_welcome(line)
+            if version is not None:
+                self._welcomed(version)
+            elif line.startswith("<"):
+                self.last_status = parse_status(line)
+            else:
+                log.info("grbl: %s", line)
+
+    def _wait_until_still(self, limit_s: float, holding: bool = False) -> None:
+        """Poll status until the carriage rests (Idle, Alarm, or Hold:0 when ``holding``); bounded by ``limit_s``."""
+        deadline = self.clock.now() + limit_s
+        while True:
+            status = self.query_status()
+            if not status.busy or (holding and status.state == "Hold" and status.substate == 0):
+                return
+            if status.state in ("Hold", "Door") and not holding:
+                return  # an operator's hold: the reset that follows stops it
+            if self.clock.now() >= deadline:
+                raise LinkTimeout(f"grbl: still {status.state} after {limit_s}s")
+            self.clock.sleep(STATUS_INTERVAL_S)
+
+    def _link(self) -> Link:
+        if self.link is None:
+            raise LinkError("grbl: the plotter is not connected")
+        return self.link
