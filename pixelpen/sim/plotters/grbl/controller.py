@@ -184,7 +184,6 @@ class GrblSimulator(SystemCommands, RealtimeCommands):
         self._line = bytearray()
         self._line_flags = 0
         self._task: LineTask | None = None
-        self._task_is_startup = False
         self._startup_queue: deque[str] = deque()
         self._reset_machine(power_up, keep_alarm)
         self._emit(WELCOME)
@@ -216,7 +215,7 @@ class GrblSimulator(SystemCommands, RealtimeCommands):
                 continue
             if self._startup_queue:
                 startup = self._startup_queue.popleft()
-                self._start_task(self._startup_task(startup), startup=True)
+                self._start_task(self._startup_task(startup))
                 continue
             line = self._take_line()
             if line is None:
@@ -226,7 +225,7 @@ class GrblSimulator(SystemCommands, RealtimeCommands):
                 return
             self.stats.commands_executed += 1
             self.log.append((self._now, line if not isinstance(line, int) else "<overflow>"))
-            self._start_task(self._line_task(line), startup=False)
+            self._start_task(self._line_task(line))
 
     def _take_line(self) -> str | int | None:
         """Move RX bytes into the line buffer (GRBL's pre-parser) until an end of line; None if none yet.
@@ -259,9 +258,8 @@ class GrblSimulator(SystemCommands, RealtimeCommands):
                 self._line.append(c)
         return None
 
-    def _start_task(self, task: LineTask, startup: bool) -> None:
+    def _start_task(self, task: LineTask) -> None:
         self._task = task
-        self._task_is_startup = startup
         self._wait = None
         self._step_task()
 

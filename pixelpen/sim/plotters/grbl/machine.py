@@ -90,7 +90,6 @@ class GrblMachine(SimulatedDevice):
         self._sleep = False
         self._critical = False
         self._homing_until: float | None = None
-        self._homing_target: np.ndarray | None = None
         self._jogging = False
         self._soft_limit_pending = False
         self._inked = 0.0
@@ -354,7 +353,6 @@ class GrblMachine(SimulatedDevice):
         duration = z_dist / seek + xy_dist / seek + 2 * (2 * self.settings[27] / locate) + 4 * self.settings[26] / 1000
         self._homing_start = phys.copy()
         self._homing_t0 = self._now
-        self._homing_target = np.zeros(3)
         self._homing_until = self._now + duration
         self._homing_duration = duration
 
