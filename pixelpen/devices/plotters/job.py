@@ -50,7 +50,7 @@ from pixelpen.devices.plotters.base import PlotProgress, PlotState, PlotterDispl
 from pixelpen.devices.plotters.layout import Layout, Placement, home_of, prepare_drawing
 from pixelpen.display.registry import display_class
 from pixelpen.errors import ConfigError, LinkError, ParseError, PlotInterrupted
-from pixelpen.urls import format_url, parse_url
+from pixelpen.urls import check_path, format_url, parse_url
 from pixelpen.vector.displaylist import DisplayList
 
 if TYPE_CHECKING:  # the optimiser is imported when a job is optimised
@@ -210,8 +210,8 @@ class PlotJob:
                  confirm_position: bool = False, retries: int = 2) -> None:
         if display.state_file is None:
             raise ConfigError(f"{display.profile.name}: a plot job needs a display with a state file")
-        if retries < 0:
-            raise ConfigError(f"retries must be 0 or more, got {retries}")
+        if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
+            raise ConfigError(f"retries must be a whole number, 0 or more, got {retries!r}")
         self.display = display
         self.drawing = drawing
         self.source = source if source is not None else fingerprint(drawing)
@@ -274,7 +274,7 @@ class PlotJob:
         is opened, for a missing or unreadable state file, one of another drawing, or a plotter of another
         profile or paper than the plot was planned for.  ``confirm_position``: see the module docstring.
         """
-        state_file = Path(state)
+        state_file = check_path(state, "state")
         plan = SavedPlan.of_state(state_file)
         target = to if to is not None else plan.url
         if not target:

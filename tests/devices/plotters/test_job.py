@@ -179,5 +179,7 @@ def test_a_job_needs_a_state_file_and_sane_retries(tmp_path):
         PlotJob(plotter_for("sim:hp7475a?speed=fast"), one_line())
     with pytest.raises(ConfigError, match="retries"):
         PlotJob(plotter_for(f"sim:hp7475a?speed=fast&state={tmp_path / 's.json'}"), one_line(), retries=-1)
+    with pytest.raises(ConfigError, match="state must be a file name"):
+        PlotJob.resume(42)
     with pytest.raises(ConfigError, match="named twice"):
         PlotJob.prepare("x.svg", to=f"sim:hp7475a?state={tmp_path / 'a.json'}", state=tmp_path / "b.json")
