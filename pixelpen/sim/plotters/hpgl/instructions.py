@@ -294,10 +294,7 @@ class GraphicsInstructions:
         points = self._arc_points(centre_user, abs(radius), start, 360.0, chord)
         for x, y in points:
             m.check_position(float(x), float(y))
-        pos, down = m.pos, m.pen_down
-        m.pen_to(False)
-        m.draw_path(points)
-        m.restore_pen(pos, down)
+        m.outline(points)
 
     def _aa(self, item: Instruction) -> None:
         """AA / AR: arc around an absolute or relative centre, drawn if the pen is down."""
@@ -330,11 +327,8 @@ class GraphicsInstructions:
         """EA / ER: edge a rectangle (absolute or relative corner)."""
         m = self.machine
         x1, y1 = m.check_position(*self._rect_corner(item))
-        (x0, y0), down = m.pos, m.pen_down
-        ring = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]])
-        m.pen_to(False)
-        m.draw_path(ring)
-        m.restore_pen((x0, y0), down)
+        x0, y0 = m.pos
+        m.outline(np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]]))
 
     def _ra(self, item: Instruction) -> None:
         """RA / RR: fill a rectangle with the FT pattern."""
@@ -364,12 +358,7 @@ class GraphicsInstructions:
 
     def _ew(self, item: Instruction) -> None:
         """EW: edge a wedge."""
-        m = self.machine
-        ring = self._wedge_ring(item)
-        pos, down = m.pos, m.pen_down
-        m.pen_to(False)
-        m.draw_path(ring)
-        m.restore_pen(pos, down)
+        self.machine.outline(self._wedge_ring(item))
 
     def _wg(self, item: Instruction) -> None:
         """WG: fill a wedge with the FT pattern."""
@@ -438,10 +427,7 @@ class GraphicsInstructions:
         else:
             span = (p2x - p1x) / 100.0
             path = np.array([[x + tp * span, y], [x - tn * span, y]])
-        down = m.pen_down
-        m.pen_to(False)
-        m.draw_path(path, dashed=False)
-        m.restore_pen((x, y), down)
+        m.outline(path, dashed=False)
 
     def _dp(self, item: Instruction) -> None:
         """Digitize: no operator here, so the point is taken at once where the pen stands (documented)."""

@@ -407,6 +407,12 @@ class Machine:
         if pen_down:
             self.pen_to(True)
 
+    def outline(self, points: np.ndarray, dashed: bool = True) -> None:
+        """Draw a shape through ``points`` from where the pen stands, then return there with the pen as it was."""
+        pos, down = self.pos, self.pen_down
+        self.pen_to(False)
+        self.draw_path(points, dashed)
+        self.restore_pen(pos, down)
 
 
 def _pieces_to_segments(polys: list[np.ndarray]) -> np.ndarray:
