@@ -1,30 +1,29 @@
-"""Shared parts of the pen-plotter simulators: paper with its pen-down strokes, wire counters, option readers."""
+"""Shared parts of the pen-plotter simulators: paper with its pen-down strokes and its rendering, wire counters."""
 
 from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Final, TypeVar
+from typing import TYPE_CHECKING, Final
 
 import numpy as np
 
 from pixelpen.colour import colour_hex, parse_colour
-from pixelpen.errors import ConfigError, URLError
+from pixelpen.errors import ConfigError
 from pixelpen.vector.displaylist import DisplayList
 
 if TYPE_CHECKING:
     from pixelpen.raster.canvas import Canvas
 
 __all__ = [
-    "PAPER_FORMATS", "Paper", "WireStats", "blank_sheet", "clamp_path", "draw_segments", "paper_format", "read_options",
+    "PAPER_FORMATS", "Paper", "WireStats", "blank_sheet", "clamp_path", "draw_segments", "paper_format",
     "write_paper_svg",
 ]
 
 log = logging.getLogger(__name__)
-T = TypeVar("T")
 
 
 @dataclass
@@ -242,30 +241,3 @@ class Paper:
         self._done.clear()
         self._current = None
 
-
-def read_options(
-    model: str,
-    options: Mapping[str, str],
-    readers: Mapping[str, tuple[Callable[[str], T], T]],
-) -> dict[str, T]:
-    """Validate a simulator's URL options: every key known, every value readable; unknown keys list the known.
-
-    ``readers`` maps option name -> (converter from the option string, default).  Returns every option,
-    converted or defaulted.  Raises URLError naming the model, the option and what was wrong.
-    """
-    unknown = sorted(set(options) - set(readers))
-    if unknown:
-        raise URLError(
-            f"sim:{model}: unknown option(s) {', '.join(unknown)}; known: {', '.join(sorted(readers))}"
-        )
-    values: dict[str, T] = {}
-    for key, (convert, default) in readers.items():
-        if key not in options:
-            values[key] = default
-            continue
-        raw = options[key]
-        try:
-            values[key] = convert(str(raw))
-        except (ValueError, TypeError, ConfigError) as exc:
-            raise URLError(f"sim:{model}: option {key}={raw!r} is not valid: {exc}") from None
-    return values

@@ -1,4 +1,4 @@
-"""Shared plotter-simulator parts: end-stop clamping, the paper's strokes and rendering, option validation."""
+"""Shared plotter-simulator parts: end-stop clamping, the paper's strokes and rendering; simulators' option errors."""
 
 from __future__ import annotations
 
@@ -8,7 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pixelpen.errors import ConfigError, URLError
-from pixelpen.sim.plotters.sheet import Paper, blank_sheet, clamp_path, draw_segments, read_options
+from pixelpen.sim.base import create_simulator
+from pixelpen.sim.plotters.sheet import Paper, blank_sheet, clamp_path, draw_segments
 
 LO = np.array([0.0, 0.0])
 HI = np.array([100.0, 50.0])
@@ -92,10 +93,10 @@ def test_draw_segments_inks_each_pen_in_its_colour_and_a_pen_without_one_plots_d
     assert tuple(img[2, 9]) == (255, 0, 0) and tuple(img[11, 9]) == (0, 0, 255) and tuple(img[15, 9]) == (255, 255, 255)
 
 
-def test_read_options_names_the_bad_option_and_lists_the_known():
-    readers = {"size": (float, 1.0), "pen": (str, "servo")}
-    assert read_options("x", {"size": "2"}, readers) == {"size": 2.0, "pen": "servo"}
-    with pytest.raises(URLError, match=r"unknown option\(s\) colour.*known: pen, size"):
-        read_options("x", {"colour": "red"}, readers)
-    with pytest.raises(URLError, match=r"option size='big' is not valid"):
-        read_options("x", {"size": "big"}, readers)
+@pytest.mark.parametrize("model, bad", [("hp7475a", "buffer"), ("grbl", "rx_buffer"), ("axidraw", "contact")])
+def test_simulator_options_name_the_bad_option_and_list_the_known(model, bad):
+    # each simulator reads its URL options through pixelpen.options (sheet.read_options, which did it before, is gone)
+    with pytest.raises(URLError, match=rf"^sim:{model}: unknown option\(s\) colourz; known: .*{bad}"):
+        create_simulator(model, colourz="red")
+    with pytest.raises(URLError, match=rf"^sim:{model}: option {bad}='big' is not valid"):
+        create_simulator(model, **{bad: "big"})
