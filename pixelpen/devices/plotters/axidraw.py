@@ -1,5 +1,8 @@
 """AxiDraw driver (``axidraw:PORT``): the EiBotBoard over USB serial, moves planned and sliced on the host.
 
+Longer than 600 lines because the EBB's command window, FIFO-count confirmation and motor-power checks are
+one protocol state on the display (the encoding, reply parsing and firmware table are in ``ebb_encode``).
+
 URL: ``axidraw:/dev/ttyACM0?model=se_a3&moves=lm`` (PORT is a device path, a pyserial URL in brackets, or
 ``auto`` for the first USB serial port with the EBB's ID 04D8:FD92); ``sim:axidraw?speed=fast`` plots on
 the simulator.  ``model=`` picks the profile: ``v3`` (default; also V2 and SE/A4), ``se_a3``, ``minikit``.
@@ -201,7 +204,7 @@ class AxiDrawPlotter(PlotterDisplay):
 
     def _rehomed(self) -> None:
         """The carriage was pushed home after the board lost count of it: clear the step counters there (EM)."""
-        self._command("EM,1,1", queued=supports(self.version, "queued_EM"))
+        self._command("EM,1,1", queued=self.version is not None and supports(self.version, "queued_EM"))
         self.position = np.zeros(2, dtype=np.int64)
         self._zeroed = True
 
@@ -234,7 +237,7 @@ class AxiDrawPlotter(PlotterDisplay):
             self.position = self._query_steps()
             log.info("axidraw: reconnected; carriage at %s steps", self.position.tolist())
         else:
-            self._command("EM,1,1", queued=supports(self.version, "queued_EM"))
+            self._command("EM,1,1", queued=self.version is not None and supports(self.version, "queued_EM"))
             self.position = np.zeros(2, dtype=np.int64)
             self._zeroed = True
         self._command(f"SC,4,{self.servo_up}")
@@ -334,7 +337,8 @@ class AxiDrawPlotter(PlotterDisplay):
         if supports(self.version, "QE"):
             enabled = self._query_enabled()
             if enabled != (MICROSTEPS, MICROSTEPS):
-                lost = lost or f"the motors are not energised at 1/{MICROSTEPS} (QE {enabled[0]},{enabled[1]}): the board restarted or they were switched off"
+                lost = lost or (f"the motors are not energised at 1/{MICROSTEPS} (QE {enabled[0]},{enabled[1]}): "
+                                 "the board restarted or they were switched off")
         elif not self._zeroed:
             lost = lost or f"EBB firmware {_v(self.version)} has no QE to tell whether the motors stayed on"
         if raw < VPLUS_MIN_RAW:
@@ -360,7 +364,7 @@ class AxiDrawPlotter(PlotterDisplay):
         return not self._query_pen_up()
 
     def _manual_home(self) -> None:
-        """Pen up and travel to where the step counters are zero (where the motors were enabled), like pyaxidraw's walk_home."""
+        """Pen up and travel to where the step counters are zero (motors enabled there), like pyaxidraw's walk_home."""
         self._manual_pen(False)
         if supports(self.version or (0, 0, 0), "QS"):
             self.position = self._query_steps()
@@ -387,12 +391,12 @@ class AxiDrawPlotter(PlotterDisplay):
         self._move(np.vstack([self.position, target]), self.profile.pen_up)
 
     def _move(self, pts: np.ndarray, limits: Any, stroke: int | None = None) -> None:
-        """Plan ``pts`` (steps, starting at the carriage) with ``limits`` and send it as slices (of ``stroke``, pen down)."""
+        """Plan ``pts`` (steps, from the carriage) with ``limits`` and send it as slices (of ``stroke``, pen down)."""
         mm = pts.astype(np.float64) / self.steps_per_mm
         sliced = slice_polyline(mm, limits, self.steps_per_mm, SLICE_S)
         signed_steps = supports(self.version or (0, 0, 0), "LM_signed_steps")
         commands = move_commands(sliced, self.moves, signed_steps)
-        for cmd, ms, vertex in zip(commands, sliced.ms.tolist(), sliced.vertex.tolist()):
+        for cmd, ms, vertex in zip(commands, sliced.ms.tolist(), sliced.vertex.tolist(), strict=False):
             self._command(cmd, queued=True, duration_s=ms / 1000.0,
                           reached=None if stroke is None else (stroke, vertex))
         self.position = self.position + sliced.steps.sum(axis=0)
@@ -425,7 +429,7 @@ class AxiDrawPlotter(PlotterDisplay):
 
     # -- motor power -----------------------------------------------------------------------------
     def _power_checkpoint(self) -> None:
-        """Queue a V+ check (``QC``; plus ``QG`` on fw >= 3): its good answer certifies the commands finished before it."""
+        """Queue a V+ check (``QC``; ``QG`` too on fw >= 3): a good answer certifies the commands finished before it."""
         certified = self._queued_sent - (FIFO_DEPTH + 1)  # what has run by the time the parser reaches the check
         self._command("QC", on_reply=lambda data: self._supply(parse_qc(data)[1], certified))
         if supports(self.version or (0, 0, 0), "queued_EM"):
@@ -557,7 +561,7 @@ class AxiDrawPlotter(PlotterDisplay):
         return found[0]
 
     def _query_steps(self) -> np.ndarray:
-        """The carriage position in steps (x, y) from the motor step counters (``QS``: motor1 = x + y, motor2 = x − y)."""
+        """The carriage position in steps (x, y) from the step counters (``QS``: motor1 = x + y, motor2 = x − y)."""
         s1, s2 = self._query("QS", parse_qs)
         return np.array([(s1 + s2) // 2, (s1 - s2) // 2], dtype=np.int64)
 
@@ -599,7 +603,8 @@ class AxiDrawPlotter(PlotterDisplay):
 def _fields_pair(data: str) -> tuple[int, int]:
     """``QE`` data ``m1,m2`` (microstep divisor of each enabled motor, 0 when off)."""
     fields = strip_name("QE", data.strip()).split(",")
-    if len(fields) != 2 or not all(f.strip().isascii() and f.strip().isdecimal() and len(f.strip()) <= 3 for f in fields):
+    if len(fields) != 2 or not all(
+            f.strip().isascii() and f.strip().isdecimal() and len(f.strip()) <= 3 for f in fields):
         raise ParseError("QE reply must be two numbers", source="ebb QE", token=data)
     return int(fields[0]), int(fields[1])
 

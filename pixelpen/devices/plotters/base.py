@@ -1,6 +1,11 @@
 """What every pen plotter shares: the link, stroke-by-stroke plotting with confirmed progress,
 pause at pen-up, pen changes, resume after faults (in process or from a state file), and safe stops.
 
+Longer than 600 lines because the plot loop, the confirmation bookkeeping and the resume decision share
+one job's state (confirmed, sent, damaged and lifted strokes, where the device said it stopped) that the
+state file mirrors; split, each part would reach into the others' fields.  What stands alone has moved
+out (``resume``, ``state``, ``progress``).
+
 A plotter family (HPGL, GRBL, EBB) subclasses :class:`PlotterDisplay` and implements the device core:
 
 * ``_connect()`` — handshake and initialise the device on ``self.link`` (called on every (re)connect);
@@ -108,9 +113,9 @@ class PlotterDisplay(VectorDisplay):
     """Built-in profile the scheme uses unless the URL names another."""
     family: ClassVar[str] = ""
     """Simulator model name for ``sim:`` URLs (usually the scheme)."""
-    lifts_after_each_stroke: ClassVar[bool] = True
+    lifts_after_each_stroke: bool = True
     """The device may rest with the pen lifted at the end of any stroke (False: only after ``_lifted_in_place``)."""
-    rests_pen_down_at_start: ClassVar[bool] = True
+    rests_pen_down_at_start: bool = True
     """The device may rest with the pen lowered on a stroke's first point before drawing it."""
     reports_position: ClassVar[bool] = False
     """True when the family implements ``_where``; otherwise a resume restarts at the last confirmed stroke
@@ -245,26 +250,29 @@ class PlotterDisplay(VectorDisplay):
         return {}
 
     @classmethod
-    def simulator_options(cls, sim_options: dict[str, str], options: OptionValues, profile: DeviceProfile) -> dict[str, str]:
+    def simulator_options(
+        cls, sim_options: dict[str, str], options: OptionValues, profile: DeviceProfile,
+    ) -> dict[str, str]:
         """Options for the simulator of a ``sim:`` URL: as given, paper included (a family translates its own)."""
         return sim_options
 
     # -- life cycle ----------------------------------------------------------------------------
     def _open_device(self) -> None:
-        self._attach(self._make_link())
+        link = self._make_link()
+        self._attach(link)
         try:
             if self.reports_position and self._unfinished_state_file():
                 self._where_found = self._where()
             self._connect()
         except BaseException:
-            self.link.close()
+            link.close()
             self.link = None
             raise
 
     def _make_link(self) -> Link:
         if self._link_factory is not None:
             return self._link_factory()
-        return SerialLink(self.port, baudrate=self.baudrate, flow=self.flow, timeout=self.timeout)  # type: ignore[arg-type]
+        return SerialLink(self.port, baudrate=self.baudrate, flow=self.flow, timeout=self.timeout)
 
     def _close_device(self) -> None:
         link, self.link = self.link, None
@@ -282,7 +290,7 @@ class PlotterDisplay(VectorDisplay):
             if self._interrupted and self.reports_position:
                 self._note_where_stopped()
             self._make_safe()
-        except Exception as exc:  # leaving the device safe is best effort on a failing link
+        except Exception as exc:  # noqa: BLE001  (leaving the device safe is best effort on a failing link)
             log.warning("could not leave %s safe: %s", self.profile.name, exc)
         finally:
             self.link = None
@@ -385,7 +393,9 @@ class PlotterDisplay(VectorDisplay):
                 self.clock.sleep(wait_s)
         self.plot(self._job, resume=True, position_confirmed=position_confirmed)
 
-    def _start_job(self, dl: DisplayList, resume: bool, pts: np.ndarray, position_confirmed: bool = False) -> ResumePoint:
+    def _start_job(
+        self, dl: DisplayList, resume: bool, pts: np.ndarray, position_confirmed: bool = False,
+    ) -> ResumePoint:
         fp = fingerprint(dl)
         start = ResumePoint(0)
         if resume and self._job is not None and fingerprint(self._job) == fp:
@@ -407,8 +417,9 @@ class PlotterDisplay(VectorDisplay):
             if state.stopped_at is not None and now is not None and not now.position_lost:
                 # the last session asked where the device stopped before it parked it
                 x, y, pen, tol = state.stopped_at
-                self._where_found = DeviceWhere((x, y), None if pen < 0 else bool(pen), tolerance=tol,
-                                                detail=f"stopped at {x:g},{y:g} (asked before the last session parked it)")
+                self._where_found = DeviceWhere(
+                    (x, y), None if pen < 0 else bool(pen), tolerance=tol,
+                    detail=f"stopped at {x:g},{y:g} (asked before the last session parked it)")
             sent = len(dl) if state.sent is None else state.sent
             self._job, self._head, self._job_state = dl, None, state  # a PositionUnknown below keeps the file current
             self._run_start = None if state.start is None else (int(state.start[0]), (state.start[1], state.start[2]))
@@ -431,7 +442,9 @@ class PlotterDisplay(VectorDisplay):
         self._save_state()
         return start
 
-    def _resume_point(self, dl: DisplayList, pts: np.ndarray, confirmed: int, sent: int, confirmed_by_user: bool) -> ResumePoint:
+    def _resume_point(
+        self, dl: DisplayList, pts: np.ndarray, confirmed: int, sent: int, confirmed_by_user: bool,
+    ) -> ResumePoint:
         """Where to continue the job: located from ``_where()`` among strokes confirmed..sent, or PositionUnknown."""
         where, self._where_found = self._where_found, None
         self._stopped_at = None
@@ -452,13 +465,13 @@ class PlotterDisplay(VectorDisplay):
             self._position_lost = True
         lost = self._position_lost or where is None or not where.settled
         lifts = self._lifts
-        found = [] if lost else locate(
+        found = [] if lost or where is None else locate(
             window, where, before, down_at_start=self.rests_pen_down_at_start,
             lifts=(lambda s: True) if self.lifts_after_each_stroke or lifts is None else lifts.__contains__,
         )
         if head is not None:
-            found = [in_full_stroke(r, head[0], len(pts[dl.offsets[head[0]] : dl.offsets[head[0] + 1]]) - len(head[1]), head[2])
-                     for r in found]
+            short = len(pts[dl.offsets[head[0]] : dl.offsets[head[0] + 1]]) - len(head[1])
+            found = [in_full_stroke(r, head[0], short, head[2]) for r in found]
         damaged, self._damaged = self._damaged, None
         self._redo = range(0)
         first = max(confirmed, damaged.start) if damaged is not None else confirmed
@@ -482,12 +495,14 @@ class PlotterDisplay(VectorDisplay):
         if confirmed == sent:
             return ResumePoint(confirmed)  # nothing was in doubt
         strokes = range(confirmed, sent)
-        if lost:
+        if lost or where is None:
             why = (where.detail if where is not None and where.detail else "the device cannot tell where it stopped")
         elif not found:
-            why = f"it stands at {where.position} (pen {_pen_word(where.pen_down)}), on none of the strokes sent since the last confirmation"
+            why = (f"it stands at {where.position} (pen {_pen_word(where.pen_down)}), "
+                   "on none of the strokes sent since the last confirmation")
         else:
-            why = f"its position {where.position} (pen {_pen_word(where.pen_down)}) fits {len(found)} places: " + ", ".join(
+            why = f"its position {where.position} (pen {_pen_word(where.pen_down)}) fits {len(found)} places: "
+            why += ", ".join(
                 f"stroke {r.stroke}" + (f" after vertex {r.vertex}" if r.vertex or r.at else "") for r in found)
         self._damaged = damaged  # still to be drawn again by the confirmed resume
         self._stopped_at = where if where is not None and where.position is not None and not lost else None
@@ -495,7 +510,8 @@ class PlotterDisplay(VectorDisplay):
         raise PositionUnknown(
             f"{self.profile.name}: cannot tell which of strokes {confirmed}..{sent - 1} are on paper: {why}. "
             f"Re-home the device or check the sheet, then resume with position_confirmed=True "
-            f"(pixelpen plot --resume --confirm-position): it continues from stroke {found[0].stroke if found else confirmed}"
+            "(pixelpen plot --resume --confirm-position): it continues from stroke "
+            f"{found[0].stroke if found else confirmed}"
             + ("" if found else ", redrawing what was drawn since"),
             resume_from=found[0].stroke if found else confirmed, strokes=strokes,
         )
@@ -504,10 +520,12 @@ class PlotterDisplay(VectorDisplay):
         """Stroke points in integer device units, offset to the paper's hard-clip origin."""
         if not np.isclose(dl.unit_mm, self.profile.unit_mm):
             raise ConfigError(
-                f"display list is in {dl.unit_mm} mm units but {self.profile.name} plots in {self.profile.unit_mm} mm units"
+                f"display list is in {dl.unit_mm} mm units but {self.profile.name} plots in "
+                f"{self.profile.unit_mm} mm units"
             )
         offset = np.array([self.paper.x_range[0], self.paper.y_range[0]], float)
-        return np.rint(dl.points + offset).astype(np.int64)
+        points: np.ndarray = np.rint(dl.points + offset).astype(np.int64)
+        return points
 
     def _confirm(self, k: int) -> None:
         """Record the device's word that strokes < k are on paper (families call this)."""
@@ -534,10 +552,12 @@ class PlotterDisplay(VectorDisplay):
             self._job_state.sent = sent
             self._job_state.position_lost = self._position_lost
             self._job_state.damaged = [self._damaged.start, self._damaged.stop] if self._damaged else None
-            self._job_state.lifts = None if self._lifts is None else sorted(s for s in self._lifts if s >= self.confirmed)
+            lifts = self._lifts
+            self._job_state.lifts = None if lifts is None else sorted(s for s in lifts if s >= self.confirmed)
             at = self._stopped_at
             self._job_state.stopped_at = None if at is None or at.position is None else [
-                float(at.position[0]), float(at.position[1]), -1 if at.pen_down is None else int(at.pen_down), at.tolerance]
+                float(at.position[0]), float(at.position[1]), -1 if at.pen_down is None else int(at.pen_down),
+                at.tolerance]
             self._job_state.save(self.state_file)
 
     def _hold_while_paused(self) -> None:
@@ -555,7 +575,7 @@ class PlotterDisplay(VectorDisplay):
             self._pause_changed(False)
 
     def _mark_damaged(self, strokes: range) -> None:
-        """Families call this before raising for an error the device found in ``strokes`` (an instruction skipped or misread).
+        """Families call this before raising for an error the device found in ``strokes`` (skipped or misread).
 
         The resume draws those strokes again whole (never losing one; their good parts are drawn twice),
         then continues where the device stopped.
@@ -565,7 +585,7 @@ class PlotterDisplay(VectorDisplay):
         self._damaged = strokes
 
     def _note_where_stopped(self) -> None:
-        """Before the safe stop parks an interrupted job's device, ask where it stopped and keep it in the state file."""
+        """Before the safe stop parks an interrupted job's device, ask where it stopped; keep it in the state file."""
         try:
             where = self._where()
         except PixelpenError as exc:  # the link that failed the plot may be gone: the next session asks the device
@@ -583,7 +603,7 @@ class PlotterDisplay(VectorDisplay):
             self._lifts.add(stroke)
 
     def _pause_changed(self, paused: bool) -> None:
-        """Tell ``on_pause`` the device has actually paused (True) or goes on (False); families call it for their own pauses."""
+        """Tell ``on_pause`` the device has paused (True) or goes on (False); families call it for their own pauses."""
         if paused != self._paused_now:
             self._paused_now = paused
             if self.on_pause is not None:
@@ -635,7 +655,7 @@ class PlotterDisplay(VectorDisplay):
     def _poll_quietly(self) -> None:
         try:
             self._poll()
-        except Exception as exc:  # the link is already failing; keep the first error
+        except Exception as exc:  # noqa: BLE001  (the link is already failing; keep the first error)
             log.debug("poll after fault failed: %s", exc)
 
     # -- the family's core ---------------------------------------------------------------------
@@ -668,15 +688,16 @@ class PlotterDisplay(VectorDisplay):
         """Stop, pen up, park, motors off — best effort on ``self.link``."""
 
     def _where(self) -> DeviceWhere:
-        """On a fresh link before ``_connect()``: let the device settle, say where it is (only if ``reports_position``)."""
-        return DeviceWhere(None, None, position_lost=True, detail=f"the {self.profile.name} driver cannot ask where it stopped")
+        """On a fresh link before ``_connect()``: let the device settle, say where it is (if ``reports_position``)."""
+        return DeviceWhere(None, None, position_lost=True,
+                           detail=f"the {self.profile.name} driver cannot ask where it stopped")
 
     def _pen_position(self) -> tuple[float, float] | None:
         """Where the pen will be once everything sent has run (device units), the next travel's start; None: unknown."""
         return None
 
     def _rehomed(self) -> None:
-        """The user re-homed the device after it lost its position: take where it stands as home (default: nothing to do)."""
+        """The user re-homed the device after it lost its position: take where it stands as home (default: nothing)."""
 
     def _manual_pen(self, down: bool) -> None:
         """Move the pen down or up now and wait until it is there."""

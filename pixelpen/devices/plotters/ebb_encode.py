@@ -61,7 +61,9 @@ VPLUS_MIN_RAW = 250
 """Least ``QC`` V+ reading (10-bit) of a powered board: plotink's queryVoltage ("typical reading is about 300,
 for 9 V input"; below 250 pyaxidraw warns that the power supply appears to be off)."""
 
-_VERSION = re.compile(r"^(?:V,)?(EBB.*?Version\s+([0-9]{1,3})\.([0-9]{1,3})\.([0-9]{1,3}).*)$", re.IGNORECASE | re.ASCII)
+_VERSION = re.compile(
+    r"^(?:V,)?(EBB.*?Version\s+([0-9]{1,3})\.([0-9]{1,3})\.([0-9]{1,3}).*)$", re.IGNORECASE | re.ASCII,
+)
 _ERROR = re.compile(r"^(?:([A-Z0-9]{1,2}),)?!([0-9]{1,3})\s*Err:\s*(.*?)(?:OK)?$", re.IGNORECASE | re.ASCII)
 _UINT = re.compile(r"[0-9]{1,10}", re.ASCII)
 _INT = re.compile(r"[+-]?[0-9]{1,10}", re.ASCII)
@@ -158,7 +160,9 @@ def slice_polyline(points_mm: np.ndarray, limits: MotionLimits, steps_per_mm: fl
     pts = np.asarray(points_mm, dtype=np.float64).reshape(-1, 2)
     blocks = plan(pts, limits)
     if len(blocks) == 0:
-        return SlicedMove(np.zeros(0, np.int64), np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(0), np.zeros(0, np.int64))
+        return SlicedMove(
+            np.zeros(0, np.int64), np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(0), np.zeros(0, np.int64),
+        )
     count = np.maximum(1, np.ceil(blocks.duration / slice_s - 1e-9).astype(np.int64))
     k = np.repeat(np.arange(len(blocks)), count)
     first = np.repeat(np.cumsum(count) - count, count)

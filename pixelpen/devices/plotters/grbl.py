@@ -269,7 +269,7 @@ class GrblPlotter(GrblStream):
                 self._send_line(line, Tag(index, 0))
             vertices = range(1, len(pts))
         first = 1 if joins else 1 + len(self.pen_motion.down_lines())
-        for line, k in zip(lines[first:], vertices):
+        for line, k in zip(lines[first:], vertices, strict=False):
             if k:
                 self.track.append(tuple(pts[k].tolist()), True)
             self._send_line(line, Tag(index, k))
@@ -362,7 +362,8 @@ class GrblPlotter(GrblStream):
                 raise LinkTimeout(f"grbl: no answer to '?' within {max(self.timeout, BOOT_WAIT_S)}s")
             if first == "welcome":
                 return DeviceWhere(None, None, position_lost=True,
-                                   detail="GRBL restarted (its welcome banner): power, reset or the port's auto-reset lose its position")
+                                   detail="GRBL restarted (its welcome banner): power, reset or the port's "
+                                   "auto-reset lose its position")
             status = self._settled_status()
             self._settle()
         finally:
@@ -374,7 +375,8 @@ class GrblPlotter(GrblStream):
             self._settle()
             status = self.query_status()
             if status.state == "Alarm":
-                return DeviceWhere(None, None, position_lost=True, detail="GRBL raised an alarm on the reset that ended its hold")
+                return DeviceWhere(None, None, position_lost=True,
+                                   detail="GRBL raised an alarm on the reset that ended its hold")
         settings = self._settings()
         status = self.query_status()
         steps = min(settings.get(100, math.inf), settings.get(101, math.inf))

@@ -101,7 +101,9 @@ MAX_DIGITS = 12
 """Digits a number in a GRBL reply may have at most (GRBL prints at most 10 for a uint32, 3-4 decimals)."""
 _WELCOME = re.compile(r"^Grbl ([0-9]{1,3})\.([0-9]{1,3})([a-z]?)\s*\[.*\]$", re.ASCII)
 _UINT = re.compile(rf"[0-9]{{1,{MAX_DIGITS}}}", re.ASCII)
-_DECIMAL = re.compile(rf"-?(?:[0-9]{{1,{MAX_DIGITS}}}(?:\.[0-9]{{0,{MAX_DIGITS}}})?|\.[0-9]{{1,{MAX_DIGITS}}})", re.ASCII)
+_DECIMAL = re.compile(
+    rf"-?(?:[0-9]{{1,{MAX_DIGITS}}}(?:\.[0-9]{{0,{MAX_DIGITS}}})?|\.[0-9]{{1,{MAX_DIGITS}}})", re.ASCII,
+)
 
 
 @dataclass(frozen=True)
@@ -152,7 +154,8 @@ def parse_status(line: str) -> GrblStatus:
     parts = text[1:-1].split("|")
     name, _, sub = parts[0].partition(":")
     if name not in STATES:
-        raise ParseError(f"unknown machine state (known: {', '.join(STATES)})", source="grbl status report", token=parts[0])
+        raise ParseError(f"unknown machine state (known: {', '.join(STATES)})", source="grbl status report",
+                         token=parts[0])
     if sub and not _UINT.fullmatch(sub):
         raise ParseError("state substate must be a number", source="grbl status report", token=parts[0])
     fields: dict[str, object] = {"state": name, "substate": int(sub) if sub else None}
@@ -181,7 +184,8 @@ def parse_status(line: str) -> GrblStatus:
         elif key == "Ov":
             nums = _numbers(value, key, int)
             if len(nums) != 3:
-                raise ParseError("Ov needs three numbers (feed, rapid, spindle)", source="grbl status report", token=part)
+                raise ParseError("Ov needs three numbers (feed, rapid, spindle)", source="grbl status report",
+                                 token=part)
             fields["overrides"] = nums
         elif key == "Pn":
             fields["pins"] = value
@@ -278,8 +282,10 @@ class PenMotion:
         """Lines that lift the pen and wait for it (the last one confirms what came before)."""
         if self.mode == "z":
             move = f"G0 Z{number(self.up)}"  # type: ignore[arg-type]
+        elif self.up is None:
+            move = "M5"
         else:
-            move = "M5" if self.up is None else f"M3 S{number(self.up)}"
+            move = f"M3 S{number(self.up)}"
         return [move, f"G4 P{number(self.dwell_up)}"]
 
     @property
@@ -306,7 +312,9 @@ class PenMotion:
         return float(m[1])
 
 
-def stroke_lines(points: np.ndarray, fmt: CoordinateFormat, pen: PenMotion, feed: float, lift_first: bool = False) -> list[str]:
+def stroke_lines(
+    points: np.ndarray, fmt: CoordinateFormat, pen: PenMotion, feed: float, lift_first: bool = False,
+) -> list[str]:
     """G-code of one stroke: travel to its start, pen down, ``G1`` along it at ``feed`` mm/min, pen up.
 
     ``points`` are integer device units (N, 2), N >= 1; a one-point stroke is a dot (pen down and up).
@@ -358,7 +366,8 @@ class CharacterCounter:
     def sent(self, line: str, tag: object = None) -> None:
         """Record a line written to the device (``tag`` comes back with its acknowledgement)."""
         if len(line) + 1 > self.rx_buffer:
-            raise ConfigError(f"G-code line of {len(line) + 1} bytes cannot fit GRBL's {self.rx_buffer}-byte buffer: {line!r}")
+            raise ConfigError(
+                f"G-code line of {len(line) + 1} bytes cannot fit GRBL's {self.rx_buffer}-byte buffer: {line!r}")
         self._lines.append((line, tag))
         self.in_flight += len(line) + 1
 
@@ -442,5 +451,6 @@ class PathTrack:
         at_vertex = near & ((np.hypot(*(q - a).T) <= tolerance) | (np.hypot(*(q - b).T) <= tolerance))
         down = np.asarray(self._down[1:], dtype=bool)
         if not at_vertex.any() and not (down[near] == pen_down).any():  # the pen changes only at vertices
-            return f"the pen is {'down' if pen_down else 'up'} along a leg the host sent with the pen {'up' if pen_down else 'down'}"
+            return (f"the pen is {'down' if pen_down else 'up'} along a leg the host sent with the pen "
+                    f"{'up' if pen_down else 'down'}")
         return None

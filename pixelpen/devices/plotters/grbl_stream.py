@@ -289,7 +289,7 @@ class GrblStream(PlotterDisplay):
         return status.spindle > 0 and abs(status.spindle - motion.down) < abs(status.spindle - up)
 
     def _settled_status(self) -> GrblStatus:
-        """Poll until GRBL has run everything it received: a completed hold, or at rest and silent for longer than a dwell.
+        """Poll until GRBL has run all it received: a completed hold, or at rest and silent for longer than a dwell.
 
         GRBL reports Idle while it dwells (``G4``) with lines still waiting behind the dwell, so one Idle report is
         not enough: the state must stay still, with no acknowledgement arriving, for the longest pen dwell and
@@ -358,7 +358,8 @@ class GrblStream(PlotterDisplay):
                     if attempt == 0 and not lines:
                         log.info("grbl: a half line from the broken connection was discarded with %r", command)
                         break
-                    raise ProtocolError(f"GRBL refused {command}", code=parse_code(line), command=command, device="grbl")
+                    raise ProtocolError(f"GRBL refused {command}", code=parse_code(line), command=command,
+                                        device="grbl")
                 if line.startswith("<"):
                     self._status_seen(parse_status(line))
                 elif line.startswith("ALARM:") or parse_welcome(line) is not None:

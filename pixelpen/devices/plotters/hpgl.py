@@ -25,7 +25,8 @@ must be the end of the last stroke sent before it; another position is a fault (
 coordinate or a skipped instruction).
 
 
-Streaming, flow control (option ``handshake``), confirmation and the device's errors: :mod:`~pixelpen.devices.plotters.hpgl_stream`.
+Streaming, flow control (option ``handshake``), confirmation and the device's errors:
+:mod:`~pixelpen.devices.plotters.hpgl_stream`.
 """
 
 from __future__ import annotations
@@ -90,9 +91,12 @@ class HPGLDisplay(HPGLStream):
     """Top pen speed (VS maximum); a profile asking for less gets ``VS``."""
     knows_ps: ClassVar[bool] = False
     """True when the model takes ``PS`` (paper size)."""
-    mnemonics: ClassVar[frozenset[str]] = frozenset(
-        ["AA", "AR", "CA", "CI", "CP", "CS", "DF", "DI", "DR", "DT", "EA", "ER", "EW", "FT", "IM", "IN", "IP", "IW", "LB", "LT", "OA", "OC", "OE", "OF", "OH", "OI", "OO", "OP", "OS", "OW", "PA", "PD", "PR", "PT", "PU", "RA", "RO", "RR", "SA", "SC", "SI", "SL", "SM", "SP", "SR", "SS", "TL", "UC", "VS", "WG", "XT", "YT"]
-    )
+    mnemonics: ClassVar[frozenset[str]] = frozenset({
+        "AA", "AR", "CA", "CI", "CP", "CS", "DF", "DI", "DR", "DT", "EA", "ER", "EW", "FT", "IM", "IN", "IP",
+        "IW", "LB", "LT", "OA", "OC", "OE", "OF", "OH", "OI", "OO", "OP", "OS", "OW", "PA", "PD", "PR", "PT",
+        "PU", "RA", "RO", "RR", "SA", "SC", "SI", "SL", "SM", "SP", "SR", "SS", "TL", "UC", "VS", "WG", "XT",
+        "YT",
+    })
     """HP-GL instructions the model knows (the HP-GL/1 set; an error 1 names a sent one outside it)."""
     OPTIONS = (
         *HPGLStream.OPTIONS,
@@ -288,7 +292,7 @@ class HPGLDisplay(HPGLStream):
         return bool(self._wire.status & (STATUS_VIEW | STATUS_PAPER_LEVER))
 
     def _make_safe(self) -> None:
-        """Drop host-queued bytes, ESC.K (drop buffered graphics), ``PU;SP0;`` and park, then wait (bounded) until they ran."""
+        """Drop host-queued bytes, ESC.K (buffered graphics), ``PU;SP0;`` and park; wait (bounded) until they ran."""
         link = self.link
         if link is None or link.closed:
             return
@@ -303,12 +307,12 @@ class HPGLDisplay(HPGLStream):
                 line = link.read_until(b"\r", timeout=deadline - self.clock.now(), max_size=MAX_REPLY)
                 if is_marker("OI", clean(line)):
                     return
-        except Exception as exc:  # leaving the plotter safe is best effort; say why it may not be
+        except Exception as exc:  # noqa: BLE001  (leaving the plotter safe is best effort; say why it may not be)
             log.warning("%s: safe stop may be incomplete: %s", self.profile.name, exc)
 
     # -- after a fault: where the plotter stopped ---------------------------------------------
     def _where(self) -> DeviceWhere:
-        """Let the plotter finish what the old connection left, drop a half instruction, ask OS and OA (module docstring)."""
+        """Let the plotter finish what the old connection left, drop a half instruction, ask OS and OA."""
         link = self._require_link()
         link.reset_input()
         self._wire = Wire(progress_at=self.clock.now(), connecting=True)
@@ -332,7 +336,7 @@ class HPGLDisplay(HPGLStream):
         return DeviceWhere((x, y), bool(pen), detail=f"OA {x},{y},{pen}")
 
     def _settle(self, hold_s: float) -> None:
-        """Ask ESC.B until its answer stays the same for ``hold_s`` seconds (waiting as long as VIEW or the lever holds)."""
+        """Ask ESC.B until its answer stays the same for ``hold_s`` s (waiting as long as VIEW or the lever holds)."""
         last, since = None, self.clock.now()
         after_output = False
         while True:
@@ -367,7 +371,10 @@ class HPGLDisplay(HPGLStream):
                 raise LinkTimeout(f"{self._name()}: no answer to {what}; is the plotter switched on?") from None
             if not line:
                 continue
-            ok = OA_ANSWER.fullmatch(line) or NUMBER_ANSWER.fullmatch(line) or IDENT_ANSWER.fullmatch(line) if form is None else form.fullmatch(line)
+            if form is None:
+                ok = OA_ANSWER.fullmatch(line) or NUMBER_ANSWER.fullmatch(line) or IDENT_ANSWER.fullmatch(line)
+            else:
+                ok = form.fullmatch(line)
             if not ok:
                 raise LinkError(f"{self._name()}: expected the {what} answer, got {line!r}")
             return line

@@ -26,7 +26,7 @@ IO_ERRORS: dict[int, str] = {
 }
 """ESC.E RS-232 error numbers (plotters.md §1.4)."""
 ERROR_OUTPUT_BUSY = 10
-"""ESC.E 10: an output request arrived while an answer was going out and was ignored (a link hiccup, not a drawing error)."""
+"""ESC.E 10: an output request came while an answer went out and was ignored (a link hiccup, not a drawing error)."""
 STATUS_VIEW = 16
 STATUS_PAPER_LEVER = 32
 """ESC.O bits that mean the plotter pauses on the operator's word (plotters.md §1.4)."""

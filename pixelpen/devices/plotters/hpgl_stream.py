@@ -27,19 +27,17 @@ pause longer than ``stall`` with a full buffer counts as a stall there; ``escb``
 Writes there go out in chunks of ``WRITE_CHUNK`` bytes, each allowed ``stall`` seconds: the limit is on
 the plotter taking nothing, not on the time a long stroke needs at the line's speed.
 
-
 Confirmation and errors: with ``escb`` an ESC.B answer confirms every stroke whose last byte lies
-``CONFIRM_MARGIN`` bytes before what the plotter has taken from its buffer; after every
-``sync_strokes`` strokes or ``sync_bytes`` bytes (at pen-up) the driver sends ``PU;OA;OE;`` and ``ESC.E``.  OA and OE are buffered output instructions, answered when
-execution reaches them, so their answers confirm every stroke before them; the answers are read as
-they arrive, never waited for while there is data to send.  A non-zero OE (HP-GL error) or ESC.E
-(RS-232 error) raises :class:`~pixelpen.errors.ProtocolError` with the code, its meaning and the
-instructions sent since the previous sync point.  Replies are told apart by form: OA answers
-``x,y,pen``, OE follows its OA at once, and numbers arriving otherwise answer the ``ESC`` queries in
-the order they were sent.  When nothing moves for ``PAUSE_CHECK_S`` the driver asks ``ESC.O``: VIEW
-(16) or the raised paper lever (32) is a pause and waits without limit; no progress for ``stall``
-seconds otherwise is a fault (LinkTimeout).  Ctrl-C and close send ``ESC.K`` then ``PU;SP0;`` and
-the park move.
+``CONFIRM_MARGIN`` bytes before what the plotter has taken from its buffer; after every ``sync_strokes``
+strokes or ``sync_bytes`` bytes (at pen-up) the driver sends ``PU;OA;OE;`` and ``ESC.E``.  OA and OE are
+buffered output instructions, answered when execution reaches them, so their answers confirm every stroke
+before them; the answers are read as they arrive, never waited for while there is data to send.  A non-zero
+OE (HP-GL error) or ESC.E (RS-232 error) raises :class:`~pixelpen.errors.ProtocolError` with the code, its
+meaning and the instructions sent since the previous sync point.  Replies are told apart by form: OA answers
+``x,y,pen``, OE follows its OA at once, and numbers arriving otherwise answer the ``ESC`` queries in the
+order they were sent.  When nothing moves for ``PAUSE_CHECK_S`` the driver asks ``ESC.O``: VIEW (16) or the
+raised paper lever (32) is a pause and waits without limit; no progress for ``stall`` seconds otherwise is a
+fault (LinkTimeout).  Ctrl-C and close send ``ESC.K`` then ``PU;SP0;`` and the park move.
 """
 
 from __future__ import annotations
@@ -366,7 +364,8 @@ class HPGLStream(PlotterDisplay):
             return
         expected = [f"{head.marker} answer" if head else None] + [f"ESC.{q.kind} answer" for q in list(w.queries)[:1]]
         raise LinkError(
-            f"{self._name()}: unexpected answer {text!r} (expected {' or '.join(e for e in expected if e) or 'nothing'})"
+            f"{self._name()}: unexpected answer {text!r} "
+            f"(expected {' or '.join(e for e in expected if e) or 'nothing'})"
         )
 
     def _on_oe(self, point: SyncPoint, code: int) -> None:

@@ -37,7 +37,7 @@ class DeviceWhere:
 
 @dataclass(frozen=True)
 class ResumePoint:
-    """Where drawing stopped: strokes < ``stroke`` done, stroke ``stroke`` drawn to vertex ``vertex`` (then to ``at``)."""
+    """Where drawing stopped: strokes < ``stroke`` done, ``stroke`` drawn to vertex ``vertex`` (then to ``at``)."""
 
     stroke: int
     vertex: int = 0
@@ -58,7 +58,7 @@ def locate(
     window: list[tuple[int, np.ndarray]], where: DeviceWhere, before: np.ndarray | None, *,
     lifts: Callable[[int], bool] = lambda stroke: True, down_at_start: bool = True,
 ) -> list[ResumePoint]:
-    """Every distinct place in the strokes ``window`` ((index, sent points) in order) the device state may be, earliest first.
+    """Every distinct place in the strokes ``window`` ((index, sent points) in order) the device may be, earliest first.
 
     ``before`` is the pen position before the window's first stroke (the end of the stroke before it), or None.
     ``lifts(s)``: the device may rest with the pen lifted at stroke s's end (False where lifting and travelling
@@ -120,17 +120,25 @@ def _near_segment(q: np.ndarray, a: np.ndarray, b: np.ndarray, tol: float) -> fl
 
 
 def _distinct(points: list[ResumePoint], tol: float) -> list[ResumePoint]:
+    """``points`` in order without repeats (places inside one segment within ``2 * tol`` of each other are one)."""
     out: list[ResumePoint] = []
     for r in sorted(points, key=lambda r: (r.stroke, r.vertex, r.at is not None)):
-        if not any(o.stroke == r.stroke and o.vertex == r.vertex and (o.at is None) == (r.at is None)
-                   and (o.at is None or np.hypot(o.at[0] - r.at[0], o.at[1] - r.at[1]) <= 2 * tol) for o in out):
+        if not any(_same_place(o, r, 2 * tol) for o in out):
             out.append(r)
     return out
 
 
+def _same_place(a: ResumePoint, b: ResumePoint, tol: float) -> bool:
+    if (a.stroke, a.vertex) != (b.stroke, b.vertex):
+        return False
+    if a.at is None or b.at is None:
+        return a.at is None and b.at is None
+    return bool(np.hypot(a.at[0] - b.at[0], a.at[1] - b.at[1]) <= tol)
+
+
 
 def in_full_stroke(r: ResumePoint, stroke: int, offset: int, head: ResumePoint) -> ResumePoint:
-    """A place located in the remainder of ``stroke`` that was sent (from ``head``, ``offset`` points short) as one in the whole stroke."""
+    """A place found in the sent remainder of ``stroke`` (from ``head``, ``offset`` points short), in the whole one."""
     if r.stroke != stroke:
         return r
     if r.vertex == 0 and r.at is None:

@@ -67,19 +67,23 @@ class PlotState:
         except OSError as exc:
             raise ParseError(f"cannot read plot state: {exc.strerror}", source=str(path)) from None
         except json.JSONDecodeError as exc:
-            raise ParseError(f"plot state is not JSON: {exc.msg}", source=str(path), line=exc.lineno, column=exc.colno) from None
+            raise ParseError(f"plot state is not JSON: {exc.msg}", source=str(path), line=exc.lineno,
+                             column=exc.colno) from None
         if not isinstance(data, dict) or data.get("version") not in _STATE_VERSIONS:
             raise ParseError(f"not a version-{STATE_VERSION} pixelpen plot state", source=str(path))
         try:
             state = cls(**{**data, "version": STATE_VERSION})
         except TypeError as exc:
             raise ParseError(f"plot state has wrong fields: {exc}", source=str(path)) from None
-        if not (isinstance(state.strokes, int) and isinstance(state.confirmed, int) and 0 <= state.confirmed <= state.strokes):
+        if not (isinstance(state.strokes, int) and isinstance(state.confirmed, int)
+                and 0 <= state.confirmed <= state.strokes):
             raise ParseError("plot state field 'confirmed' is out of range", source=str(path), token=state.confirmed)
-        if state.sent is not None and not (isinstance(state.sent, int) and state.confirmed <= state.sent <= state.strokes):
+        if state.sent is not None and not (
+                isinstance(state.sent, int) and state.confirmed <= state.sent <= state.strokes):
             raise ParseError("plot state field 'sent' is out of range", source=str(path), token=state.sent)
         if state.damaged is not None and not (
-            isinstance(state.damaged, list) and len(state.damaged) == 2 and all(isinstance(v, int) for v in state.damaged)
+            isinstance(state.damaged, list) and len(state.damaged) == 2
+            and all(isinstance(v, int) for v in state.damaged)
             and 0 <= state.damaged[0] <= state.damaged[1] <= state.strokes
         ):
             raise ParseError("plot state field 'damaged' is not a [start, stop] stroke range", source=str(path),
@@ -87,10 +91,12 @@ class PlotState:
         if state.lifts is not None and not (
             isinstance(state.lifts, list) and all(isinstance(v, int) and 0 <= v < state.strokes for v in state.lifts)
         ):
-            raise ParseError("plot state field 'lifts' is not a list of stroke numbers", source=str(path), token=state.lifts)
+            raise ParseError("plot state field 'lifts' is not a list of stroke numbers", source=str(path),
+                             token=state.lifts)
         if state.stopped_at is not None and not (
             isinstance(state.stopped_at, list) and len(state.stopped_at) == 4
-            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in state.stopped_at)
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                    for v in state.stopped_at)
             and state.stopped_at[2] in (-1, 0, 1) and state.stopped_at[3] >= 0
         ):
             raise ParseError("plot state field 'stopped_at' is not [x, y, pen -1/0/1, tolerance]", source=str(path),
@@ -102,6 +108,7 @@ class PlotState:
         ):
             raise ParseError("plot state field 'start' is not [stroke, x, y]", source=str(path), token=state.start)
         if not isinstance(state.position_lost, bool):
-            raise ParseError("plot state field 'position_lost' is not true or false", source=str(path), token=state.position_lost)
+            raise ParseError("plot state field 'position_lost' is not true or false", source=str(path),
+                             token=state.position_lost)
         return state
 
