@@ -15,6 +15,7 @@ from pixelpen.display.picture import (
     Fill,
     Image,
     Marker,
+    MarkerKind,
     Picture,
     Polygon,
     Polyline,
@@ -79,7 +80,8 @@ def reference_scene() -> Picture:
     pic.add(BSpline(ctrl, degree=3, style=Style(colour="blue", width=0.4)))
     pic.add(Bezier([[6, 8], [30, 16], [60, 0], [90, 14], [100, 4], [120, 10]], style=green))
     pic.add(Marker(ctrl, kind="circle", size=2.0, style=Style(colour="grey")))
-    for k, kind in enumerate(["dot", "plus", "cross", "star", "square", "diamond"]):
+    kinds: tuple[MarkerKind, ...] = ("dot", "plus", "cross", "star", "square", "diamond")
+    for k, kind in enumerate(kinds):
         pic.add(Marker([[128 + 10 * k, 6]], kind=kind, size=3.0, style=ink))
 
     # an image (a colour ramp) and rotated, slanted text

@@ -31,7 +31,7 @@ class Capabilities:
     can_erase: bool = True
     tolerance: float = 0.5
     """Curve flattening tolerance in device units."""
-    limits: dict = field(default_factory=dict)
+    limits: dict[str, object] = field(default_factory=dict)
 
     @property
     def size_mm(self) -> tuple[float, float]:

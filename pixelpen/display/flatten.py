@@ -33,6 +33,7 @@ from pixelpen.display.picture import (
     Text,
 )
 from pixelpen.errors import InvalidArgument, InvalidArgumentType
+from pixelpen.geometry.viewing import Rect
 
 log = logging.getLogger(__name__)
 
@@ -79,7 +80,10 @@ def flatten_picture(
         yield from shapes
 
 
-def _shapes_of(prim: Primitive, matrix: np.ndarray, tolerance: float, unit_mm: float, rect) -> Iterator[DeviceShape]:
+def _shapes_of(
+    prim: Primitive, matrix: np.ndarray, tolerance: float, unit_mm: float, rect: Rect | None
+) -> Iterator[DeviceShape]:
+    """The device shapes of one primitive: strokes, clipped fill rings, or an image."""
     style = prim.style
     if isinstance(prim, Image):
         yield DeviceShape("image", [], False, style, image=prim, matrix=matrix, clip_rect=rect)
@@ -103,7 +107,10 @@ def _shapes_of(prim: Primitive, matrix: np.ndarray, tolerance: float, unit_mm: f
     yield from _stroke(paths, style, unit_mm, rect, matrix)
 
 
-def _stroke(paths: list[np.ndarray], style: Style, unit_mm: float, rect, matrix: np.ndarray) -> Iterator[DeviceShape]:
+def _stroke(
+    paths: list[np.ndarray], style: Style, unit_mm: float, rect: Rect | None, matrix: np.ndarray
+) -> Iterator[DeviceShape]:
+    """Device paths dashed by the style, clipped to ``rect``, as one stroke shape."""
     if style.dash:
         paths = geo.dash_polylines(paths, [d / unit_mm for d in style.dash])
     if rect is not None:
@@ -113,7 +120,8 @@ def _stroke(paths: list[np.ndarray], style: Style, unit_mm: float, rect, matrix:
         yield DeviceShape("stroke", paths, False, style, matrix=matrix)
 
 
-def _clip_rings(rings: list[np.ndarray], rect) -> list[np.ndarray]:
+def _clip_rings(rings: list[np.ndarray], rect: Rect | None) -> list[np.ndarray]:
+    """Fill rings clipped to ``rect`` (Sutherland–Hodgman), dropping what vanishes."""
     if rect is None:
         return rings
     out: list[np.ndarray] = []
@@ -180,7 +188,7 @@ def _open_ring(ring: np.ndarray) -> np.ndarray:
     return ring
 
 
-_UNIT_SHAPES = {
+_UNIT_SHAPES: dict[str, list[list[list[float]]]] = {
     "plus": [[[-1, 0], [1, 0]], [[0, -1], [0, 1]]],
     "cross": [[[-1, -1], [1, 1]], [[-1, 1], [1, -1]]],
     "star": [[[-1, 0], [1, 0]], [[0, -1], [0, 1]], [[-0.7, -0.7], [0.7, 0.7]], [[-0.7, 0.7], [0.7, -0.7]]],

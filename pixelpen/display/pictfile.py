@@ -265,21 +265,22 @@ class _Reader:
         try:
             return cls(*args, **kwargs)
         except (PixelpenError, TypeError, ValueError) as exc:
-            raise self.error(where, f"invalid {getattr(cls, '__name__', cls).lower()}: {exc}") from None
+            raise self.error(where, f"invalid {getattr(cls, '__name__', str(cls)).lower()}: {exc}") from None
 
     def add(self, container: Picture | Segment, item: Primitive | Segment, where: str) -> None:
+        """Add ``item`` to a picture or (a primitive) to a segment; the container's refusal becomes an error."""
         try:
-            container.add(item)
+            container.add(item)  # type: ignore[arg-type]  # Segment.add refuses a segment itself (ConfigError)
         except ConfigError as exc:
             raise self.error(where, str(exc)) from None
 
-    def items(self, value: Any, where: str) -> list:
+    def items(self, value: Any, where: str) -> list[Any]:
         if not isinstance(value, list):
             raise self.error(where, "expected a list", type(value).__name__)
         self.spend("items", len(value), MAX_ITEMS, where)
         return value
 
-    def known(self, obj: dict, where: str, allowed: set[str]) -> None:
+    def known(self, obj: dict[str, Any], where: str, allowed: set[str]) -> None:
         extra = sorted(set(obj) - allowed)
         if extra:
             raise self.error(
@@ -299,7 +300,7 @@ class _Reader:
             raise self.error(f"{where}[{bad[0]}]", "expected a finite number", value[bad[0]])
         return out
 
-    def segment(self, item: dict, where: str) -> Segment:
+    def segment(self, item: dict[str, Any], where: str) -> Segment:
         self.known(item, where, {"type", "name", "transform", "visible", "pickable", "items"})
         transform = item.get("transform", np.eye(3).tolist())
         if not (isinstance(transform, list) and len(transform) == 3):
@@ -343,7 +344,8 @@ class _Reader:
                 kwargs[key] = tuple(self.numbers(value, f"{where}.{key}"))
             else:
                 kwargs[key] = value
-        return self.build(cls, where, **kwargs)
+        primitive: Primitive = self.build(cls, where, **kwargs)
+        return primitive
 
     def points(self, value: Any, where: str) -> np.ndarray:
         if not isinstance(value, list):

@@ -15,11 +15,12 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pixelpen import geometry as geo
 from pixelpen.colour import NAMED_COLOURS as NAMED_COLOURS  # re-exported for importers from before colour.py
@@ -31,6 +32,12 @@ FillStyle = Literal["hollow", "solid", "hatch", "crosshatch", "pattern"]
 Align = Literal["left", "center", "right"]
 VAlign = Literal["bottom", "baseline", "middle", "top"]
 MarkerKind = Literal["dot", "plus", "cross", "star", "circle", "square", "diamond"]
+ColourLike = str | tuple[int, int, int] | Sequence[int]
+"""What a Style's colour may be given as: a CSS name or form (see :mod:`pixelpen.colour`) or (r, g, b)."""
+
+# The classes below store checked, normalised values (an (r, g, b) tuple, read-only float arrays) but accept
+# the wider input forms; each declares that wider signature for type checkers under TYPE_CHECKING, while the
+# dataclass generates the real __init__.
 
 
 MAX_COORDINATE = 1e15
@@ -75,7 +82,7 @@ def _length_mm(value: object, name: str) -> float:
 
 def _pair(value: object, name: str) -> tuple[float, float]:
     """An (x, y) pair of numbers."""
-    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__") or len(value) != 2:  # type: ignore[arg-type]
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__") or len(value) != 2:
         raise InvalidArgumentType(f"{name} must be a pair (x, y) of numbers, got {type(value).__name__}")
     return _number(value[0], f"{name}[0]"), _number(value[1], f"{name}[1]")  # type: ignore[index]
 
@@ -159,6 +166,11 @@ class Style:
     """Area fill for closed primitives; None = outline only."""
     layer: str | None = None
 
+    if TYPE_CHECKING:
+        def __init__(self, colour: ColourLike = ..., pen: int | None = ..., width: float = ...,
+                     dash: Sequence[float] | None = ..., fill: Fill | None = ..., layer: str | None = ...) -> None:
+            """Typed signature (see the note above ColourLike)."""
+
     def __post_init__(self) -> None:
         _set(self, colour=parse_colour(self.colour), width=_length_mm(self.width, "line width (mm)"))
         if self.dash is not None:
@@ -201,6 +213,10 @@ class Polyline:
     points: np.ndarray
     style: Style = Style()
 
+    if TYPE_CHECKING:
+        def __init__(self, points: ArrayLike, style: Style = ...) -> None:
+            """Typed signature (see the note above ColourLike)."""
+
     def __post_init__(self) -> None:
         object.__setattr__(self, "points", _points(self.points, "polyline", 1))
 
@@ -212,15 +228,19 @@ class Polygon:
     rings: tuple[np.ndarray, ...]
     style: Style = Style()
 
+    if TYPE_CHECKING:
+        def __init__(self, rings: ArrayLike | Sequence[ArrayLike], style: Style = ...) -> None:
+            """Typed signature (see the note above ColourLike)."""
+
     def __post_init__(self) -> None:
         rings = self.rings
         if isinstance(rings, (str, bytes, dict)) or not hasattr(rings, "__len__"):
             raise InvalidArgumentType(
                 f"polygon rings must be a sequence of (N, 2) point arrays, got {type(rings).__name__}"
             )
-        if isinstance(rings, np.ndarray) or (len(rings) and np.ndim(rings[0]) == 1):
-            rings = (rings,)
-        object.__setattr__(self, "rings", tuple(_points(r, "polygon ring", 3) for r in rings))
+        one_ring = isinstance(rings, np.ndarray) or (len(rings) and np.ndim(rings[0]) == 1)
+        given = (rings,) if one_ring else rings
+        object.__setattr__(self, "rings", tuple(_points(r, "polygon ring", 3) for r in given))
         if not self.rings:
             raise ConfigError("a polygon needs at least one ring")
 
@@ -305,6 +325,10 @@ class Bezier:
     degree: int | None = None
     style: Style = Style()
 
+    if TYPE_CHECKING:
+        def __init__(self, control_points: ArrayLike, degree: int | None = ..., style: Style = ...) -> None:
+            """Typed signature (see the note above ColourLike)."""
+
     def __post_init__(self) -> None:
         pts = _points(self.control_points, "Bezier", 2)
         object.__setattr__(self, "control_points", pts)
@@ -321,6 +345,11 @@ class BSpline:
     degree: int = 3
     knots: tuple[float, ...] | None = None
     style: Style = Style()
+
+    if TYPE_CHECKING:
+        def __init__(self, control_points: ArrayLike, degree: int = ..., knots: Sequence[float] | None = ...,
+                     style: Style = ...) -> None:
+            """Typed signature (see the note above ColourLike)."""
 
     def __post_init__(self) -> None:
         pts = _points(self.control_points, "B-spline", 2)
@@ -351,6 +380,10 @@ class Marker:
     kind: MarkerKind = "plus"
     size: float = 2.0
     style: Style = Style()
+
+    if TYPE_CHECKING:
+        def __init__(self, points: ArrayLike, kind: MarkerKind = ..., size: float = ..., style: Style = ...) -> None:
+            """Typed signature (see the note above ColourLike)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "points", _points(self.points, "marker", 1))

@@ -27,14 +27,16 @@ def rasterize(canvas: Canvas, shapes: list[DeviceShape], unit_mm: float) -> None
             _image(canvas, shape)
 
 
-def _stroke(canvas: Canvas, shape: DeviceShape, value, unit_mm: float) -> None:
+def _stroke(canvas: Canvas, shape: DeviceShape, value: object, unit_mm: float) -> None:
+    """Draw a stroke shape's polylines as lines of the style's width."""
     segments = [np.hstack([p[:-1], p[1:]]) if len(p) > 1 else np.hstack([p, p]) for p in shape.paths]
     seg = np.floor(np.concatenate(segments)).astype(np.int64)
     width = max(1, round(float(shape.style.width / unit_mm)))
     canvas.lines(seg, value, width=width)
 
 
-def _area(canvas: Canvas, shape: DeviceShape, value, unit_mm: float) -> None:
+def _area(canvas: Canvas, shape: DeviceShape, value: object, unit_mm: float) -> None:
+    """Fill an area shape: solid, hatched or patterned."""
     fill: Fill = shape.style.fill  # type: ignore[assignment]
     if fill.style == "solid":
         canvas.polygons([shape.paths], value, rule="evenodd")
@@ -49,7 +51,7 @@ def _area(canvas: Canvas, shape: DeviceShape, value, unit_mm: float) -> None:
         _pattern(canvas, shape.paths, np.asarray(fill.pattern, dtype=bool), value)
 
 
-def _pattern(canvas: Canvas, rings: list[np.ndarray], cells: np.ndarray, value) -> None:
+def _pattern(canvas: Canvas, rings: list[np.ndarray], cells: np.ndarray, value: object) -> None:
     """Fill the rings with a pattern of cells tiled from the canvas origin."""
     mask = Canvas(canvas.width, canvas.height, "1")
     mask.polygons([rings], 1, rule="evenodd")

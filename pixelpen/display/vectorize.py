@@ -24,11 +24,24 @@ DEFAULT_LAYER = "default"
 class ShapeLike(Protocol):
     """What build_display_list reads of a ``pixelpen.display.flatten.DeviceShape``."""
 
-    kind: str
-    paths: list[np.ndarray]
-    closed: bool
-    style: Style
-    """Also read when present: ``matrix``, the 3x3 world-to-device transform (maps the hatch angle)."""
+    @property
+    def kind(self) -> str:
+        """"stroke" or "area" (other kinds are skipped)."""
+
+    @property
+    def paths(self) -> list[np.ndarray]:
+        """Polylines or rings in device units."""
+
+    @property
+    def closed(self) -> bool:
+        """Whether the paths are closed rings."""
+
+    @property
+    def style(self) -> Style:
+        """The primitive's attributes.
+
+        Also read when present: ``matrix``, the 3x3 world-to-device transform (maps the hatch angle).
+        """
 
 
 def nearest_pen(colour: tuple[int, int, int], pens: Sequence[str]) -> int:

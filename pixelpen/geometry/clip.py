@@ -7,7 +7,7 @@ BOTTOM = 4 (y < ymin), TOP = 8 (y > ymax). Window edges are inside: a point on t
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Literal
+from typing import Literal, overload
 
 import numpy as np
 
@@ -28,10 +28,11 @@ _BORDER_TOL = 1e-9
 def _codes(x: np.ndarray, y: np.ndarray, rect: tuple[float, float, float, float]) -> np.ndarray:
     """Outcodes of coordinate arrays (validated rectangle)."""
     xmin, ymin, xmax, ymax = rect
-    return (
+    codes: np.ndarray = (
         (x < xmin) * np.uint8(LEFT) | (x > xmax) * np.uint8(RIGHT)
         | (y < ymin) * np.uint8(BOTTOM) | (y > ymax) * np.uint8(TOP)
     ).astype(np.uint8)
+    return codes
 
 
 def outcodes(points: ArrayLike, window: Sequence[float]) -> np.ndarray:
@@ -245,7 +246,8 @@ class _ConvexWindow:
 
     def distances(self, points: np.ndarray) -> np.ndarray:
         """Signed distance of each point to each edge line, (N, K), positive inside."""
-        return np.einsum("nkj,kj->nk", points[:, None, :] - self.corners[None], self.normals)
+        distances: np.ndarray = np.einsum("nkj,kj->nk", points[:, None, :] - self.corners[None], self.normals)
+        return distances
 
     def snap(self, k: int) -> tuple[int, float] | None:
         """(axis, value) when edge k is axis-parallel, so intersections can be placed exactly on it."""
@@ -358,6 +360,18 @@ def clip_polygon_convex(vertices: ArrayLike, convex_polygon: ArrayLike) -> list[
     Like :func:`clip_polygon`, border-running pieces of concave input are split into separate rings.
     """
     return _ConvexWindow(as_convex_window(convex_polygon)).clip_polygon(vertices)
+
+
+@overload
+def clip_polylines(
+    polylines: Sequence[ArrayLike], window: Sequence[float], *, return_index: Literal[False] = False
+) -> list[np.ndarray]: ...
+
+
+@overload
+def clip_polylines(
+    polylines: Sequence[ArrayLike], window: Sequence[float], *, return_index: Literal[True]
+) -> tuple[list[np.ndarray], np.ndarray]: ...
 
 
 def clip_polylines(

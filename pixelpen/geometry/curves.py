@@ -217,7 +217,7 @@ def eval_basis(basis: ArrayLike, geometry: ArrayLike, t: ArrayLike) -> np.ndarra
         raise InvalidArgument(f"geometry must have exactly 4 rows for a cubic basis, got {len(g)}")
     tt, scalar = _parameters(t)
     powers = np.stack([tt ** 3, tt ** 2, tt, np.ones_like(tt)], axis=1)
-    pts = powers @ m @ g
+    pts: np.ndarray = powers @ m @ g
     return pts[0] if scalar else pts
 
 

@@ -104,4 +104,5 @@ def _point_at(pts: np.ndarray, arc: np.ndarray, where: np.ndarray, first: np.nda
     span = arc[i1] - arc[i]
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(span > 0, np.clip((where - arc[i]) / span, 0.0, 1.0), 0.0)
-    return pts[i] + t[:, None] * (pts[i1] - pts[i])
+    points: np.ndarray = pts[i] + t[:, None] * (pts[i1] - pts[i])
+    return points

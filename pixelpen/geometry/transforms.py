@@ -68,7 +68,7 @@ def as_number(value: object, name: str) -> float:
 
 def as_pair(value: object, name: str) -> tuple[float, float]:
     """Return value as a pair of finite floats (a point)."""
-    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:  # type: ignore[arg-type]
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
         raise InvalidArgument(f"{name} must be a pair (x, y), got {value!r}")
     return as_number(value[0], f"{name}[0]"), as_number(value[1], f"{name}[1]")  # type: ignore[index]
 
@@ -128,7 +128,7 @@ def reflect(axis: str | Sequence[Sequence[float]]) -> np.ndarray:
         m = np.eye(3)
         m[:2, :2] = _NAMED_REFLECTIONS[axis]
         return m
-    if not hasattr(axis, "__len__") or len(axis) != 2:  # type: ignore[arg-type]
+    if not hasattr(axis, "__len__") or len(axis) != 2:
         raise InvalidArgument(f"reflection axis must be a name or two points ((x0, y0), (x1, y1)), got {axis!r}")
     x0, y0 = as_pair(axis[0], "axis[0]")
     x1, y1 = as_pair(axis[1], "axis[1]")
@@ -199,7 +199,8 @@ def apply(m: ArrayLike, points: ArrayLike) -> np.ndarray:
     if not np.isfinite(out).all():
         row = int(np.flatnonzero(~np.isfinite(out).all(axis=1))[0])
         raise InvalidArgument(f"point {pts[row].tolist()} (row {row}) maps beyond the floating-point range")
-    return out[0] if single else out
+    result: np.ndarray = out[0] if single else out
+    return result
 
 
 def _singular_ratio(mat: np.ndarray) -> float:

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from typing import Any, Literal
+from collections.abc import Iterable, Sequence, Sized
+from typing import Any, Literal, cast
 
 import numpy as np
 
@@ -27,9 +27,9 @@ Align = Literal["center", "lower-left"]
 
 def as_rect(rect: object, name: str = "window") -> Rect:
     """Validate a rectangle (xmin, ymin, xmax, ymax) with xmin < xmax and ymin < ymax; return it as floats."""
-    if isinstance(rect, (str, bytes)) or not hasattr(rect, "__len__") or len(rect) != 4:  # type: ignore[arg-type]
+    if isinstance(rect, (str, bytes)) or not isinstance(rect, Sized) or len(rect) != 4:
         raise InvalidArgument(f"{name} must be a rectangle (xmin, ymin, xmax, ymax), got {rect!r}")
-    xmin, ymin, xmax, ymax = (as_number(v, f"{name}[{i}]") for i, v in enumerate(rect))  # type: ignore[union-attr]
+    xmin, ymin, xmax, ymax = (as_number(v, f"{name}[{i}]") for i, v in enumerate(cast("Iterable[object]", rect)))
     if not xmin < xmax:
         raise InvalidArgument(f"{name} is degenerate: xmin must be < xmax, got xmin={xmin}, xmax={xmax}")
     if not ymin < ymax:

@@ -72,7 +72,7 @@ class Canvas:
         self.mode = mode
         dtype, channels = MODES[mode]
         shape = (int(height), int(width)) + ((channels,) if channels > 1 else ())
-        self.array = np.zeros(shape, dtype=dtype)
+        self.array: np.ndarray = np.zeros(shape, dtype=dtype)
         self.palette = self._make_palette(palette)
         bpp = _BYTES_PER_PIXEL[mode] if bytes_per_pixel is None else bytes_per_pixel
         self._damage = DamageTracker(int(width), int(height), merge_cost, bpp)

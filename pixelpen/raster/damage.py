@@ -145,7 +145,7 @@ class DamageTracker:
 
 def _tile_size(tile: int | tuple[int, int]) -> tuple[int, int]:
     """(tile width, tile height) from an int or a pair, or ConfigError."""
-    tw, th = (tile, tile) if isinstance(tile, (int, np.integer)) else tuple(tile)  # type: ignore[arg-type]
+    tw, th = (tile, tile) if isinstance(tile, (int, np.integer)) else tuple(tile)
     if int(tw) < 1 or int(th) < 1:
         raise ConfigError(f"tile size must be >= 1, found {tile!r}")
     return int(tw), int(th)

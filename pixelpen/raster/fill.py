@@ -21,10 +21,10 @@ def check_seed(seed: object, width: int, height: int) -> tuple[int, int]:
     """The seed as (x, y) ints on the canvas, or ConfigError."""
     try:
         x, y = seed  # type: ignore[misc]
-        xi, yi = int(x), int(y)
+        xi, yi = int(x), int(y)  # type: ignore[has-type]
     except (TypeError, ValueError):
         raise ConfigError(f"seed must be an (x, y) pair of integers, found {seed!r}") from None
-    if xi != x or yi != y:
+    if xi != x or yi != y:  # type: ignore[has-type]
         raise ConfigError(f"seed must be an (x, y) pair of integers, found {seed!r}")
     if not (0 <= xi < width and 0 <= yi < height):
         raise ConfigError(f"seed {seed!r} is outside the {width}x{height} canvas")
@@ -35,7 +35,7 @@ def check_connectivity(connectivity: object) -> int:
     """4 or 8, or ConfigError."""
     if connectivity not in _STRUCTURES:
         raise ConfigError(f"connectivity must be 4 or 8, found {connectivity!r}")
-    return int(connectivity)  # type: ignore[call-overload]
+    return int(connectivity)  # type: ignore[call-overload,unused-ignore]
 
 
 def equal_mask(array: np.ndarray, value: np.ndarray) -> np.ndarray:

@@ -309,7 +309,7 @@ def _precision_class(runs: LineRuns) -> np.ndarray:
     return np.where(too_long, 2, cls)
 
 
-_STEPS = {np.float32: np.arange(_MAX_RUN, dtype=np.float32), np.float64: np.arange(_MAX_RUN, dtype=np.float64)}
+_STEPS: dict[type, np.ndarray] = {dtype: np.arange(_MAX_RUN, dtype=dtype) for dtype in (np.float32, np.float64)}
 
 
 def _schedule(key: np.ndarray, count: np.ndarray) -> list[tuple[int, int, int]]:
@@ -347,12 +347,14 @@ def _scatter_fast(plane: np.ndarray, runs: LineRuns, precise: np.ndarray, value:
     c64 = runs.phase[order] / (2.0 * major) + eps
     s64 = (runs.step_minor[order] * stride).astype(np.float64)
     a64 = (runs.major_start[order] + runs.minor_start[order] * stride).astype(np.float64)
-    columns = {}
+    columns: dict[type, tuple[np.ndarray, ...]] = {}
     for dtype in (np.float32, np.float64):
         columns[dtype] = tuple(v.astype(dtype)[:, None] for v in (slope64, c64, s64, a64))
     bufs = {dtype: (np.empty(2 * _CHUNK, dtype), np.empty(2 * _CHUNK, dtype)) for dtype in (np.float32, np.float64)}
     index = np.empty(2 * _CHUNK, dtype=np.intp)
-    steps = {dtype: (-_STEPS[dtype], _STEPS[dtype]) for dtype in (np.float32, np.float64)}
+    steps: dict[type, tuple[np.ndarray, np.ndarray]] = {
+        dtype: (-_STEPS[dtype], _STEPS[dtype]) for dtype in (np.float32, np.float64)
+    }
     for lo, hi, length in _schedule(key[order], count):
         dtype = np.float32 if precise[lo] == 0 else np.float64
         slope, c, s, a = columns[dtype]

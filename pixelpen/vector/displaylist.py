@@ -49,7 +49,7 @@ class DisplayList:
                 page = ()
             if len(page) != 2 or not all(math.isfinite(v) and v > 0 for v in page):
                 raise ConfigError(f"display list page must be (width, height) > 0, got {self.page!r}")
-            self.page = page  # type: ignore[assignment]
+            self.page = page
 
     @classmethod
     def from_polylines(
@@ -130,7 +130,9 @@ class DisplayList:
         lo, hi = self.points.min(axis=0), self.points.max(axis=0)
         return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
 
-    def reordered(self, order: Sequence[int], reverse: Sequence[bool] | np.ndarray | None = None) -> DisplayList:
+    def reordered(
+        self, order: Sequence[int] | np.ndarray, reverse: Sequence[bool] | np.ndarray | None = None
+    ) -> DisplayList:
         """A new display list with strokes taken in ``order``, each reversed where ``reverse`` says so."""
         order = np.asarray(order, dtype=np.int64)
         rev = np.zeros(len(order), bool) if reverse is None else np.asarray(reverse, bool)

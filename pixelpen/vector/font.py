@@ -145,7 +145,8 @@ SHIPPED_SOURCE = f"pixelpen/data/fonts/{FONT_FILE}"
 @lru_cache(maxsize=1)
 def _shipped_sections() -> dict[str, tuple[int, str]]:
     """The shipped file split into fonts: name -> (first line number, text), so fonts are decoded on demand."""
-    lines = resources.files("pixelpen").joinpath("data", "fonts", FONT_FILE).read_text(encoding="ascii").splitlines()
+    shipped = resources.files("pixelpen").joinpath("data").joinpath("fonts").joinpath(FONT_FILE)
+    lines = shipped.read_text(encoding="ascii").splitlines()
     starts = [i for i, line in enumerate(lines) if line.startswith("font ")]
     return {
         lines[a].split(" ", 2)[1]: (a + 1, "\n".join(lines[a:b]))

@@ -139,7 +139,7 @@ def order_paths(
         last = g[o[-1]]
         at = starts[last] if f[-1] else ends[last]
     order = np.concatenate(order_parts)
-    flips = np.concatenate(flip_parts)
+    flips: np.ndarray | None = np.concatenate(flip_parts)
     given = np.concatenate(groups)
     if _worse_than(
         (starts[order], ends[order], flips), (starts[given], ends[given], np.zeros(len(dl), bool)), home_xy, cost_scalar
@@ -293,12 +293,13 @@ def _local_search(xy, home, entries, nb, dist, reverse, deadlines, cost_scalar, 
     hop_len[-1] = 0.0  # last exit -> H_in
     hc_a = np.empty(N)
     hc_a[seq[0::2]] = hc_a[seq[1::2]] = _apply(cost_scalar, hop_len)
-    tour, pos, hp, hc = (memoryview(a) for a in (tour_a, pos_a, hp_a, hc_a))
+    # numpy's stubs give ndarray the buffer protocol only for Python 3.12+ (__buffer__); the target is 3.10
+    tour, pos, hp, hc = (memoryview(a) for a in (tour_a, pos_a, hp_a, hc_a))  # type: ignore[arg-type]
     nbl = nb.tolist()
     ncost = _apply(cost_scalar, dist).tolist()
     extent = float(np.ptp(pts, axis=0).max())
     eps = _REL_EPS * max(1.0, cost_scalar(extent) if use_cost else extent)
-    journal: list | None = None  # undo records while a kick is on trial
+    journal: list[tuple[int, ...]] | None = None  # undo records while a kick is on trial
 
     def cost(p, q):
         if p == HIN or q == HIN:
@@ -318,7 +319,7 @@ def _local_search(xy, home, entries, nb, dist, reverse, deadlines, cost_scalar, 
         pos_a[ids] = idx
 
     def undo():
-        for rec in reversed(journal):
+        for rec in reversed(journal or []):
             if len(rec) == 4:
                 tour_a[rec[0]] = rec[1]
                 pos_a[rec[2]] = rec[3]

@@ -66,7 +66,7 @@ def _split(dl: DisplayList, prof: Any, home: tuple[float, float], return_home: b
     down_mm = per_layer(down) * dl.unit_mm
     up_mm = per_layer(hops, inner)
     changes = per_layer(change & inner)
-    between = {
+    between: dict[str, float | int | dict[str, float] | None] = {
         "pen_up_mm": float(hops[~inner].sum()) + back,
         "pen_changes": int(np.count_nonzero(change & ~inner)),
         "hops": int(np.count_nonzero(~inner)) + (1 if n and return_home else 0),

@@ -245,7 +245,7 @@ class CheckedDocument:
                 depth[i] = 1 + max((depth[j] for j in succ), default=0)
                 state[i] = 2
         if size[0] - n > limits.max_use_elements:
-            worst = max(self.href, key=lambda u: size[self.by_id.get(self.href[u], u)])
+            worst = max(self.href, key=lambda u: size[self.by_id.get(self.href[u], int(u))])
             raise self.error(worst, f"<use> elements would copy more than {limits.max_use_elements} elements "
                                     f"(limit max_use_elements)")
         if depth[0] > limits.max_depth:

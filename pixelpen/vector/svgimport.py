@@ -63,22 +63,24 @@ def _page(doc: se.SVG, root: dict[str, str]) -> tuple[tuple[float, float] | None
     transform by the one computed from the exact size, so a page written in mm reads back unchanged.
     """
     vb = doc.viewbox
-    sides = []
+    sides: list[float] = []
     for attr, se_px in (("width", doc.width), ("height", doc.height)):
-        exact = _length_mm(root.get(attr))
-        sides.append(exact if exact is not None else (se_px * MM_PER_PX if vb is not None else None))
-    if not all(s is not None and math.isfinite(s) and s > 0 for s in sides):
-        return None, np.eye(3)
-    page = (float(sides[0]), float(sides[1]))
+        side = _length_mm(root.get(attr))
+        if side is None and vb is not None:
+            side = se_px * MM_PER_PX
+        if side is None or not (math.isfinite(side) and side > 0):
+            return None, np.eye(3)
+        sides.append(float(side))
+    page = (sides[0], sides[1])
     if vb is None or vb.width is None or vb.height is None:
         return page, np.eye(3)
     try:
         used = _affine(se.Matrix(doc.viewbox_transform))
-        exact = _affine(se.Matrix(se.Viewbox.viewbox_transform(
+        exact_vb = _affine(se.Matrix(se.Viewbox.viewbox_transform(
             doc.x, doc.y, page[0] / MM_PER_PX, page[1] / MM_PER_PX, vb.x, vb.y, vb.width, vb.height,
             vb.preserve_aspect_ratio)))
         own = _affine(se.Matrix(root.get("transform", "")))
-        correction = own @ exact @ np.linalg.inv(used) @ np.linalg.inv(own)
+        correction = own @ exact_vb @ np.linalg.inv(used) @ np.linalg.inv(own)
     except (ValueError, ZeroDivisionError, np.linalg.LinAlgError):
         return page, np.eye(3)
     return page, (correction if np.isfinite(correction).all() else np.eye(3))
