@@ -26,6 +26,7 @@ from pixelpen.sim.plotters.sheet import Paper, WireStats, clamp_path
 __all__ = ["PEN_MODES", "RESUMED", "ROOM", "SYNC", "GrblMachine", "MovePayload", "Wait"]
 
 log = logging.getLogger("pixelpen.sim.plotters.grbl.controller")
+"""The simulator's one logger, under the name it had before the split (every module of the package logs here)."""
 
 PEN_MODES = ("servo", "servo-inverted", "z")
 """How the pen is driven: a servo on the spindle output (down at high or at low output), or the Z axis."""
