@@ -55,9 +55,9 @@ from pixelpen.errors import ConfigError, PixelpenError, URLError
 from pixelpen.options import OptionSpec, boolean, integer, read_options
 from pixelpen.sim.base import Fault, SimulatedDevice, register_simulator
 from pixelpen.sim.plotters.hpgl.drawing import Drawing
-from pixelpen.sim.plotters.hpgl.instructions import GRAPHICS, GraphicsInstructions
+from pixelpen.sim.plotters.hpgl.instructions import GRAPHICS, MAX_FILL_LINES, GraphicsInstructions
 from pixelpen.sim.plotters.hpgl.labels import LABELS, LabelInstructions
-from pixelpen.sim.plotters.hpgl.machine import Machine, Status
+from pixelpen.sim.plotters.hpgl.machine import DEFAULT_E_MASK, LINE_PATTERNS, MAX_DASHES_PER_VECTOR, Machine, Status
 from pixelpen.sim.plotters.hpgl.models import DEFAULT_PEN_COLOURS, G_CM_S2, MODELS, PAPER_ALIASES, ModelSpec, PaperSpec
 from pixelpen.sim.plotters.hpgl.motion import Motion, axis_distance, axis_time
 from pixelpen.sim.plotters.hpgl.output import (
@@ -76,7 +76,8 @@ if TYPE_CHECKING:
     from pixelpen.raster.canvas import Canvas
 
 __all__ = [
-    "COMMANDS", "COORD_LIMIT", "DEFAULT_PEN_COLOURS", "G_CM_S2", "MODELS", "OPTIONS", "PAPER_ALIASES",
+    "COMMANDS", "COORD_LIMIT", "DEFAULT_E_MASK", "DEFAULT_PEN_COLOURS", "G_CM_S2", "LINE_PATTERNS",
+    "MAX_DASHES_PER_VECTOR", "MAX_FILL_LINES", "MODELS", "OPTIONS", "PAPER_ALIASES",
     "HPGLPlotter", "ModelSpec", "PaperSpec", "PlotterStats", "axis_distance", "axis_time", "create", "option_specs",
 ]
 
