@@ -32,11 +32,7 @@ and Z∈[−$132,0].  Timing is continuous (no step quantisation); a status repo
 Simplifications, each as the documentation allows: a hold is resumed only by ``~`` (an arriving line
 never resumes it); a soft-reset after a critical alarm discards the offending line without an ``ok``;
 homing takes straight seek moves at $25 plus two locate passes of the pull-off at $24.
-
-The package, by concern: ``controller`` (this module: the serial side, line protocol, options),
-``system`` (the ``$`` command table) and ``settings``, ``realtime`` (the real-time byte table),
-``execute`` (a block's execution, STEP 4), ``gcode`` (parsing, STEPs 1-3) and ``modal`` (its state),
-``reports``, ``machine`` (motion, holds, homing, pen and paper), ``planner``, ``arcs``.
+The package docstring maps the other modules.
 """
 
 from __future__ import annotations
