@@ -34,7 +34,8 @@ def arc_points(
     segments = math.floor(abs(0.5 * travel * radius) / denom) if radius > 0 else 0
     segments = min(segments, 100_000)
     if segments <= 1:
-        return target.reshape(1, 3).copy()
+        single: np.ndarray = target.reshape(1, 3).copy()
+        return single
     k = np.arange(1, segments)
     theta = math.atan2(r1, r0) + travel * k / segments
     pts = np.empty((segments, 3))

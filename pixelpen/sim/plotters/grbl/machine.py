@@ -359,8 +359,8 @@ class GrblMachine(SimulatedDevice):
 
     def _homing_position(self, t: float) -> np.ndarray:
         f = min(max((t - self._homing_t0) / self._homing_duration, 0.0), 1.0) if self._homing_duration else 1.0
-        phys = self._homing_start * (1.0 - f)
-        return phys - self._phys_offset
+        phys: np.ndarray = self._homing_start * (1.0 - f) - self._phys_offset
+        return phys
 
     def _finish_homing(self) -> None:
         start_m = self._homing_start - self._phys_offset
@@ -517,7 +517,7 @@ def _z_down_pieces(block: Block, s0: float, s1: float, wco_z: float) -> list[tup
     dz = block.unit[2]
 
     def down(s: float) -> bool:
-        return z0 + dz * s <= 1e-9
+        return bool(z0 + dz * s <= 1e-9)
 
     if abs(dz) < 1e-15:
         return [(s0, s1)] if down(s0) else []

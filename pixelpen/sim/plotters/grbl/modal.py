@@ -85,8 +85,7 @@ class GcodeState:
 
     def wco(self) -> np.ndarray:
         """Work coordinate offset: active WCS + G92 + tool length offset (on Z)."""
-        w = self.coord_system + self.coord_offset
-        w = w.copy()
+        w: np.ndarray = (self.coord_system + self.coord_offset).copy()
         w[2] += self.tool_length_offset
         return w
 
