@@ -167,7 +167,8 @@ def test_center_puts_the_drawing_in_the_middle_of_the_page_less_the_margins(tmp_
     url, ident = sim("grbl")
     assert run(path, "--to", url, "--center", "--margin", "20", "--no-optimize") == 0
     # the GRBL area is the whole 297 x 210 page: the box is 20..277 x 20..190, centre (148.5, 105)
-    assert ends_on_sheet(ident) == {frozenset({(128.5, 95.0), (168.5, 95.0)}), frozenset({(128.5, 115.0), (168.5, 115.0)})}
+    assert ends_on_sheet(ident) == {frozenset({(128.5, 95.0), (168.5, 95.0)}),
+                                    frozenset({(128.5, 115.0), (168.5, 115.0)})}
     url, ident = sim("grbl")
     assert run(path, "--to", url, "--center", "--page", "a5", "--no-optimize") == 0
     # a5 on a landscape bed is laid landscape, 210 x 148 mm from the sheet's top left: centre (105, 74)
@@ -648,7 +649,7 @@ def test_a_simulated_plotter_saves_its_paper_with_out(tmp_path, sim):
     from PIL import Image
 
     paper = tmp_path / "paper.png"
-    url, ident = sim("hp7475a", out=str(paper))
+    url, _ = sim("hp7475a", out=str(paper))
     assert run(svg(tmp_path, line(30, 50, 130, 50)), "--to", url) == 0
     img = np.asarray(Image.open(paper).convert("L"))
     ink_rows = np.flatnonzero((img < 128).any(axis=1))
@@ -753,7 +754,7 @@ def layout_campaign(cases, seed):
     points = np.array([[10.0, 20.0], [50.0, 20.0], [30.0, 60.0]])
 
     def target(data):
-        page, rotate, scale, margin = (data.decode("utf-8", "replace").split(" ") + ["", "", "", ""])[:4]
+        page, rotate, scale, margin = [*data.decode("utf-8", "replace").split(" "), "", "", "", ""][:4]
         numbers = []
         for text, convert in ((rotate, plotcmd._angle), (scale, plotcmd._number(0.0, False)),
                               (margin, plotcmd._number(0.0, True))):

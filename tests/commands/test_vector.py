@@ -169,7 +169,7 @@ def test_preview_on_a_device_shows_what_is_cut(tmp_path, capsys):
     frames = [p for p in paths if p.get("class") == "frame"]
     drawn = [p for p in paths if p.get("class") is None]
     assert len(cut) == 1 and len(frames) == 2 and len(drawn) == 1
-    pts = lambda p: np.array([[float(v) for v in xy.split(",")] for xy in p.get("d")[1:].split()])  # noqa: E731
+    pts = lambda p: np.array([[float(v) for v in xy.split(",")] for xy in p.get("d")[1:].split()])
     np.testing.assert_allclose(pts(cut[0]), [[0, 100], [x0, 100]], atol=0.05)
     np.testing.assert_allclose(sorted(pts(drawn[0]).tolist()), [[x0, 100], [50, 100]], atol=0.05)
     np.testing.assert_allclose(pts(frames[0])[[0, 2]], [[0, 0], [297, 210]])
