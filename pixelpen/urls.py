@@ -204,16 +204,6 @@ class Options:
         return key in self.url.options
 
 
-def parse_bool(text: str) -> bool:
-    """Read an option value as a boolean (1/0, true/false, yes/no, on/off)."""
-    low = text.strip().lower()
-    if low in {"1", "true", "yes", "on"}:
-        return True
-    if low in {"0", "false", "no", "off"}:
-        return False
-    raise ValueError(f"expected true/false, got {text!r}")
-
-
 _MM_PER = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "px": 25.4 / 96}
 PAPER_MM = {
     "a5": (148.0, 210.0), "a4": (210.0, 297.0), "a3": (297.0, 420.0), "a2": (420.0, 594.0),

@@ -89,8 +89,7 @@ def cmd_devices(args: argparse.Namespace) -> int:
 
 def scheme_options(cls: type[Display]) -> dict[str, str]:
     """A display's URL options as name -> plain help text, from its ``OPTIONS`` specs."""
-    rows = describe(cls.OPTIONS) if cls.OPTIONS else list(cls.url_options.items())  # url_options: until converted
-    return {name: plain_text(text) for name, text in rows}
+    return {name: plain_text(text) for name, text in describe(cls.OPTIONS)}
 
 
 def _print_options(options: dict[str, str]) -> None:
