@@ -44,8 +44,8 @@ def test_pen_down_stays_down_until_pen_up(model, plotter, capsys):
     assert not pen_is_down(model, ident)
 
 
-@pytest.mark.xfail(strict=True,
-                   reason="each open's handshake (_connect) lifts the pen, so a toggle in a new process always lowers it")
+@pytest.mark.xfail(strict=True, reason="each open's handshake (_connect) lifts the pen, "
+                                        "so a toggle in a new process always lowers it")
 @pytest.mark.parametrize("model", ["axidraw", "grbl"])
 def test_toggle_flips_the_pen(model, plotter):
     url, ident = plotter(model)
