@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 
@@ -10,14 +9,14 @@ import pixelpen
 from pixelpen.clock import SimulatedClock
 from pixelpen.devices.plotters.axidraw import AxiDrawPlotter
 from pixelpen.devices.plotters.base import PlotInterrupted, PositionUnknown
-from pixelpen.drivers.stream import Link
 from pixelpen.drivers.serial import SerialLink
+from pixelpen.drivers.stream import Link
 from pixelpen.errors import ConfigError, LinkError, ProtocolError, URLError
+from pixelpen.profiles.model import load_profile
 from pixelpen.sim.base import create_simulator
 from pixelpen.sim.plotters.sheet import Paper
 from pixelpen.urls import parse_url
 from pixelpen.vector.displaylist import DisplayList
-from pixelpen.profiles.model import load_profile
 from tests.devices.plotters.test_grbl import CLOSED_STROKE, OPEN_STROKES, InkAccount, ink_account
 
 PROFILE = load_profile("axidraw_v3")
@@ -140,9 +139,9 @@ def test_future_syntax_board_is_understood():
 
 
 def test_old_firmware_and_missing_features_are_refused():
-    with pytest.raises(ProtocolError, match="2.4.4"):
+    with pytest.raises(ProtocolError, match=r"2\.4\.4"):
         fake_plotter(version="2.4.0")
-    with pytest.raises(ConfigError, match="2.7.0"):
+    with pytest.raises(ConfigError, match=r"2\.7\.0"):
         fake_plotter(version="2.6.5", moves="lm")
     plotter, _fake = fake_plotter(version="2.6.5", moves="xm")
     plotter.close()
@@ -180,7 +179,7 @@ def test_auto_port_finds_the_eibotboard(monkeypatch):
     monkeypatch.setattr(axidraw, "list_serial_ports", lambda: ports)
     assert axidraw.find_ebb_port() == "/dev/ttyACM3"
     monkeypatch.setattr(axidraw, "list_serial_ports", lambda: ports[:1])
-    with pytest.raises(LinkError, match="04D8:FD92.*ttyUSB0"):
+    with pytest.raises(LinkError, match=r"04D8:FD92.*ttyUSB0"):
         axidraw.find_ebb_port()
 
 
@@ -206,7 +205,7 @@ def test_unit_square_and_pen_lift_sequence():
     down, up = sent.index("SP,0,120"), sent.index("SP,1,120")
     travel, stroke = sent[:down], sent[down + 1:up]
     assert motion(travel)[-1].tolist() == [400, 240]          # pen-up travel from home to (5 mm, 3 mm)
-    path = motion(stroke) + [400, 240]
+    path = motion(stroke) + [400, 240]  # noqa: RUF005  (an array: the offset added to every point)
     corners = {(1200, 240), (1200, 1040), (400, 1040), (400, 240)}
     assert corners <= {tuple(p) for p in path.tolist()}       # every corner is reached exactly
     on_edge = np.isin(path[:, 0], [400, 1200]) | np.isin(path[:, 1], [240, 1040])
@@ -361,7 +360,8 @@ def test_ctrl_c_leaves_the_pen_up_and_the_motors_on_for_a_resume():
     with pytest.raises(KeyboardInterrupt):
         plotter.plot(squares(4, side_mm=2.0))
     assert dev.pen_up and not dev.paper.pen_is_down
-    dev.receive(b"QE\r")  # still energised at 1/16 (ebb.html QE): the step counters keep the position, as pyaxidraw's pause
+    # still energised at 1/16 (ebb.html QE): the step counters keep the position, as pyaxidraw's pause
+    dev.receive(b"QE\r")
     assert dev.take_output() == b"16,16\r\nOK\r\n"
     dev.receive(b"QM\r")
     assert dev.take_output() == b"QM,0,0,0,0\n\r"  # nothing moving or queued
@@ -422,7 +422,7 @@ def fault_points(seed: int, n: int, total: int, start: int = 100) -> list[int]:
                                      pytest.param([*OPEN_STROKES[:3], CLOSED_STROKE, *OPEN_STROKES[3:]], id="closed")])
 @pytest.mark.parametrize("fault", ["drop_after", "stall_after"])
 def test_resume_after_a_link_fault_draws_every_segment_once(fault, strokes):
-    """Drop or stall anywhere (mid-slice, a travel, the first one from home, a closed stroke): the resume goes on exactly."""
+    """Drop or stall anywhere (mid-slice, a travel, the first from home, a loop): the resume goes on exactly."""
     total = plotted_bytes(strokes)
     points = fault_points(3 if fault == "drop_after" else 5, 6, total)
     interrupted = 0

@@ -1,7 +1,8 @@
-"""The plotter core: locating where a device stopped, resuming each stroke exactly once, state files, pause and manual hooks."""
+"""The plotter core: locating where a device stopped, resuming each stroke once, state files, pause and manual hooks."""
 
 from __future__ import annotations
 
+import itertools
 import json
 
 import numpy as np
@@ -10,12 +11,18 @@ import pytest
 from benchmarks.faults import Tally, compare
 from pixelpen.clock import SimulatedClock
 from pixelpen.devices.plotters.base import (
-    DeviceWhere, PlotInterrupted, PlotState, PlotterDisplay, PositionUnknown, ResumePoint, locate,
+    DeviceWhere,
+    PlotInterrupted,
+    PlotState,
+    PlotterDisplay,
+    PositionUnknown,
+    ResumePoint,
+    locate,
 )
 from pixelpen.drivers.stream import Link
 from pixelpen.errors import ConfigError, Disconnected, ParseError
-from pixelpen.vector.displaylist import DisplayList
 from pixelpen.profiles.model import load_profile
+from pixelpen.vector.displaylist import DisplayList
 
 A = np.array([[0, 0], [10, 0], [10, 10]])
 B = np.array([[20, 0], [30, 0]])
@@ -52,7 +59,7 @@ def test_locate_reads_one_place(x, y, pen, expected):
 
 
 @pytest.mark.parametrize("x, y, pen", [(15, 5, True), (5, 0.6, True), (50, 50, False), (3, 3, None),
-                                      (5, 0, False), (10, 5, False)])  # pen up inside a stroke: the base never lifts it there
+                                      (5, 0, False), (10, 5, False)])  # pen up inside a stroke: never lifted there
 def test_locate_finds_nothing_off_the_strokes_and_their_travels(x, y, pen):
     assert locate(WINDOW, where(x, y, pen), BEFORE) == []
 
@@ -96,7 +103,8 @@ def test_acknowledgements_rule_out_what_came_before_them():
     up_at_start = DeviceWhere((0, 0), False, reached=(3, 3))  # the move back to the start was acknowledged
     assert locate([(3, loop)], up_at_start, np.array([50, 50])) == [ResumePoint(4)]
     # k = 0 is only the travel: that proves nothing about the pen, so the closed stroke still has two readings
-    assert locate([(3, loop)], DeviceWhere((0, 0), False, reached=(3, 0)), np.array([50, 50])) == [ResumePoint(3), ResumePoint(4)]
+    where = DeviceWhere((0, 0), False, reached=(3, 0))
+    assert locate([(3, loop)], where, np.array([50, 50])) == [ResumePoint(3), ResumePoint(4)]
     cross = np.array([[0, 0], [10, 0], [10, 10], [5, 10], [5, -10]])
     assert locate([(0, cross)], DeviceWhere((5, 0), True, reached=(0, 3)), None) == [ResumePoint(0, 3, (5.0, 0.0))]
     assert locate([(0, cross)], DeviceWhere((5, 0), True, reached=(0, 1)), None) == [ResumePoint(0, 3, (5.0, 0.0))]
@@ -133,7 +141,8 @@ def test_a_version_1_state_file_still_loads_with_every_unconfirmed_stroke_in_dou
     "fields, message",
     [({"sent": 9}, "'sent' is out of range"), ({"sent": 1}, "'sent' is out of range"),
      ({"position_lost": "yes"}, "'position_lost' is not true or false"), ({"version": 3}, "not a version-2"),
-     ({"start": [9, 0, 0]}, "'start' is not"), ({"start": [1.5, 0, 0]}, "'start' is not"), ({"start": [0, 1]}, "'start' is not")],
+     ({"start": [9, 0, 0]}, "'start' is not"), ({"start": [1.5, 0, 0]}, "'start' is not"),
+     ({"start": [0, 1]}, "'start' is not")],
 )
 def test_bad_state_fields_are_named(tmp_path, fields, message):
     path = tmp_path / "s.json"
@@ -181,7 +190,8 @@ class FakePlotter(PlotterDisplay):
 
     def __init__(self, budget=None, tell=True, *, home=(0.0, 0.0), cut_travel=None, skip=None, **kw) -> None:
         clock = SimulatedClock()
-        super().__init__("fake", profile=load_profile("hp7475a"), clock=clock, link_factory=lambda: NullLink(clock), **kw)
+        super().__init__("fake", profile=load_profile("hp7475a"), clock=clock, link_factory=lambda: NullLink(clock),
+                         **kw)
         self.budgets = [] if budget is None else [float(b) for b in np.atleast_1d(budget)]
         self.tell, self.cut_travel, self.skip = tell, cut_travel, skip
         self.inked: list[tuple[float, float, float, float, int]] = []
@@ -208,7 +218,7 @@ class FakePlotter(PlotterDisplay):
             self.pos, self.down = tuple((np.asarray(self.pos) + p[0]) / 2), False
             self._cut(index)
         self.pos, self.down, self.reached = tuple(p[0]), True, (index, 0)
-        for k, (a, b) in enumerate(zip(p[:-1], p[1:]), start=1):
+        for k, (a, b) in enumerate(itertools.pairwise(p), start=1):
             step = float(np.hypot(*(b - a)))
             if self.budgets and step > self.budgets[0]:
                 cut = a + (b - a) * self.budgets.pop(0) / step
@@ -396,7 +406,7 @@ def test_a_lost_position_is_remembered_in_the_state_file(tmp_path):
 def test_resuming_from_a_missing_state_file_names_it(tmp_path):
     d = FakePlotter(state_file=tmp_path / "gone.json")
     d.open()
-    with pytest.raises(ConfigError, match="gone.json: no plot state to resume"):
+    with pytest.raises(ConfigError, match=r"gone\.json: no plot state to resume"):
         d.plot(_job(), resume=True)
 
 

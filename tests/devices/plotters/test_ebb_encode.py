@@ -26,8 +26,8 @@ from pixelpen.devices.plotters.ebb_encode import (
     vplus_volts,
 )
 from pixelpen.errors import ConfigError, ParseError
-from pixelpen.vector.motion import MotionLimits
 from pixelpen.profiles.model import ServoSettings, load_profile
+from pixelpen.vector.motion import MotionLimits
 
 DOWN = MotionLimits(speed=50.0, accel=200.0, cornering=0.127)   # saxi's pen-down limits (plotters.md §2.4)
 STEPS_PER_MM = 80.0
@@ -160,7 +160,7 @@ def _lm_steps_at(rate: int, accel: int, ticks: int) -> int:
 ])
 def test_lm_slices_finish_their_steps_within_the_slice(path):
     move = slice_polyline(np.array(path, float), DOWN, STEPS_PER_MM, 0.025)
-    for cmd, ms in zip(move_commands(move, "lm"), move.ms):
+    for cmd, ms in zip(move_commands(move, "lm"), move.ms, strict=True):
         fields = cmd.split(",")
         if fields[0] == "SM":
             continue

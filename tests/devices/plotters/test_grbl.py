@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import re
 from dataclasses import dataclass
 
@@ -10,15 +11,15 @@ import pytest
 
 import pixelpen
 from pixelpen.clock import SimulatedClock
-from pixelpen.devices.plotters.grbl import GrblPlotter
 from pixelpen.devices.plotters.base import PlotInterrupted, PositionUnknown
-from pixelpen.drivers.stream import Link
+from pixelpen.devices.plotters.grbl import GrblPlotter
 from pixelpen.drivers.serial import SerialLink
+from pixelpen.drivers.stream import Link
 from pixelpen.errors import ConfigError, LinkTimeout, ProtocolError, URLError
+from pixelpen.profiles.model import load_profile
 from pixelpen.sim.base import create_simulator
 from pixelpen.sim.plotters.sheet import Paper
 from pixelpen.vector.displaylist import DisplayList
-from pixelpen.profiles.model import load_profile
 
 WELCOME = b"\r\nGrbl 1.1h ['$' for help]\r\n"
 PROFILE = load_profile("grbl")
@@ -172,7 +173,7 @@ def test_connect_sends_units_and_pen_up_once():
 
 
 def test_old_grbl_is_refused():
-    with pytest.raises(ProtocolError, match="0.9j"):
+    with pytest.raises(ProtocolError, match=r"0\.9j"):
         fake_plotter(welcome=b"\r\nGrbl 0.9j ['$' for help]\r\n")
 
 
@@ -441,13 +442,13 @@ def ink_account(intended: list[np.ndarray], drawn: list[np.ndarray], tol: float 
     along the one most parallel to it, in its drawing direction.  A segment is lost when a stretch longer than
     ``tol`` is not covered, doubled when its pieces overlap by more than ``tol``; a piece on none is stray.
     """
-    ref = np.array([np.r_[a, b] for p in intended for a, b in zip(p[:-1], p[1:]) if np.hypot(*(b - a)) > 1e-9])
+    ref = np.array([np.r_[a, b] for p in intended for a, b in itertools.pairwise(p) if np.hypot(*(b - a)) > 1e-9])
     a, d = ref[:, :2], ref[:, 2:] - ref[:, :2]
     length = np.hypot(*d.T)
     spans: list[list[tuple[float, float]]] = [[] for _ in ref]
     stray = 0
     for piece in drawn:
-        for p0, p1 in zip(piece[:-1], piece[1:]):
+        for p0, p1 in itertools.pairwise(piece):
             if np.hypot(*(p1 - p0)) <= 1e-9:
                 continue
             far, ts = np.zeros(len(ref)), []
@@ -596,7 +597,7 @@ def test_power_loss_asks_and_homing_lets_it_go_on_without_losing_a_segment():
 
 
 def test_manual_pen_home_and_motors_off():
-    """``pixelpen pen ...``: servo S values as the profile says, G0 home without homing switches, $SLP for motors off."""
+    """``pixelpen pen ...``: servo S values as the profile says, G0 home without homing switches, $SLP: motors off."""
     dev, clock = new_sim()
     plotter = sim_plotter(dev, clock)
     plotter.pen_down()

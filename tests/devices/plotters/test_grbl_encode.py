@@ -14,8 +14,8 @@ from pixelpen.devices.plotters.grbl_encode import (
     ERROR_CODES,
     CharacterCounter,
     CoordinateFormat,
-    PenMotion,
     PathTrack,
+    PenMotion,
     parse_code,
     parse_status,
     parse_welcome,
@@ -164,7 +164,8 @@ def test_streaming_by_the_counting_rule_never_overflows(script):
 # -- status reports, welcome, codes ----------------------------------------------------------------
 def test_status_report_from_interface_md():
     s = parse_status("<Idle|MPos:0.000,0.000,0.000|FS:0,0|WCO:0.000,0.000,0.000>\r\n")
-    assert (s.state, s.substate, s.mpos, s.wco, s.feed, s.spindle) == ("Idle", None, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0, 0.0)
+    assert (s.state, s.substate, s.mpos, s.wco, s.feed, s.spindle) == (
+        "Idle", None, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0, 0.0)
     assert not s.busy and not s.held
     s = parse_status("<Hold:0|MPos:5.529,0.560,7.000|Bf:15,128|FS:0,0|Ov:100,100,100|A:S>")
     assert (s.state, s.substate, s.planner_free, s.rx_free, s.overrides, s.accessories) == (

@@ -13,17 +13,17 @@ import pytest
 
 import pixelpen
 from pixelpen.clock import SimulatedClock
-from pixelpen.devices.plotters.hpgl import HP7440A, HP7475A, HP7550A, HPGLDisplay
 from pixelpen.devices.plotters.base import PlotInterrupted, PlotState, PositionUnknown
+from pixelpen.devices.plotters.hpgl import HP7440A, HP7475A, HP7550A, HPGLDisplay
 from pixelpen.display.registry import known_schemes
 from pixelpen.drivers import discovery
 from pixelpen.drivers.stream import Link
 from pixelpen.errors import ConfigError, LinkError, LinkTimeout, PixelpenError, ProtocolError, URLError
+from pixelpen.profiles.model import load_profile
 from pixelpen.sim.base import create_simulator, forget_simulator, named_simulator
 from pixelpen.sim.transports.port import open_sim_port
 from pixelpen.urls import parse_url
 from pixelpen.vector.displaylist import DisplayList
-from pixelpen.profiles.model import load_profile
 
 UNIT = 0.02488  # HP 7475A plotter unit in mm (7475A manual p. 22)
 ESC_QUERY = re.compile(rb"\x1b\.[BEO]")
@@ -134,7 +134,7 @@ def test_bad_url_options_are_named(options, message):
 def test_conflicting_flow_and_out_of_range_velocity():
     with pytest.raises(ConfigError, match="handshake=xonxoff needs flow=xonxoff"):
         HP7475A.from_url(parse_url("hp7475a:/dev/ttyUSB0?handshake=xonxoff&flow=none"))
-    with pytest.raises(ConfigError, match="velocity 50 cm/s is outside 0..38.1"):
+    with pytest.raises(ConfigError, match=r"velocity 50 cm/s is outside 0\.\.38\.1"):
         HP7475A.from_url(parse_url("hp7475a:/dev/ttyUSB0?velocity=50"))
 
 
@@ -163,7 +163,8 @@ def test_wire_bytes_of_a_square_are_exact():
     with rig.display as d:
         d.plot(DisplayList.from_polylines([square(1000, 1000)], pens=1, unit_mm=UNIT))
     # ESC.( plotter on, ESC.K abort leftovers, ESC.(; (the escb preamble); IN, OS (clears its bit 8, so that
-    # a later OS can tell a power cycle), OI/OE to identify and check; pen 1; the square; PU;OA;OE; to confirm it; on close ESC.K, PU;SP0;, the A4 park position
+    # a later OS can tell a power cycle), OI/OE to identify and check; pen 1; the square; PU;OA;OE; to confirm it;
+    # on close ESC.K, PU;SP0;, the A4 park position
     # and OI; to see them done.
     assert graphics(rig.sent) == (
         b"\x1b.(\x1b.K\x1b.(;IN;OS;OI;OE;"
@@ -192,7 +193,8 @@ def test_a_slower_profile_asks_for_its_speed():
 
 def test_pens_are_selected_when_they_change_and_land_on_paper_in_order():
     rig = Rig(options="sync_strokes=1")
-    dl = DisplayList.from_polylines([square(500, 500), square(3000, 500), square(5500, 500)], pens=[2, 2, 5], unit_mm=UNIT)
+    dl = DisplayList.from_polylines([square(500, 500), square(3000, 500), square(5500, 500)], pens=[2, 2, 5],
+                                    unit_mm=UNIT)
     with rig.display as d:
         d.plot(dl)
     wire = graphics(rig.sent)
@@ -502,7 +504,8 @@ class Operator(SimulatedClock):
                 dev.press_view()
 
 
-@pytest.mark.parametrize("fault, why", [("paper_lever_after", "paper lever is raised"), ("pause_after", "VIEW is pressed")])
+@pytest.mark.parametrize("fault, why", [("paper_lever_after", "paper lever is raised"),
+                                        ("pause_after", "VIEW is pressed")])
 def test_a_pause_at_the_plotter_is_waited_for_not_a_fault(fault, why, caplog):
     dl = drawing(n=10)
     reference = Rig()
@@ -585,7 +588,7 @@ def _plot_through_faults(dl: DisplayList, fault: dict[str, str], options: str = 
 def _segments(device) -> list[tuple]:
     """The sheet as a sorted list of (x0, y0, x1, y1, pen): a multiset, so a line drawn twice shows."""
     seg, pens, _ = device.segments()
-    return sorted((*map(float, s), int(p)) for s, p in zip(seg, pens))
+    return sorted((*map(float, s), int(p)) for s, p in zip(seg, pens, strict=True))
 
 
 def _reference(dl: DisplayList, options: str = "sync_strokes=3") -> tuple[list[tuple], int]:
@@ -681,7 +684,7 @@ def test_a_wrong_position_at_a_confirmation_is_a_fault_and_the_strokes_are_redra
         return bytes(out)
 
     rig = Rig(options="sync_strokes=2", mangle=wrong_oa)
-    with pytest.raises(PlotInterrupted, match="OA found the pen at 1,1 after strokes 2..3"):
+    with pytest.raises(PlotInterrupted, match=r"OA found the pen at 1,1 after strokes 2\.\.3"):
         rig.display.plot(dl)
     rig.display.resume_after_fault()
     rig.display.close()

@@ -69,7 +69,7 @@ def _hp2xx_segments(hpgl: bytes, tmp_path) -> tuple[np.ndarray, np.ndarray]:
         values = [float(v) for v in params.split(",") if v]
         if mnemonic == "SP":
             pen = int(values[0]) if values else 0
-        for x, y in zip(values[0::2], values[1::2]):
+        for x, y in zip(values[0::2], values[1::2], strict=False):
             if mnemonic == "PD" and pos is not None:
                 segments.append((*pos, x, y))
                 pens.append(pen)

@@ -1,4 +1,4 @@
-"""A real ser2net bridging RFC 2217 on loopback to the simulated 7475A behind a pty: plotting works as on a local port."""
+"""A real ser2net bridging RFC 2217 on loopback to the simulated 7475A behind a pty: it plots as on a local port."""
 
 from __future__ import annotations
 
