@@ -5,7 +5,19 @@ import pytest
 
 from pixelpen.display.flatten import flatten_picture
 from pixelpen.display.picture import (
-    Arc, Bezier, Circle, Ellipse, Fill, Marker, Picture, Polygon, Polyline, Rectangle, Segment, Style, Text,
+    Arc,
+    Bezier,
+    Circle,
+    Ellipse,
+    Fill,
+    Marker,
+    Picture,
+    Polygon,
+    Polyline,
+    Rectangle,
+    Segment,
+    Style,
+    Text,
 )
 from pixelpen.geometry import ViewingPipeline, rotate
 
@@ -91,7 +103,9 @@ def test_curves_arcs_and_text_become_strokes():
     (pie,) = shapes(Arc((50, 50), 10, 10, 0, np.pi / 2, close="pie"))
     assert np.allclose(pie.paths[0][-2], [500, 500])  # pie goes back through the centre
     (ell,) = shapes(Ellipse((50, 50), 20, 10, angle=np.pi / 2))
-    assert np.ptp(ell.paths[0][:, 1]) == pytest.approx(400, abs=1) and np.ptp(ell.paths[0][:, 0]) == pytest.approx(200, abs=1)
+    assert np.ptp(ell.paths[0][:, 1]) == pytest.approx(400, abs=1) and np.ptp(ell.paths[0][:, 0]) == pytest.approx(
+        200, abs=1
+    )
     (txt,) = shapes(Text((10, 10), "Hi", height=5))
     assert len(txt.paths) >= 3
 
@@ -103,8 +117,11 @@ def test_zero_radius_curves_are_exact_degenerate_shapes():
     # a flat ellipse is the segment between its extremes, rotated by its angle: (50 +- 20 cos a, 50 +- 20 sin a)
     line = np.vstack(shapes(Ellipse((50, 50), 20, 0, angle=np.pi / 6))[0].paths)
     world = line / 10 * [1, -1] + [0, 100]  # device -> world for this y-down pipeline
-    ends = [50 + 20 * np.cos(np.pi / 6), 50 + 20 * np.sin(np.pi / 6)], [50 - 20 * np.cos(np.pi / 6), 50 - 20 * np.sin(np.pi / 6)]
-    np.testing.assert_allclose(sorted(map(tuple, world))[::len(world) - 1], sorted(map(tuple, ends)), atol=1e-9)
+    ends = (
+        [50 + 20 * np.cos(np.pi / 6), 50 + 20 * np.sin(np.pi / 6)],
+        [50 - 20 * np.cos(np.pi / 6), 50 - 20 * np.sin(np.pi / 6)],
+    )
+    np.testing.assert_allclose(sorted(map(tuple, world))[:: len(world) - 1], sorted(map(tuple, ends)), atol=1e-9)
     quarter = np.vstack(shapes(Arc((0, 0), 0, 10, 0.0, np.pi / 2), pipeline((-50, -50, 50, 50)))[0].paths)
     assert len(quarter) == 2  # from u = 0 (the centre) to u = pi/2 (10 up): one straight piece
 

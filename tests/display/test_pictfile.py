@@ -9,7 +9,20 @@ from hypothesis import strategies as st
 
 from pixelpen.display.pictfile import load_picture, loads_picture, picture_to_dict, save_picture
 from pixelpen.display.picture import (
-    Arc, Bezier, BSpline, Circle, Ellipse, Fill, Image, Marker, Picture, Polygon, Polyline, Rectangle, Segment, Style,
+    Arc,
+    Bezier,
+    BSpline,
+    Circle,
+    Ellipse,
+    Fill,
+    Image,
+    Marker,
+    Picture,
+    Polygon,
+    Polyline,
+    Rectangle,
+    Segment,
+    Style,
     Text,
 )
 from pixelpen.errors import ParseError
@@ -18,7 +31,9 @@ from pixelpen.errors import ParseError
 def _every_primitive() -> Picture:
     pic = Picture(window=(0, 0, 100, 50))
     pic.add(Polyline([[0, 0], [1, 2]], Style(colour="red", width=0.5, dash=(1, 2), layer="a")))
-    pic.add(Polygon(([[0, 0], [4, 0], [0, 4]], [[1, 1], [2, 1], [1, 2]]), Style(fill=Fill("hatch", angle=0.5, spacing=2))))
+    pic.add(
+        Polygon(([[0, 0], [4, 0], [0, 4]], [[1, 1], [2, 1], [1, 2]]), Style(fill=Fill("hatch", angle=0.5, spacing=2)))
+    )
     pic.add(Rectangle(1, 2, 3, 4, Style(fill=Fill("pattern", pattern=((1, 0), (0, 1)), outline=False))))
     pic.add(Circle((5, 5), 2))
     pic.add(Ellipse((5, 5), 3, 1, angle=0.2))
@@ -101,15 +116,32 @@ P2 = [[0, 0], [1, 1]]
     "text, words",
     [
         (_doc({"type": {}}), r"\$\.items\[0\]\.type: unknown primitive type"),  # was TypeError: unhashable dict
-        (_doc({"type": "rectangle", "x0": 0, "y0": 0, "x1": 1, "y1": 1,
-               "style": {"fill": {"style": "pattern", "pattern": 5}}}), r"\$\.items\[0\]\.style\.fill.*rows"),
+        (
+            _doc(
+                {
+                    "type": "rectangle",
+                    "x0": 0,
+                    "y0": 0,
+                    "x1": 1,
+                    "y1": 1,
+                    "style": {"fill": {"style": "pattern", "pattern": 5}},
+                }
+            ),
+            r"\$\.items\[0\]\.style\.fill.*rows",
+        ),
         (_doc({"type": "segment", "name": "s", "items": 5}), r"\$\.items\[0\]\.items: expected a list"),
         (_doc({"type": "segment", "name": "s", "items": [5]}), r"\$\.items\[0\]\.items\[0\]: expected an object"),
         (_doc({"type": "text", "position": [0, 0], "text": 5}), r"\$\.items\[0\]: .*text must be a string"),
         (_doc({"type": "marker", "points": P2, "size": "2"}), r"\$\.items\[0\]: .*marker size"),
-        (_doc({"type": "arc", "center": [0, 0], "rx": 1, "ry": 1, "start": [1], "end": 2}), r"\$\.items\[0\]: .*arc start"),
+        (
+            _doc({"type": "arc", "center": [0, 0], "rx": 1, "ry": 1, "start": [1], "end": 2}),
+            r"\$\.items\[0\]: .*arc start",
+        ),
         (_doc({"type": "circle", "center": [0, 0], "r": 1e308}), r"\$\.items\[0\]: .*circle radius"),
-        (_doc({"type": "ellipse", "center": [0, 0], "rx": 1, "ry": 1, "angle": 1e400}), r"\$\.items\[0\]: .*ellipse angle"),
+        (
+            _doc({"type": "ellipse", "center": [0, 0], "rx": 1, "ry": 1, "angle": 1e400}),
+            r"\$\.items\[0\]: .*ellipse angle",
+        ),
         (_doc({"type": "polyline", "points": P2}, window=[0, 0, 0, 10]), r"\$\.window: .*degenerate"),
         (_doc({"type": "polyline", "points": [[0, 1e400], [1, 1]]}), r"\$\.items\[0\]\.points\[0\]: expected finite"),
         (_doc({"type": "polyline", "points": P2}, window=[0, 0, 10, 1e400]), r"\$\.window\[3\]: expected a finite"),
@@ -135,7 +167,7 @@ def test_numbers_beyond_python_limits_are_parse_errors():
         loads_picture(pen)
 
 
-@pytest.mark.parametrize("opener", ["[", "{\"a\":", "[{\"b\":"])
+@pytest.mark.parametrize("opener", ["[", '{"a":', '[{"b":'])
 def test_deep_nesting_is_refused_with_its_byte_offset(opener):
     text = opener * 5000  # json.loads raised RecursionError on this
     with pytest.raises(ParseError, match=r"byte offset \d+: JSON nested more than 32 deep"):
@@ -166,10 +198,15 @@ def _depth_reference(raw: bytes, limit: int):
 
 @settings(max_examples=100, deadline=None)
 @given(
-    parts=st.lists(st.one_of(
-        st.sampled_from(["[", "]", "{", "}", ",", "1"]),
-        st.lists(st.sampled_from(["a", "[", "{", "]", '\\"', "\\\\"]), max_size=5).map(lambda p: '"' + "".join(p) + '"'),
-    ), max_size=40),
+    parts=st.lists(
+        st.one_of(
+            st.sampled_from(["[", "]", "{", "}", ",", "1"]),
+            st.lists(st.sampled_from(["a", "[", "{", "]", '\\"', "\\\\"]), max_size=5).map(
+                lambda p: '"' + "".join(p) + '"'
+            ),
+        ),
+        max_size=40,
+    ),
     limit=st.integers(0, 5),
     chunk=st.sampled_from([1, 2, 3, 7, 1 << 22]),
 )
@@ -180,11 +217,14 @@ def test_the_vectorised_depth_scan_matches_a_scalar_scan(parts, limit, chunk):
     assert _first_too_deep(raw, limit, chunk) == _depth_reference(raw, limit)  # small chunks split strings, escapes
 
 
-@pytest.mark.parametrize("limit, value, words", [
-    ("MAX_ITEMS", 1, "more than 1 items"),
-    ("MAX_POINTS", 3, "more than 3 points"),
-    ("MAX_DEPTH", 4, "nested more than 4"),  # object, items, polyline, points, point: 5
-])
+@pytest.mark.parametrize(
+    "limit, value, words",
+    [
+        ("MAX_ITEMS", 1, "more than 1 items"),
+        ("MAX_POINTS", 3, "more than 3 points"),
+        ("MAX_DEPTH", 4, "nested more than 4"),  # object, items, polyline, points, point: 5
+    ],
+)
 def test_per_file_limits_are_overridable(monkeypatch, limit, value, words):
     import pixelpen.display.pictfile as pf
 
@@ -205,5 +245,5 @@ def test_bad_file_names_are_parse_errors(tmp_path):
 def test_saving_under_a_bad_file_name_is_a_config_error(tmp_path):
     from pixelpen.errors import ConfigError
 
-    with pytest.raises(ConfigError, match="picture file.*NUL"):
+    with pytest.raises(ConfigError, match=r"picture file.*NUL"):
         save_picture(Picture(), str(tmp_path / "a\x00.json"))

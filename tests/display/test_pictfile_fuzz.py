@@ -9,7 +9,20 @@ from pixelpen import geometry as geo
 from pixelpen.display.flatten import flatten_picture
 from pixelpen.display.pictfile import loads_picture, picture_to_dict
 from pixelpen.display.picture import (
-    Arc, Bezier, BSpline, Circle, Ellipse, Fill, Image, Marker, Picture, Polygon, Polyline, Rectangle, Segment, Style,
+    Arc,
+    Bezier,
+    BSpline,
+    Circle,
+    Ellipse,
+    Fill,
+    Image,
+    Marker,
+    Picture,
+    Polygon,
+    Polyline,
+    Rectangle,
+    Segment,
+    Style,
     Text,
 )
 from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
@@ -23,7 +36,11 @@ def _seeds() -> list[bytes]:
 
     full = Picture(window=(0, 0, 100, 80))
     full.add(Polyline([[0, 0], [10, 20], [30, 5]], Style(colour="red", width=0.5, dash=(1, 2), layer="a", pen=2)))
-    full.add(Polygon(([[0, 0], [40, 0], [0, 40]], [[5, 5], [10, 5], [5, 10]]), Style(fill=Fill("hatch", angle=0.5, spacing=2))))
+    full.add(
+        Polygon(
+            ([[0, 0], [40, 0], [0, 40]], [[5, 5], [10, 5], [5, 10]]), Style(fill=Fill("hatch", angle=0.5, spacing=2))
+        )
+    )
     full.add(Rectangle(1, 2, 30, 40, Style(fill=Fill("pattern", pattern=((1, 0), (0, 1)), outline=False))))
     full.add(Circle((50, 50), 20))
     full.add(Ellipse((50, 40), 30, 10, angle=0.2, style=Style(fill=Fill("solid"))))
@@ -43,8 +60,25 @@ def _seeds() -> list[bytes]:
 
 
 TROUBLE: tuple[object, ...] = (
-    1e308, -1e308, 1e16, 0, -1, 1e-300, float("inf"), float("nan"), 10**30, "x", "", {}, [], [[1, 2]], [[[0]]],
-    True, None, [1e308, -1e308], [[1e308, 0], [-1e308, 0]],
+    1e308,
+    -1e308,
+    1e16,
+    0,
+    -1,
+    1e-300,
+    float("inf"),
+    float("nan"),
+    10**30,
+    "x",
+    "",
+    {},
+    [],
+    [[1, 2]],
+    [[[0]]],
+    True,
+    None,
+    [1e308, -1e308],
+    [[1e308, 0], [-1e308, 0]],
 )
 """Values put in place of each part of a seed by the structural variants."""
 
@@ -54,10 +88,10 @@ def _paths(node: object, path: tuple = ()) -> list[tuple]:
     out = [path] if path else []
     if isinstance(node, dict):
         for key, value in node.items():
-            out += _paths(value, path + (key,))
+            out += _paths(value, (*path, key))
     elif isinstance(node, list):
         for index, value in enumerate(node):
-            out += _paths(value, path + (index,))
+            out += _paths(value, (*path, index))
     return out
 
 

@@ -4,8 +4,22 @@ import numpy as np
 import pytest
 
 from pixelpen.display.picture import (
-    Arc, Bezier, BSpline, Circle, Ellipse, Fill, Image, Marker, Picture, Polygon, Polyline, Rectangle, Segment, Style,
-    Text, parse_colour,
+    Arc,
+    Bezier,
+    BSpline,
+    Circle,
+    Ellipse,
+    Fill,
+    Image,
+    Marker,
+    Picture,
+    Polygon,
+    Polyline,
+    Rectangle,
+    Segment,
+    Style,
+    Text,
+    parse_colour,
 )
 from pixelpen.errors import ConfigError, PixelpenError
 

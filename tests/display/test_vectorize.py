@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from pixelpen.display.picture import Fill, Style
-from pixelpen.errors import ConfigError
 from pixelpen.display.vectorize import PenLayerMap, build_display_list, device_angle, nearest_pen
+from pixelpen.errors import ConfigError
 
 
 @dataclass

@@ -235,7 +235,7 @@ rects = st.tuples(st.floats(-10, 10), st.floats(-10, 10), st.floats(0.5, 20), st
 
 def same_segments_ignoring_touches(a, ia, b, ib, atol):
     """a and b agree, except that a segment shorter than atol (a touch) may be kept by only one."""
-    da, db = dict(zip(ia.tolist(), a)), dict(zip(ib.tolist(), b))
+    da, db = dict(zip(ia.tolist(), a, strict=False)), dict(zip(ib.tolist(), b, strict=False))
     for i in set(da) | set(db):
         if i in da and i in db:
             np.testing.assert_allclose(da[i], db[i], atol=atol)
@@ -372,7 +372,8 @@ def star_polygons(draw):
 
 @settings(max_examples=30, deadline=None)
 @given(poly=star_polygons())
-@example(poly=np.array([[-1.0, 1.73205087], [-1.0, -1.73205075], [2.0, 5.96046443e-08]]))  # a sliver tip 6e-8 off the border
+# a sliver tip 6e-8 off the border
+@example(poly=np.array([[-1.0, 1.73205087], [-1.0, -1.73205075], [2.0, 5.96046443e-08]]))
 def test_clipped_concave_polygon_is_polygon_and_window(poly):
     rings = clip_polygon(poly, WINDOW)
     check_polygon_clip(poly, rect_ring(WINDOW), rings)
@@ -410,8 +411,9 @@ def test_convex_clipping_with_a_rectangle_matches_rectangle_clipping():
     for poly in (U_SHAPE, COMB, COMB[::-1]):
         a = clip_polygon(poly, WINDOW)
         b = clip_polygon_convex(poly, rect_ring(WINDOW)[::-1])  # clockwise window accepted
-        assert sorted(map(frozenset, map(as_vertex_set, a)), key=sorted) == \
-            sorted(map(frozenset, map(as_vertex_set, b)), key=sorted)
+        assert sorted(map(frozenset, map(as_vertex_set, a)), key=sorted) == sorted(
+            map(frozenset, map(as_vertex_set, b)), key=sorted
+        )
 
 
 def test_convex_window_worked_example():
@@ -424,10 +426,14 @@ def test_convex_window_worked_example():
 
 @pytest.mark.parametrize(
     "window, message",
-    [([(0, 0), (10, 0), (5, 2), (5, 10)], "not convex"), ([(0, 0), (1, 1), (2, 2)], "degenerate"),
-     ([(0, 0), (1, 0)], "at least 3"), ([(0, 0), (0, 0), (1, 1), (0, 1)], "zero-length edge"),
-     ([(0, 0), (4, 0), (np.nan, 4)], "row 2"),
-     ([(np.cos(a), np.sin(a)) for a in 4 * np.pi * np.arange(5) / 5], "winds")],  # a pentagram
+    [
+        ([(0, 0), (10, 0), (5, 2), (5, 10)], "not convex"),
+        ([(0, 0), (1, 1), (2, 2)], "degenerate"),
+        ([(0, 0), (1, 0)], "at least 3"),
+        ([(0, 0), (0, 0), (1, 1), (0, 1)], "zero-length edge"),
+        ([(0, 0), (4, 0), (np.nan, 4)], "row 2"),
+        ([(np.cos(a), np.sin(a)) for a in 4 * np.pi * np.arange(5) / 5], "winds"),
+    ],  # a pentagram
 )
 def test_bad_convex_windows_are_rejected(window, message):
     with pytest.raises(ValueError, match=message):
@@ -447,6 +453,7 @@ def test_bad_polygons_are_rejected():
 
 # ---------------------------------------------------------------------------------------------
 # Cyrus–Beck
+
 
 def test_cyrus_beck_worked_example():
     # triangle (0,0), (10,0), (5,10): at y = 5 the left edge is at x = 2.5, the right edge at x = 7.5
@@ -482,6 +489,7 @@ def test_cyrus_beck_output_is_inside_and_complete(segs, win):
 # ---------------------------------------------------------------------------------------------
 # Polylines
 
+
 def test_polyline_leaving_and_reentering_becomes_several_pieces():
     line = [(-5, 5), (5, 5), (5, 15), (6, 15), (6, 5), (8, 5)]
     pieces, src = clip_polylines([line, [(1, 1)], [(20, 20)], [(2, 2), (3, 3)]], WINDOW, return_index=True)
@@ -494,8 +502,7 @@ def test_polyline_leaving_and_reentering_becomes_several_pieces():
 
 
 @settings(max_examples=50, deadline=None)
-@given(lines=st.lists(st.lists(st.tuples(coords, coords), min_size=2, max_size=12), min_size=1, max_size=6),
-       rect=rects)
+@given(lines=st.lists(st.lists(st.tuples(coords, coords), min_size=2, max_size=12), min_size=1, max_size=6), rect=rects)
 def test_polyline_pieces_cover_exactly_the_clipped_segments(lines, rect):
     pieces, src = clip_polylines(lines, rect, return_index=True)
     segs = np.concatenate([np.hstack([np.array(p)[:-1], np.array(p)[1:]]) for p in lines])

@@ -1,5 +1,6 @@
 """Tests for pixelpen.geometry.curves: Bernstein/Bézier, Cox–de Boor B-splines, basis matrices, flattening."""
 
+import itertools
 import math
 
 import numpy as np
@@ -24,7 +25,6 @@ from pixelpen.geometry.curves import (
     uniform_knots,
 )
 
-
 # ---------------------------------------------------------------------------------------------
 # Scalar references written from the textbook recurrences
 
@@ -32,7 +32,7 @@ def de_casteljau_reference(points, t):
     """Plain de Casteljau: repeated linear interpolation of a list of points."""
     pts = [tuple(p) for p in points]
     while len(pts) > 1:
-        pts = [tuple((1 - t) * a + t * b for a, b in zip(p, q)) for p, q in zip(pts, pts[1:])]
+        pts = [tuple((1 - t) * a + t * b for a, b in zip(p, q, strict=False)) for p, q in itertools.pairwise(pts)]
     return pts[0]
 
 
@@ -85,7 +85,7 @@ def test_bernstein_partition_of_unity(n, t):
 
 def test_bezier_point_matches_scalar_de_casteljau_on_random_curves():
     rng = np.random.default_rng(3)
-    for degree in range(0, 9):
+    for degree in range(9):
         ctrl = rng.uniform(-50, 50, size=(degree + 1, 2))
         t = rng.uniform(0, 1, size=25)
         expected = [de_casteljau_reference(ctrl, ti) for ti in t]
@@ -209,7 +209,7 @@ def test_flatten_beziers_batch_equals_one_by_one():
     rng = np.random.default_rng(8)
     curves = [rng.uniform(0, 100, size=(rng.integers(2, 6), 2)) for _ in range(30)]
     batch = flatten_beziers(curves, 0.05)
-    for curve, poly in zip(curves, batch):
+    for curve, poly in zip(curves, batch, strict=False):
         np.testing.assert_array_equal(poly, flatten_bezier(curve, 0.05))
 
 

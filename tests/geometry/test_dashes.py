@@ -1,5 +1,6 @@
 """Tests for pixelpen.geometry.dashes: dash patterns along polylines, against a scalar walking reference."""
 
+import itertools
 import math
 
 import numpy as np
@@ -21,7 +22,7 @@ def dash_reference(poly, pattern, offset):
         idx = (idx + 1) % len(pat)
     remain, on = pat[idx] - pos, idx % 2 == 0
     pieces, current = [], [tuple(poly[0])] if idx % 2 == 0 else None
-    for a, b in zip(poly[:-1], poly[1:]):
+    for a, b in itertools.pairwise(poly):
         a, b = np.asarray(a, float), np.asarray(b, float)
         length, done = float(np.hypot(*(b - a))), 0.0
         while length - done > remain:
@@ -66,7 +67,7 @@ def test_pattern_continues_across_a_corner_worked_example():
     pieces = dash_polylines([[(0, 0), (10, 0), (10, 10)]], (3, 2), offset=1)
     expected = [[(0, 0), (2, 0)], [(4, 0), (7, 0)], [(9, 0), (10, 0), (10, 2)], [(10, 4), (10, 7)], [(10, 9), (10, 10)]]
     assert len(pieces) == len(expected)
-    for got, want in zip(pieces, expected):
+    for got, want in zip(pieces, expected, strict=False):
         np.testing.assert_allclose(got, want, atol=1e-12)
 
 
@@ -81,7 +82,7 @@ def test_pattern_restarts_for_every_polyline():
     pieces = dash_polylines([line, line], (2, 1.5))
     half = len(pieces) // 2
     assert len(pieces) == 2 * half
-    for a, b in zip(pieces[:half], pieces[half:]):
+    for a, b in zip(pieces[:half], pieces[half:], strict=False):
         np.testing.assert_array_equal(a, b)
 
 
@@ -118,7 +119,7 @@ def test_dashes_match_the_scalar_reference(lines, pattern, offset):
     keep = [p for p in pieces if polyline_length(p) > 1e-7]
     want = [p for p in expected if polyline_length(p) > 1e-7]
     assert len(keep) == len(want)
-    for got, ref in zip(keep, want):
+    for got, ref in zip(keep, want, strict=False):
         np.testing.assert_allclose(got[[0, -1]], ref[[0, -1]], atol=1e-7)
         assert polyline_length(got) == pytest.approx(polyline_length(ref), abs=1e-7)
 

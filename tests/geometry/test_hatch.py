@@ -1,4 +1,4 @@
-"""Tests of scan-line hatching: against a scalar textbook scan-line fill, an independent point-in-polygon test, areas."""
+"""Tests of scan-line hatching: against a scalar textbook scan-line fill, an independent inside test, areas."""
 
 import math
 
@@ -11,6 +11,7 @@ from pixelpen.errors import ConfigError
 from pixelpen.geometry.hatch import hatch
 
 # --- independent references -------------------------------------------------------------------------------------
+
 
 def inside_evenodd(px, py, rings):
     """Ray casting (Hearn & Baker's odd-parity rule): count edge crossings of a ray to +x."""
@@ -54,7 +55,7 @@ def scanline_reference(rings, ys):
                 if min(y0, y1) <= y < max(y0, y1):
                     xs.append(x0 + (y - y0) * (x1 - x0) / (y1 - y0))
         xs.sort()
-        for a, b in zip(xs[0::2], xs[1::2]):
+        for a, b in zip(xs[0::2], xs[1::2], strict=False):
             if b > a:
                 spans.append((y, a, b))
     return spans
@@ -85,6 +86,7 @@ def circle(cx, cy, r, n=48):
 
 # --- worked examples ---------------------------------------------------------------------------------------------
 
+
 def test_square_zigzag_is_one_boustrophedon_path():
     # 10 units tall at spacing 2: five lines centred in the extent, at y = 1, 3, 5, 7, 9
     paths = hatch(SQUARE, 2.0)
@@ -96,7 +98,11 @@ def test_square_zigzag_is_one_boustrophedon_path():
 def test_unjoined_lines_alternate_direction():
     paths = hatch(SQUARE, 2.0, join=False)
     assert [p.tolist() for p in paths] == [
-        [[0, 1], [10, 1]], [[10, 3], [0, 3]], [[0, 5], [10, 5]], [[10, 7], [0, 7]], [[0, 9], [10, 9]],
+        [[0, 1], [10, 1]],
+        [[10, 3], [0, 3]],
+        [[0, 5], [10, 5]],
+        [[10, 7], [0, 7]],
+        [[0, 9], [10, 9]],
     ]
 
 
@@ -128,7 +134,7 @@ def test_matches_scalar_scanline_reference_with_hole():
     assert len(got) == len(ref)
     np.testing.assert_allclose(np.array(got), np.array(sorted(ref)), atol=1e-9)
     # lines through the hole are split in two, and no hatch midpoint lies in the hole
-    for (a, b) in segments_of(paths):
+    for a, b in segments_of(paths):
         mx, my = (a + b) / 2
         assert inside_evenodd(mx, my, rings)
         assert not inside_evenodd(mx, my, [hole])
@@ -165,6 +171,7 @@ def test_zigzag_connectors_follow_the_boundary_and_stay_inside():
         along = abs(d[0] * math.sin(0.3) - d[1] * math.cos(0.3)) < 1e-9 * (1 + np.hypot(*d))
         if not along:
             assert distance_to_boundary(mx, my, rings) < 1e-9
+
     # joined paths contain every hatch span: the length along the hatch direction is the same
     def along_length(ps):
         total = 0.0
@@ -173,6 +180,7 @@ def test_zigzag_connectors_follow_the_boundary_and_stay_inside():
             if abs(d[0] * math.sin(0.3) - d[1] * math.cos(0.3)) < 1e-9 * (1 + np.hypot(*d)):
                 total += np.hypot(*d)
         return total
+
     assert along_length(paths) == pytest.approx(along_length(unjoined), rel=1e-9)
 
 
@@ -225,11 +233,13 @@ def test_spacing_too_small_is_refused_not_hung():
 
 # --- invariants -------------------------------------------------------------------------------------------------
 
+
 @st.composite
 def star_polygons(draw):
     n = draw(st.integers(3, 14))
-    angles = np.sort(np.array(draw(st.lists(st.floats(0, 2 * np.pi, exclude_max=True), min_size=n, max_size=n,
-                                            unique=True))))
+    angles = np.sort(
+        np.array(draw(st.lists(st.floats(0, 2 * np.pi, exclude_max=True), min_size=n, max_size=n, unique=True)))
+    )
     radii = np.array(draw(st.lists(st.floats(1.0, 20.0), min_size=n, max_size=n)))
     ring = np.column_stack([radii * np.cos(angles), radii * np.sin(angles)])
     if shoelace(ring) < 1.0:

@@ -126,7 +126,7 @@ def test_window_corners_land_on_the_clip_rect(p):
     np.testing.assert_allclose(np.sort(corners[:, 0]), [xmin, xmin, xmax, xmax], atol=1e-8)
     np.testing.assert_allclose(np.sort(corners[:, 1]), [ymin, ymin, ymax, ymax], atol=1e-8)
     w, h = p.device_size
-    assert -1e-9 <= xmin and xmax <= w + 1e-9 and -1e-9 <= ymin and ymax <= h + 1e-9
+    assert xmin >= -1e-9 and xmax <= w + 1e-9 and ymin >= -1e-9 and ymax <= h + 1e-9
     if p.preserve_aspect:
         side = p.window[2] - p.window[0]
         assert (xmax - xmin) == pytest.approx(p.scale * side) or (ymax - ymin) == pytest.approx(p.scale * side)

@@ -64,7 +64,7 @@ def test_axidraw_travel_and_motion():
 def test_unknown_paper_and_profile_names():
     with pytest.raises(ConfigError, match="unknown paper 'a0'"):
         load_profile("hp7440a").paper("a0")
-    with pytest.raises(ConfigError, match="unknown device profile 'hp9999'.*hp7475a"):
+    with pytest.raises(ConfigError, match=r"unknown device profile 'hp9999'.*hp7475a"):
         load_profile("hp9999")
 
 
@@ -323,7 +323,7 @@ def test_profile_limits_are_overridable(tmp_path, monkeypatch):
     path = write(tmp_path, "pens = 12\n" + MINIMAL)
     assert load_profile(path).pens == 12
     monkeypatch.setattr(profiles, "MAX_PENS", 8)
-    with pytest.raises(ConfigError, match="1..8"):
+    with pytest.raises(ConfigError, match=r"1..8"):
         load_profile(path)
     monkeypatch.setattr(profiles, "MAX_BYTES", 50)
     with pytest.raises(ParseError, match="larger than the 50"):
@@ -346,7 +346,11 @@ def test_vpype_numbers_out_of_range(tmp_path):
     base = VPYPE.split("[device.roland]")[0]
     for old, new, key in [
         ('plotter_unit_length = "0.02488mm"', 'plotter_unit_length = "1e400mm"', "device.hp7475a.plotter_unit_length"),
-        ('final_pu_params = "11040,7721"', f'final_pu_params = "{"9" * 5000},1"', "device.hp7475a.paper[0].final_pu_params"),
+        (
+            'final_pu_params = "11040,7721"',
+            f'final_pu_params = "{"9" * 5000},1"',
+            "device.hp7475a.paper[0].final_pu_params",
+        ),
         ("pen_count = 6", "pen_count = 1000000000000", "device.hp7475a.pen_count"),
     ]:
         path = write(tmp_path, base.replace(old, new), "vpype.toml")
@@ -361,7 +365,7 @@ def test_the_readers_still_import_from_model_as_before_the_split():
     assert model.load_profile is toml.load_profile and model.builtin_profiles is toml.builtin_profiles
     assert model.load_vpype_config is vpype.load_vpype_config and model.parse_length_mm is vpype.parse_length_mm
     with pytest.raises(AttributeError):
-        model.no_such_name  # noqa: B018
+        model.no_such_name  # noqa: B018 (the attribute access is the test)
 
 
 def test_motion_limits_are_profile_data_re_exported_by_the_motion_model():

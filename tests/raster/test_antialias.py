@@ -22,10 +22,10 @@ def coverage_map(segments, width: int, height: int) -> np.ndarray:
 
 def test_horizontal_and_diagonal_lines():
     pts, cov = wu_line(2, 3, 8, 3)
-    lit = {tuple(p): c for p, c in zip(pts.tolist(), cov.tolist()) if c > 0}
+    lit = {tuple(p): c for p, c in zip(pts.tolist(), cov.tolist(), strict=False) if c > 0}
     assert lit == {(2, 3): 0.5, **{(x, 3): 1.0 for x in range(3, 8)}, (8, 3): 0.5}
     pts, cov = wu_line(0, 0, 5, 5)
-    lit = {tuple(p) for p, c in zip(pts.tolist(), cov.tolist()) if c > 0}
+    lit = {tuple(p) for p, c in zip(pts.tolist(), cov.tolist(), strict=False) if c > 0}
     assert lit == {(i, i) for i in range(6)}
 
 

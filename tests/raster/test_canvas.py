@@ -25,15 +25,21 @@ def test_colour_values_per_mode():
     assert Canvas(1, 1, "1").colour_value(rgb) == 0 and Canvas(1, 1, "1").colour_value((200, 150, 50)) == 1
     assert Canvas(1, 1, "RGB565").colour_value((255, 255, 255)) == 0xFFFF
     assert Canvas(1, 1, "RGB565").colour_value((0x12, 0x34, 0x56)) == 0x11AA  # 00010 001101 01010
-    assert Canvas(1, 1, "RGB").colour_value(rgb) == rgb and Canvas(1, 1, "RGBA").colour_value(rgb) == rgb + (255,)
+    assert Canvas(1, 1, "RGB").colour_value(rgb) == rgb and Canvas(1, 1, "RGBA").colour_value(rgb) == (*rgb, 255)
     pal = Canvas(1, 1, "P", palette=[(0, 0, 0), (255, 0, 0), (190, 110, 40), (200, 100, 50)])
     assert pal.colour_value(rgb) == 3 and pal.colour_value((250, 5, 0)) == 1
     assert pal.palette.shape == (256, 3)
 
 
 def test_to_rgb_every_mode():
-    for mode, value, want in (("1", 1, (255, 255, 255)), ("L", 77, (77, 77, 77)), ("RGB565", 0xF800, (255, 0, 0)),
-                              ("RGB565", 0x07E0, (0, 255, 0)), ("RGB", (1, 2, 3), (1, 2, 3)), ("RGBA", (1, 2, 3, 4), (1, 2, 3))):
+    for mode, value, want in (
+        ("1", 1, (255, 255, 255)),
+        ("L", 77, (77, 77, 77)),
+        ("RGB565", 0xF800, (255, 0, 0)),
+        ("RGB565", 0x07E0, (0, 255, 0)),
+        ("RGB", (1, 2, 3), (1, 2, 3)),
+        ("RGBA", (1, 2, 3, 4), (1, 2, 3)),
+    ):
         c = Canvas(3, 2, mode)
         c.fill(value)
         out = c.to_rgb()
@@ -93,19 +99,39 @@ def test_from_array_and_pixel():
         c.pixel(2, 0)
 
 
-@pytest.mark.parametrize("args,kwargs,match", [
-    ((0, 5), {}, "width"), ((5, 5.5), {}, "height"), ((5, 5, "CMYK"), {}, "CMYK"), ((5, 5, "L", [(1, 2, 3)]), {}, "palette"),
-    ((5, 5, "P", [(1, 2)]), {}, "palette"), ((5, 5, "P", [(1, 2, 300)]), {}, "0..255"), ((70000, 5), {}, "width"),
-    ((5, 5), {"merge_cost": -3}, "merge_cost"),
-])
+@pytest.mark.parametrize(
+    "args,kwargs,match",
+    [
+        ((0, 5), {}, "width"),
+        ((5, 5.5), {}, "height"),
+        ((5, 5, "CMYK"), {}, "CMYK"),
+        ((5, 5, "L", [(1, 2, 3)]), {}, "palette"),
+        ((5, 5, "P", [(1, 2)]), {}, "palette"),
+        ((5, 5, "P", [(1, 2, 300)]), {}, "0..255"),
+        ((70000, 5), {}, "width"),
+        ((5, 5), {"merge_cost": -3}, "merge_cost"),
+    ],
+)
 def test_bad_canvas_arguments(args, kwargs, match):
     with pytest.raises(ConfigError, match=match):
         Canvas(*args, **kwargs)
 
 
-@pytest.mark.parametrize("mode,value", [("1", 2), ("L", 256), ("L", -1), ("L", (1, 2, 3)), ("L", 1.5),
-                                        ("RGB", 5), ("RGB", (1, 2)), ("RGB", (1, 2, 256)), ("RGBA", (1, 2, 3, 4, 5)),
-                                        ("RGB565", 70000)])
+@pytest.mark.parametrize(
+    "mode,value",
+    [
+        ("1", 2),
+        ("L", 256),
+        ("L", -1),
+        ("L", (1, 2, 3)),
+        ("L", 1.5),
+        ("RGB", 5),
+        ("RGB", (1, 2)),
+        ("RGB", (1, 2, 256)),
+        ("RGBA", (1, 2, 3, 4, 5)),
+        ("RGB565", 70000),
+    ],
+)
 def test_bad_values_name_the_mode(mode, value):
     with pytest.raises(ConfigError, match=mode):
         Canvas(3, 3, mode).fill(value)
@@ -114,7 +140,7 @@ def test_bad_values_name_the_mode(mode, value):
 def test_bad_colour():
     with pytest.raises(ConfigError, match="colour"):
         Canvas(3, 3).colour_value((1, 2))
-    with pytest.raises(ConfigError, match="0..255"):
+    with pytest.raises(ConfigError, match=r"0..255"):
         Canvas(3, 3).colour_value((1, 2, 300))
 
 
@@ -124,7 +150,7 @@ def test_colour_values_match_colour_value_in_every_mode():
     for mode in ("1", "L", "P", "RGB565", "RGB", "RGBA"):
         c = Canvas(4, 4, mode, palette=rng.integers(0, 256, (256, 3)) if mode == "P" else None)
         batch = c.colour_values(colours)
-        for rgb, v in zip(colours.tolist(), batch):
+        for rgb, v in zip(colours.tolist(), batch, strict=False):
             single = c.colour_value(rgb)
             assert (tuple(int(x) for x in v) if np.ndim(v) else int(v)) == single
 
@@ -139,7 +165,7 @@ def test_put_colours_composites_over_and_records_damage():
     c.put_colours([0], [1], [[255, 0, 0, 128]])
     # over: (255*128 + 0*127 + 127)//255 = 128 red; (200*127 + 127)//255 = 100 blue
     assert c.pixel(0, 1) == (128, 0, 100)
-    (x0, y0, x1, y1), = [tuple(r) for r in c.damage()][:1] or [(None,) * 4]
+    ((x0, y0, x1, y1),) = [tuple(r) for r in c.damage()][:1] or [(None,) * 4]
     assert x0 <= 0 and y0 <= 0 and x1 >= 3 and y1 >= 3
     grey = Canvas(2, 2, "L")
     grey.put_colours([0], [0], [[255, 255, 255, 255]])

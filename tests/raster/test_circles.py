@@ -60,7 +60,7 @@ def test_degenerate_ellipses():
 
 def test_batch_circles_equal_reference():
     size = 2 * 130 + 3
-    for r in range(0, 130):
+    for r in range(130):
         c = Canvas(size, size, "1")
         c.circles([[size // 2, size // 2]], [r], 1)
         ref = mask_of(midpoint_circle(size // 2, size // 2, int(r)), size, size)
@@ -76,7 +76,7 @@ def test_batch_circles_many_at_once_with_clipping_and_fill():
     filled.circles(centres, radii, 1, fill=True)
     want_o = np.zeros((70, 90), dtype=bool)
     want_f = np.zeros((70, 90), dtype=bool)
-    for (x, y), r in zip(centres.tolist(), radii.tolist()):
+    for (x, y), r in zip(centres.tolist(), radii.tolist(), strict=False):
         pts = midpoint_circle(x, y, r)
         want_o |= mask_of(pts, 90, 70)
         want_f |= filled_of(pts, 90, 70)
@@ -101,9 +101,14 @@ def test_pillow_ellipse_on_square_box_is_midpoint_circle():
 def test_ellipse_closed_form_equals_midpoint_loop():
     a, b = (v.ravel() for v in np.meshgrid(np.arange(0, 41), np.arange(0, 41)))
     owner, x, y = ellipse_quadrant(a, b)
-    for i, (rx, ry) in enumerate(zip(a.tolist(), b.tolist())):
+    for i, (rx, ry) in enumerate(zip(a.tolist(), b.tolist(), strict=False)):
         sel = owner == i
-        got = {(sx * p, sy * q) for p, q in zip(x[sel].tolist(), y[sel].tolist()) for sx in (1, -1) for sy in (1, -1)}
+        got = {
+            (sx * p, sy * q)
+            for p, q in zip(x[sel].tolist(), y[sel].tolist(), strict=False)
+            for sx in (1, -1)
+            for sy in (1, -1)
+        }
         assert got == set(map(tuple, midpoint_ellipse(0, 0, rx, ry).tolist())), (rx, ry)
 
 
@@ -116,7 +121,7 @@ def test_batch_ellipses_equal_reference():
     filled.ellipses(centres, a, b, 1, fill=True)
     want_o = np.zeros((90, 100), dtype=bool)
     want_f = np.zeros((90, 100), dtype=bool)
-    for (xc, yc), rx, ry in zip(centres.tolist(), a.tolist(), b.tolist()):
+    for (xc, yc), rx, ry in zip(centres.tolist(), a.tolist(), b.tolist(), strict=False):
         pts = midpoint_ellipse(xc, yc, rx, ry)
         want_o |= mask_of(pts, 100, 90)
         want_f |= filled_of(pts, 100, 90)
@@ -138,15 +143,18 @@ def test_damage_covers_circles():
     assert r == (5, 5, 16, 16)
 
 
-@pytest.mark.parametrize("call,match", [
-    (lambda c: c.circles([[1, 1]], -1, 1), ">= 0"),
-    (lambda c: c.circles([[1, 1]], 1 << 20, 1), "beyond"),
-    (lambda c: c.circles([[1, 1], [2, 2]], [1, 2, 3], 1), "one per centre"),
-    (lambda c: c.circles([[1, 1, 1]], 1, 1), r"N, 2"),
-    (lambda c: c.ellipses([[1, 1]], 2, 1.5, 1), "not integral"),
-    (lambda c: midpoint_circle(0, 0, -2), ">= 0"),
-    (lambda c: midpoint_ellipse(0, 0, 1, -2), ">= 0"),
-])
+@pytest.mark.parametrize(
+    "call,match",
+    [
+        (lambda c: c.circles([[1, 1]], -1, 1), ">= 0"),
+        (lambda c: c.circles([[1, 1]], 1 << 20, 1), "beyond"),
+        (lambda c: c.circles([[1, 1], [2, 2]], [1, 2, 3], 1), "one per centre"),
+        (lambda c: c.circles([[1, 1, 1]], 1, 1), r"N, 2"),
+        (lambda c: c.ellipses([[1, 1]], 2, 1.5, 1), "not integral"),
+        (lambda c: midpoint_circle(0, 0, -2), ">= 0"),
+        (lambda c: midpoint_ellipse(0, 0, 1, -2), ">= 0"),
+    ],
+)
 def test_bad_circle_input(call, match):
     with pytest.raises(ConfigError, match=match):
         call(Canvas(10, 10, "1"))

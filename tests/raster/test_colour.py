@@ -188,11 +188,11 @@ def test_rgb888_to_rgb565_matches_formula_and_keeps_shape():
 # --- errors -------------------------------------------------------------------------------
 
 def test_errors():
-    with pytest.raises(ConfigError, match="shape \\(..., 3\\), found shape \\(2,\\)"):
+    with pytest.raises(ConfigError, match=r"shape \(..., 3\), found shape \(2,\)"):
         rgb_to_hsv((1, 0))
     with pytest.raises(ConfigError, match="finite"):
         rgb_to_hsl((np.nan, 0, 0))
-    with pytest.raises(ConfigError, match="must lie in \\[0, 1\\], found 1.5 at index \\(1,\\)"):
+    with pytest.raises(ConfigError, match=r"must lie in \[0, 1\], found 1.5 at index \(1,\)"):
         rgb_to_hsv((0, 1.5, 0))
     with pytest.raises(ConfigError, match="saturation/value"):
         hsv_to_rgb((0, -0.1, 1))

@@ -133,7 +133,9 @@ def test_damage_from_previous_frame_tiles():
 
 
 @settings(max_examples=40, deadline=None)
-@given(st.lists(st.tuples(st.integers(0, 63), st.integers(0, 47)), max_size=40), st.integers(1, 20), st.integers(0, 500))
+@given(
+    st.lists(st.tuples(st.integers(0, 63), st.integers(0, 47)), max_size=40), st.integers(1, 20), st.integers(0, 500)
+)
 def test_tile_damage_covers_all_differences(points, tile, cost):
     prev = np.zeros((48, 64), np.uint16)
     cur = prev.copy()

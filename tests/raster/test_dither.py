@@ -208,9 +208,9 @@ def test_dither_errors():
     grey = np.zeros((4, 4), dtype=np.uint8)
     with pytest.raises(ConfigError, match="3 level counts given for an image of 1 channel"):
         ordered(grey, (2, 2, 2))
-    with pytest.raises(ConfigError, match="integers 2..256"):
+    with pytest.raises(ConfigError, match=r"integers 2..256"):
         floyd_steinberg(grey, 1)
-    with pytest.raises(ConfigError, match="integers 2..256"):
+    with pytest.raises(ConfigError, match=r"integers 2..256"):
         ordered(grey, 257)
     with pytest.raises(ConfigError, match="origin must be \\(x, y\\) integers"):
         ordered(grey, 2, 4, origin=(0.5, 0))

@@ -365,7 +365,7 @@ def test_imageops_errors():
         rotate(img, 1.0, "cubic")
     with pytest.raises(ConfigError, match="fill must be one value or 1 values"):
         rotate(img, 1.0, fill=(1, 2))
-    with pytest.raises(ConfigError, match="0..255"):
+    with pytest.raises(ConfigError, match=r"0..255"):
         rotate(img, 1.0, fill=300)
     with pytest.raises(ConfigError, match="odd height and width"):
         convolve(img, np.ones((2, 3)))

@@ -148,7 +148,7 @@ def test_other_errors():
     with pytest.raises(ConfigError, match="unknown palette 'vga'"):
         Palette.named("vga")
     p = Palette.named("ega16")
-    with pytest.raises(ConfigError, match="palette index 16 at \\(0, 1\\) outside 0..15"):
+    with pytest.raises(ConfigError, match=r"palette index 16 at \(0, 1\) outside 0..15"):
         p.lookup(np.array([[0, 16]]))
     with pytest.raises(ConfigError, match="must be integers"):
         p.lookup(np.array([0.0]))
@@ -157,9 +157,9 @@ def test_other_errors():
     with pytest.raises(ConfigError, match="shape \\(P, 3\\)"):
         p.nearest_rows(np.zeros((3, 4)))
     img = few_colour_image()
-    with pytest.raises(ConfigError, match="1..256, found 0"):
+    with pytest.raises(ConfigError, match=r"1..256, found 0"):
         quantize(img, 0)
-    with pytest.raises(ConfigError, match="1..256, found 257"):
+    with pytest.raises(ConfigError, match=r"1..256, found 257"):
         quantize(img, 257)
     with pytest.raises(ConfigError, match="unknown quantize method 'popularity'"):
         quantize(img, 4, "popularity")

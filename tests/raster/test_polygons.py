@@ -20,7 +20,7 @@ def brute_force(rings: list[np.ndarray], width: int, height: int, rule: str) -> 
     winding = np.zeros((height, width), dtype=int)
     crossings = np.zeros((height, width), dtype=int)
     for ring in rings:
-        for (x0, y0), (x1, y1) in zip(ring, np.roll(ring, -1, axis=0)):
+        for (x0, y0), (x1, y1) in zip(ring, np.roll(ring, -1, axis=0), strict=False):
             if y0 == y1:
                 continue
             lo, hi = min(y0, y1), max(y0, y1)
@@ -45,7 +45,7 @@ def coverage_count(tris: np.ndarray, width: int, height: int) -> np.ndarray:
     for t in tris:
         mask = np.zeros((height, width), dtype=bool)
         row, a, b = triangle_spans(t[None], width, height)
-        for r, x0, x1 in zip(row.tolist(), a.tolist(), b.tolist()):
+        for r, x0, x1 in zip(row.tolist(), a.tolist(), b.tolist(), strict=False):
             mask[r, x0:x1] = True
         count += mask
     return count
@@ -118,7 +118,7 @@ def test_triangles_fast_path_equals_generic_polygons():
         row, a, b = polygon_spans(list(t), 64, 48)
         generic = Canvas(64, 48, "1")
         fast = Canvas(64, 48, "1")
-        for r, x0, x1 in zip(row.tolist(), a.tolist(), b.tolist()):
+        for r, x0, x1 in zip(row.tolist(), a.tolist(), b.tolist(), strict=False):
             generic.array[r, x0:x1] = 1
         fast.triangles(t, 1)
         assert (generic.array == fast.array).all()

@@ -152,7 +152,7 @@ def test_each_layer_and_pen_is_deduplicated_on_its_own(polys, data):
     dl = DisplayList.from_polylines([np.array(p, float) for p in polys], pens=pens, layers=layers)
     out, account = deduplicate(dl)
     reported = {(r.layer, r.pen): r for r in account}
-    for key in set(zip(layers, pens)):
+    for key in set(zip(layers, pens, strict=False)):
         mine = (dl.layers == key[0]) & (dl.pens == key[1])
         got = out.select((out.layers == key[0]) & (out.pens == key[1]))
         assert unit_steps(got) == sorted(set(unit_steps(dl.select(mine))))  # each group's ink, once

@@ -18,7 +18,7 @@ HERSHEY_I = {"left": -4, "right": 4, "strokes": [[(0, -12), (0, 9)]]}
 
 
 def strokes_of(glyph):
-    return [glyph.points[a:b].tolist() for a, b in zip(glyph.offsets[:-1], glyph.offsets[1:])]
+    return [glyph.points[a:b].tolist() for a, b in zip(glyph.offsets[:-1], glyph.offsets[1:], strict=False)]
 
 
 @pytest.mark.parametrize("char, ref", [("A", HERSHEY_A), ("H", HERSHEY_H), ("I", HERSHEY_I)])
@@ -106,7 +106,7 @@ def test_multiline_middle_and_bottom():
 def test_rotation_is_about_the_position():
     plain = text_strokes("AH", height=7, position=(3, 4))
     turned = text_strokes("AH", height=7, position=(3, 4), angle=math.pi / 2)
-    for p, q in zip(plain, turned):
+    for p, q in zip(plain, turned, strict=False):
         rel = p - [3, 4]
         np.testing.assert_allclose(q, np.column_stack([3 - rel[:, 1], 4 + rel[:, 0]]), atol=1e-12)
     ext = text_extent("AH", height=7, position=(3, 4), angle=math.pi / 2)
@@ -152,7 +152,7 @@ def test_empty_text():
 
 
 def test_bad_arguments():
-    with pytest.raises(ConfigError, match="unknown font 'nope'.*futural"):
+    with pytest.raises(ConfigError, match=r"unknown font 'nope'.*futural"):
         text_strokes("x", font="nope")
     with pytest.raises(ConfigError, match="height"):
         text_strokes("x", height=0)

@@ -106,5 +106,5 @@ def test_exact_merging_keeps_every_segment(dl, reverse):
     assert sorted(set(out.pens.tolist())) == sorted(set(dl.pens.tolist()))
     if not reverse:
         # every input segment still runs the same way
-        fwd = lambda d: sorted(map(tuple, d.segments().tolist()))  # noqa: E731
+        fwd = lambda d: sorted(map(tuple, d.segments().tolist()))
         assert fwd(out) == fwd(dl)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -10,9 +11,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pixelpen.errors import ConfigError
+from pixelpen.profiles.model import DeviceProfile
 from pixelpen.vector.displaylist import DisplayList
 from pixelpen.vector.motion import MotionLimits, estimate_time, junction_speeds, plan
-from pixelpen.profiles.model import DeviceProfile
 
 SAXI_DOWN = MotionLimits(speed=50.0, accel=200.0, cornering=0.127)
 
@@ -140,9 +141,9 @@ def _reference_time(pts: np.ndarray, lim: MotionLimits) -> float:
     pts = [p for i, p in enumerate(pts) if i == 0 or p != pts[i - 1]]
     if len(pts) < 2:
         return 0.0
-    segs = [(b[0] - a[0], b[1] - a[1]) for a, b in zip(pts, pts[1:])]
+    segs = [(b[0] - a[0], b[1] - a[1]) for a, b in itertools.pairwise(pts)]
     lengths = [math.hypot(*s) for s in segs]
-    units = [(s[0] / d, s[1] / d) for s, d in zip(segs, lengths)]
+    units = [(s[0] / d, s[1] / d) for s, d in zip(segs, lengths, strict=False)]
     v = [0.0] * (len(segs) + 1)  # vertex speed limits
     for i in range(1, len(segs)):
         cos_t = -(units[i - 1][0] * units[i][0] + units[i - 1][1] * units[i][1])

@@ -9,12 +9,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from pixelpen.profiles.model import load_profile
+from pixelpen.vector.dedupe import DuplicateRemoval, remove_duplicates
 from pixelpen.vector.displaylist import DisplayList
 from pixelpen.vector.motion import estimate_time
-from pixelpen.vector.dedupe import DuplicateRemoval, remove_duplicates
 from pixelpen.vector.optimize import OptimizeReport, optimize
 from pixelpen.vector.order import auto_budget
-from pixelpen.profiles.model import load_profile
 
 
 def canonical_segments(dl: DisplayList) -> list[tuple[float, float, float, float]]:
@@ -29,7 +29,10 @@ def grouped(dl: DisplayList) -> DisplayList:
     """The strokes taken layer by layer (first appearance), pen by pen (first appearance), else in given order."""
     layers = list(dict.fromkeys(dl.layers.tolist()))
     pens = list(dict.fromkeys(dl.pens.tolist()))
-    key = [(layers.index(l_), pens.index(p), i) for i, (l_, p) in enumerate(zip(dl.layers.tolist(), dl.pens.tolist()))]
+    key = [
+        (layers.index(l_), pens.index(p), i)
+        for i, (l_, p) in enumerate(zip(dl.layers.tolist(), dl.pens.tolist(), strict=False))
+    ]
     return dl.reordered([k[2] for k in sorted(key)])
 
 
@@ -88,7 +91,10 @@ def test_dedupe_works_within_each_layer_and_pen_only(dl):
 def test_report_counts_and_lines():
     dl = DisplayList.from_polylines(
         [[(0, 0), (10, 0)], [(10, 0), (0, 0)], [(0, 5), (10, 5)], [(50, 50), (50.5, 50)], [(0, 5), (10, 5)]],
-        pens=[2, 2, 2, 2, 1], layers=[1, 1, 1, 1, 1], layer_names={1: "red"})
+        pens=[2, 2, 2, 2, 1],
+        layers=[1, 1, 1, 1, 1],
+        layer_names={1: "red"},
+    )
     report = OptimizeReport()
     out = optimize(dl, min_length=1.0, time_budget=0.01, report=report)
     assert report.duplicates == [DuplicateRemoval(1, 2, 1, 0, pytest.approx(10.0))]
@@ -99,8 +105,9 @@ def test_report_counts_and_lines():
     assert lines[0] == "removed 1 duplicate stroke (10.0 mm) in layer 1 'red', pen 2"
     assert "dropped 1 strokes shorter than the minimum length (0.5 mm of ink)" in lines
     cut = OptimizeReport(unit_mm=0.5, duplicates=[DuplicateRemoval(0, 1, 3, 2, 25.0)])
-    assert cut.lines()[0] == ("removed 3 duplicate strokes and the retraced part of 2 strokes (12.5 mm) in layer 0, "
-                              "pen 1")
+    assert cut.lines()[0] == (
+        "removed 3 duplicate strokes and the retraced part of 2 strokes (12.5 mm) in layer 0, pen 1"
+    )
     assert "duplicate removal off" in OptimizeReport(dedupe=False).lines()[0]
 
 
@@ -114,12 +121,14 @@ def test_adaptive_budget_scales_with_the_input():
 
 
 def test_pipeline_steps_in_order():
-    dl = DisplayList.from_polylines([
-        [(0, 0), (5, 0.01), (10, 0)],         # simplifies to a straight line
-        [(10, 0), (20, 0)],                   # touches the first: merged
-        [(20, 0), (10, 0)],                   # retraces the second: removed by dedupe
-        [(50, 50), (50.5, 50)],               # shorter than min_length
-    ])
+    dl = DisplayList.from_polylines(
+        [
+            [(0, 0), (5, 0.01), (10, 0)],  # simplifies to a straight line
+            [(10, 0), (20, 0)],  # touches the first: merged
+            [(20, 0), (10, 0)],  # retraces the second: removed by dedupe
+            [(50, 50), (50.5, 50)],  # shorter than min_length
+        ]
+    )
     out = optimize(dl, merge=0.001, simplify=0.1, min_length=1.0, time_budget=0.1)
     # merged first, then simplified as one stroke: the middle point goes too
     assert len(out) == 1
@@ -154,7 +163,11 @@ def test_bad_options(bad):
 
 
 def test_every_step_keeps_the_page_and_names():
-    dl = DisplayList.from_polylines([[(0, 0), (1, 0)], [(1, 0), (0, 0)], [(1, 0), (5, 0.001), (9, 0)], [(5, 5)]],
-                                    layer_names={0: "ink"}, pen_colours={1: "#123456"}, page=(297.0, 210.0))
+    dl = DisplayList.from_polylines(
+        [[(0, 0), (1, 0)], [(1, 0), (0, 0)], [(1, 0), (5, 0.001), (9, 0)], [(5, 5)]],
+        layer_names={0: "ink"},
+        pen_colours={1: "#123456"},
+        page=(297.0, 210.0),
+    )
     out = optimize(dl, merge=0.1, simplify=0.01, min_length=0.0, time_budget=0.01)
     assert out.page == (297.0, 210.0) and out.layer_names == {0: "ink"} and out.pen_colours == {1: "#123456"}

@@ -37,7 +37,7 @@ def reference(points: list[tuple[float, float]], tol: float) -> list[int]:
 
     if len(points) == 1:
         return [0]
-    return rec(0, len(points) - 1) + [len(points) - 1]
+    return [*rec(0, len(points) - 1), len(points) - 1]
 
 
 def test_collinear_points_go():

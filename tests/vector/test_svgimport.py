@@ -274,7 +274,7 @@ def test_write_then_read_round_trip(tmp_path):
     assert back.layers.tolist() == dl.layers.tolist()
     assert back.pen_colours == dl.pen_colours and back.pens.tolist() == dl.pens.tolist()
     assert len(back) == len(dl)
-    for a, b in zip(back.strokes(), dl.strokes()):
+    for a, b in zip(back.strokes(), dl.strokes(), strict=False):
         if len(b) == 1:  # a dot is written as a zero-length line
             b = np.vstack([b, b])
         np.testing.assert_allclose(a, b, rtol=REL)
@@ -297,7 +297,7 @@ def test_write_svg_negative_coordinates_extend_the_page():
 
 
 def test_non_finite_coordinates_are_a_parse_error():
-    with pytest.raises(ParseError, match="'far'.*non-finite"):
+    with pytest.raises(ParseError, match=r"'far'.*non-finite"):
         read_svg(svg('<line id="far" x1="0" y1="0" x2="1e400" y2="0" stroke="black"/>'))
 
 
@@ -355,7 +355,8 @@ def test_page_in_device_units_is_written_in_mm():
     assert 'width="297mm" height="210mm" viewBox="0 0 11880 8400"' in buf.getvalue()
     back = read_svg(buf.getvalue().encode())
     assert back.page == pytest.approx((297, 210), rel=1e-12)
-    np.testing.assert_allclose(back.points, [[100, 50], [110, 50]], rtol=1e-9)  # svgelements prints matrices to 12 digits
+    # svgelements prints matrices to 12 digits
+    np.testing.assert_allclose(back.points, [[100, 50], [110, 50]], rtol=1e-9)
 
 
 @pytest.mark.parametrize("page", [(0, 10), (10, -1), (float("inf"), 1), (1, 2, 3), "a4"])

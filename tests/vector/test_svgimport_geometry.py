@@ -204,7 +204,7 @@ roots = st.tuples(
 def root_of(unit, w, h, viewbox, par):
     attrs = f'width="{w:.6g}{unit}" height="{h:.6g}{unit}"'
     if viewbox is not None:
-        attrs += ' viewBox="%s"' % " ".join(f"{v:.6g}" for v in viewbox)
+        attrs += ' viewBox="{}"'.format(" ".join(f"{v:.6g}" for v in viewbox))
         if par is not None:
             attrs += f' preserveAspectRatio="{par}"'
     w_px, h_px = float(f"{w:.6g}") * UNIT_PX[unit], float(f"{h:.6g}") * UNIT_PX[unit]
@@ -230,7 +230,7 @@ def test_basic_shapes_match_hand_computed_matrices(root, stacks):
     body = "".join(el.replace("/>", f' stroke="{COLOURS[k]}" fill="none"/>') for k, (el, _) in enumerate(SHAPES))
     dl = read_svg(document(attrs, groups, body), tolerance=TOL)
     ours = strokes_by_colour(dl)
-    for k, (el, local) in enumerate(SHAPES):
+    for k, (_el, local) in enumerate(SHAPES):
         expected = apply(m, local) * PX_MM
         assert_same_curves(ours[COLOURS[k]], [expected], TOL, eps_for([expected]) + 1e-6 * TOL)
 
@@ -261,7 +261,8 @@ def sampling_error(curves):
     sparse = [c[::2] for c in curves if len(c) > 2]
     if not sparse:
         return 0.0
-    return float(max(point_to_polylines(c[1::2], [s]).max() for c, s in zip([c for c in curves if len(c) > 2], sparse)))
+    long_enough = [c for c in curves if len(c) > 2]
+    return float(max(point_to_polylines(c[1::2], [s]).max() for c, s in zip(long_enough, sparse, strict=False)))
 
 
 @settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -281,13 +282,20 @@ def test_every_element_type_matches_svgelements_geometry(root, stacks):
 
 def test_rotated_rect_corners_by_hand():
     # the issue's example on an A4 landscape page in mm: rotate(30) then translate(150, 50)
-    data = document('width="297mm" height="210mm" viewBox="0 0 297 210"', ["translate(150,50) rotate(30)"],
-                    '<rect x="-20" y="-10" width="40" height="20" stroke="black"/>')
+    data = document(
+        'width="297mm" height="210mm" viewBox="0 0 297 210"',
+        ["translate(150,50) rotate(30)"],
+        '<rect x="-20" y="-10" width="40" height="20" stroke="black"/>',
+    )
     dl = read_svg(data)
     c, s = math.sqrt(3) / 2, 0.5
     # (x, y) -> (150 + x c - y s, 50 + x s + y c)
-    corners = [(150 - 20 * c + 10 * s, 50 - 20 * s - 10 * c), (150 + 20 * c + 10 * s, 50 + 20 * s - 10 * c),
-               (150 + 20 * c - 10 * s, 50 + 20 * s + 10 * c), (150 - 20 * c - 10 * s, 50 - 20 * s + 10 * c)]
+    corners = [
+        (150 - 20 * c + 10 * s, 50 - 20 * s - 10 * c),
+        (150 + 20 * c + 10 * s, 50 + 20 * s - 10 * c),
+        (150 + 20 * c - 10 * s, 50 + 20 * s + 10 * c),
+        (150 - 20 * c - 10 * s, 50 - 20 * s + 10 * c),
+    ]
     np.testing.assert_allclose(dl.stroke(0), corners + corners[:1], atol=1e-9)
     np.testing.assert_allclose(dl.stroke(0)[0], [137.67949192431, 31.33974596216], atol=1e-9)
     assert dl.page == (297.0, 210.0)
@@ -295,16 +303,25 @@ def test_rotated_rect_corners_by_hand():
 
 def test_units_scale_the_page_exactly():
     # 4 in x 2 in, 96 user units per inch: the point (48, 24) is (1.27 cm, 0.635 cm) exactly
-    dl = read_svg(document('width="4in" height="2in" viewBox="0 0 384 192"', [],
-                           '<line x1="0" y1="0" x2="48" y2="24" stroke="black"/>'))
+    dl = read_svg(
+        document(
+            'width="4in" height="2in" viewBox="0 0 384 192"', [], '<line x1="0" y1="0" x2="48" y2="24" stroke="black"/>'
+        )
+    )
     np.testing.assert_allclose(dl.points, [[0, 0], [12.7, 6.35]], rtol=1e-12, atol=1e-12)
     assert dl.page == pytest.approx((101.6, 50.8), rel=1e-12)
 
 
 def test_circle_under_skew_is_an_ellipse_through_the_mapped_points():
     # skewX(45) maps the circle's points (r cos t, r sin t) to (r cos t + r sin t, r sin t)
-    dl = read_svg(document('width="100mm" height="100mm" viewBox="0 0 100 100"', ["translate(50,50) skewX(45)"],
-                           '<circle r="20" stroke="black" fill="none"/>'), tolerance=0.01)
+    dl = read_svg(
+        document(
+            'width="100mm" height="100mm" viewBox="0 0 100 100"',
+            ["translate(50,50) skewX(45)"],
+            '<circle r="20" stroke="black" fill="none"/>',
+        ),
+        tolerance=0.01,
+    )
     pts = dl.stroke(0) - [50, 50]
     y = pts[:, 1]
     x = pts[:, 0] - y  # undo the skew
@@ -314,8 +331,13 @@ def test_circle_under_skew_is_an_ellipse_through_the_mapped_points():
 
 def test_mirrored_arc_keeps_its_direction():
     # scale(-1, 1) mirrors a sweep-flag arc: the upper half circle from (0,0) to (20,0) lands at x <= 0
-    dl = read_svg(document('width="100mm" height="100mm" viewBox="0 0 100 100"', ["translate(50,50) scale(-1,1)"],
-                           '<path d="M 0 0 A 10 10 0 0 1 20 0" stroke="black" fill="none"/>'))
+    dl = read_svg(
+        document(
+            'width="100mm" height="100mm" viewBox="0 0 100 100"',
+            ["translate(50,50) scale(-1,1)"],
+            '<path d="M 0 0 A 10 10 0 0 1 20 0" stroke="black" fill="none"/>',
+        )
+    )
     pts = dl.stroke(0) - [50, 50]
     np.testing.assert_allclose(np.hypot(pts[:, 0] + 10, pts[:, 1]), 10, rtol=1e-9)
     assert pts[:, 1].min() == pytest.approx(-10, abs=0.05) and pts[:, 0].max() <= 1e-9

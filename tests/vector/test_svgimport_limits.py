@@ -24,7 +24,9 @@ def refused(data, match, limits=None, tmp_path=None):
 
 
 def test_deep_nesting_is_refused_not_a_recursion_error(tmp_path):
-    err = refused(doc("<g>" * 1000 + LINE + "</g>" * 1000), r"<g>: nested deeper than 200 .*max_depth", tmp_path=tmp_path)
+    err = refused(
+        doc("<g>" * 1000 + LINE + "</g>" * 1000), r"<g>: nested deeper than 200 .*max_depth", tmp_path=tmp_path
+    )
     assert err.line == 1 and err.column is not None
     # a nesting just inside the limit still imports (svg + 198 groups + line = 200 levels)
     assert len(read_svg(doc("<g>" * 198 + LINE + "</g>" * 198))) == 1
@@ -32,21 +34,33 @@ def test_deep_nesting_is_refused_not_a_recursion_error(tmp_path):
 
 def test_nesting_through_use_counts(tmp_path):
     chain = '<g id="a0">' + LINE + "</g>" + "".join(f'<g id="a{k}"><use href="#a{k - 1}"/></g>' for k in range(1, 60))
-    refused(doc(f"<defs>{chain}</defs>" + '<use href="#a59"/>'), "once <use> is expanded", SvgLimits(max_depth=100),
-            tmp_path)
+    refused(
+        doc(f"<defs>{chain}</defs>" + '<use href="#a59"/>'),
+        "once <use> is expanded",
+        SvgLimits(max_depth=100),
+        tmp_path,
+    )
     assert len(read_svg(doc(f"<defs>{chain}</defs>" + '<use href="#a59"/>'))) == 1
 
 
 def test_use_cycle_is_refused(tmp_path):
-    refused(doc('<g id="a">' + LINE + '<use xlink:href="#a"/></g>'), r"<use>: refers to #a, which contains it",
-            tmp_path=tmp_path)
+    refused(
+        doc('<g id="a">' + LINE + '<use xlink:href="#a"/></g>'),
+        r"<use>: refers to #a, which contains it",
+        tmp_path=tmp_path,
+    )
 
 
 def test_use_fan_out_is_refused_before_expanding(tmp_path):
     # ten copies of ten copies ... of a line: 10^5 strokes from 1.4 kB
     def defs(levels):
-        return '<defs><g id="l0">' + LINE + "</g>" + "".join(
-            f'<g id="l{k}">' + f'<use href="#l{k - 1}"/>' * 10 + "</g>" for k in range(1, levels + 1)) + "</defs>"
+        return (
+            '<defs><g id="l0">'
+            + LINE
+            + "</g>"
+            + "".join(f'<g id="l{k}">' + f'<use href="#l{k - 1}"/>' * 10 + "</g>" for k in range(1, levels + 1))
+            + "</defs>"
+        )
 
     data = doc(defs(5) + '<use href="#l5"/>')
     assert len(data) < 1500
@@ -66,20 +80,30 @@ def test_byte_limit(tmp_path):
 
 def test_long_number_is_refused_instead_of_backtracking(tmp_path):
     # svgelements' coordinate-pair regex is cubic in a number's length: 2000 digits took ~60 s
-    err = refused(doc(f'<polyline id="p" stroke="black" points="0,0 {"1" * 2000}"/>'),
-                  r"<polyline id='p'>: attribute 'points' has a number longer than 64 characters", tmp_path=tmp_path)
+    err = refused(
+        doc(f'<polyline id="p" stroke="black" points="0,0 {"1" * 2000}"/>'),
+        r"<polyline id='p'>: attribute 'points' has a number longer than 64 characters",
+        tmp_path=tmp_path,
+    )
     assert err.line == 1
     refused(doc(f'<path stroke="black" d="M0 0 L 1.{"0" * 100} 1"/>'), "'d' has a number longer", tmp_path=tmp_path)
     # numbers as long as real files write them are fine, and ".5.5" runs are several numbers
-    dl = read_svg(doc('<path stroke="black" d="M0.123456789012345678 0 L.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5'
-                      '.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5"/>'))
+    dl = read_svg(
+        doc(
+            '<path stroke="black" d="M0.123456789012345678 0 L.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5'
+            '.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5.5"/>'
+        )
+    )
     assert len(dl.points) == 21
 
 
 @pytest.mark.parametrize("points", ["1 2 3", "1,2 x", "1 2,, 3 4", "1.5.5"])
 def test_points_that_are_not_pairs_are_refused(tmp_path, points):
-    refused(doc(f'<polyline stroke="black" points="{points}"/>'), "'points' is not a list of coordinate pairs",
-            tmp_path=tmp_path)
+    refused(
+        doc(f'<polyline stroke="black" points="{points}"/>'),
+        "'points' is not a list of coordinate pairs",
+        tmp_path=tmp_path,
+    )
 
 
 def test_valid_points_syntax_variants_import():
@@ -95,8 +119,12 @@ def test_malformed_transform_and_css_are_refused(tmp_path):
 
 
 def test_css_classes_still_apply():
-    dl = read_svg(doc('<style>/* pens */ .st0 { stroke: #ff0000; fill: none }</style>'
-                      '<line class="st0" x1="0" y1="0" x2="5" y2="0"/>'))
+    dl = read_svg(
+        doc(
+            "<style>/* pens */ .st0 { stroke: #ff0000; fill: none }</style>"
+            '<line class="st0" x1="0" y1="0" x2="5" y2="0"/>'
+        )
+    )
     assert dl.pen_colours == {1: "#ff0000"}
 
 
@@ -120,8 +148,12 @@ def test_strokes_limit(tmp_path):
 
 def test_non_finite_transform_is_refused():
     with pytest.raises(ParseError, match="<line id='x'> has a non-finite"):
-        read_svg(doc('<g transform="matrix(1e308 0 0 1e308 0 0) scale(1e10)">'
-                     '<line id="x" x1="0" y1="0" x2="1" y2="0" stroke="black"/></g>'))
+        read_svg(
+            doc(
+                '<g transform="matrix(1e308 0 0 1e308 0 0) scale(1e10)">'
+                '<line id="x" x1="0" y1="0" x2="1" y2="0" stroke="black"/></g>'
+            )
+        )
 
 
 @pytest.mark.parametrize("bad", [0, -1, 1.5, True, "10"])
