@@ -18,7 +18,6 @@ from pixelpen.display.registry import known_schemes, open_display
 from pixelpen.drivers.discovery import DiscoveredDevice, discover
 from pixelpen.options import OptionSpec, describe
 from pixelpen.scene import draw_reference
-from pixelpen.sim.transports.options import TRANSPORT_OPTIONS
 from pixelpen.urls import format_url
 
 _ROLE = re.compile(r":[a-z]+(?::[a-z]+)?:`(?:([^`<]*?)\s*<[^`>]*>|~(?:[\w.]*\.)?([^`]*)|([^`]*))`")
@@ -26,11 +25,22 @@ _LITERAL = re.compile(r"``(.+?)``|`([^`]+)`|\*\*(.+?)\*\*")
 
 
 OptionSection = tuple[str, Sequence[OptionSpec[Any]]]
+"""A titled group of option specs that ``pixelpen devices`` lists after the schemes'."""
 
-OPTION_SECTIONS: list[OptionSection] = [
-    ("options of every sim: and sim:// URL (the simulated line)", TRANSPORT_OPTIONS),
-]
-"""Options listed after the schemes', each group under its title (one line per group of specs)."""
+
+def option_sections() -> list[OptionSection]:
+    """The simulated line's options, then each simulator's (imported here, so other commands load no simulator)."""
+    from pixelpen.sim.plotters.ebb.board import OPTIONS as EBB_OPTIONS
+    from pixelpen.sim.plotters.grbl.controller import OPTIONS as GRBL_OPTIONS
+    from pixelpen.sim.plotters.hpgl.plotter import OPTIONS as HPGL_OPTIONS
+    from pixelpen.sim.transports.options import TRANSPORT_OPTIONS
+
+    return [
+        ("options of every sim: and sim:// URL (the simulated line)", TRANSPORT_OPTIONS),
+        *((f"options of the {model} simulator (sim:{model})", specs) for model, specs in HPGL_OPTIONS.items()),
+        ("options of the GRBL simulator (sim:grbl)", GRBL_OPTIONS),
+        ("options of the EBB simulator (sim:axidraw, sim://ebb)", EBB_OPTIONS),
+    ]
 
 
 def plain_text(text: str) -> str:
@@ -65,7 +75,7 @@ def cmd_devices(args: argparse.Namespace) -> int:
                "options": scheme_options(cls), "simulated": cls.simulated}
         for name, cls in known_schemes().items()
     }
-    sections = {title: {name: plain_text(text) for name, text in describe(specs)} for title, specs in OPTION_SECTIONS}
+    sections = {title: {name: plain_text(text) for name, text in describe(specs)} for title, specs in option_sections()}
     present: list[dict[str, object]] = []
     if not args.no_probe:
         present = [_record(device) for device in discover()]

@@ -72,8 +72,10 @@ def test_devices_lists_schemes_with_options(capsys):
     data = json.loads(capsys.readouterr().out)
     assert {"png", "svg"} <= set(data["schemes"]) and "size" in data["schemes"]["png"]["options"]
     assert data["schemes"]["png"]["options"]["size"] == "image size in pixels, WxH (default 800x600)"
-    (line,) = [options for title, options in data["options"].items() if "sim://" in title]
+    line = data["options"]["options of every sim: and sim:// URL (the simulated line)"]
     assert {"speed", "baud", "flow"} <= set(line)
+    assert {"options of the hp7475a simulator (sim:hp7475a)", "options of the GRBL simulator (sim:grbl)"} <= set(
+        data["options"])
 
 
 def test_devices_lists_every_option_section_under_its_title(capsys, monkeypatch):
@@ -81,7 +83,7 @@ def test_devices_lists_every_option_section_under_its_title(capsys, monkeypatch)
     from pixelpen.options import OptionSpec, integer
 
     knobs = OptionSpec("knobs", integer(1), 3, "how many ``knobs``")
-    monkeypatch.setattr(core, "OPTION_SECTIONS", [("widgets of the test", (knobs,))])
+    monkeypatch.setattr(core, "option_sections", lambda: [("widgets of the test", (knobs,))])
     assert main(["devices", "--no-probe"]) == 0
     out = capsys.readouterr().out
     assert "\nWidgets of the test:\n      ?knobs=  how many knobs (default 3)\n" in out
