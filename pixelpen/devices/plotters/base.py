@@ -86,7 +86,7 @@ from pixelpen.errors import (
     ProtocolError,
     URLError,
 )
-from pixelpen.options import OptionSpec, OptionValues, choice, describe, integer, positive, text
+from pixelpen.options import OptionSpec, OptionValues, choice, integer, positive, text
 from pixelpen.profiles.model import DeviceProfile, load_profile
 from pixelpen.urls import DeviceURL, check_path, format_url
 from pixelpen.vector.displaylist import DisplayList
@@ -131,10 +131,6 @@ class PlotterDisplay(VectorDisplay):
     )
     SIM_SHARED: ClassVar[frozenset[str]] = frozenset({"paper"})
     SIM_TRANSPORT: ClassVar[frozenset[str]] = frozenset({"baud", "flow"})
-
-    def __init_subclass__(cls, **kwargs: Any) -> None:
-        super().__init_subclass__(**kwargs)
-        cls.url_options = dict(describe(cls.OPTIONS))  # the help texts ``pixelpen devices`` prints, from the specs
 
     def __init__(
         self,
