@@ -34,7 +34,7 @@ class Display(ABC):
     OPTIONS: ClassVar[tuple[OptionSpec[Any], ...]] = ()
     """The options the scheme's URLs accept, as specs (read by ``read_url_options``, listed by ``pixelpen devices``)."""
     url_options: ClassVar[dict[str, str]] = {}
-    """Options the scheme's URLs accept, with a one-line help text each (the older form of ``OPTIONS``)."""
+    """The older help table of the options (kept while tests read it; ``OPTIONS`` replaces it)."""
     simulated: ClassVar[bool] = False
     """True when ``sim:<scheme>`` gives a simulated device of this model."""
     SIM_SHARED: ClassVar[frozenset[str]] = frozenset()
@@ -61,7 +61,7 @@ class Display(ABC):
     @classmethod
     @abstractmethod
     def from_url(cls, url: DeviceURL, **kwargs: object) -> Display:
-        """Build the display a parsed URL describes; read options with ``cls.options_of(url)``."""
+        """Build the display a parsed URL describes; read options with ``cls.read_url_options(url)``."""
 
     @classmethod
     def read_url_options(cls, url: DeviceURL) -> OptionValues:
@@ -82,7 +82,7 @@ class Display(ABC):
 
     @classmethod
     def options_of(cls, url: DeviceURL) -> Options:
-        """The URL's options, refusing any this scheme does not know (the error lists the known ones)."""
+        """The older reader of ``url_options`` (kept while tests call it; ``read_url_options`` replaces it)."""
         return Options(url, cls.url_options)
 
     # -- life cycle --------------------------------------------------------------------------
