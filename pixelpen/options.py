@@ -88,7 +88,10 @@ def describe(specs: Iterable[OptionSpec[Any]]) -> list[tuple[str, str]]:
     """(name, help with the default) pairs for documentation, in declaration order."""
     rows = []
     for spec in specs:
-        default = "" if spec.default is None or spec.default == "" else f" (default {spec.default})"
+        value = spec.default
+        if isinstance(value, (tuple, list)):
+            value = ",".join(str(v) for v in value)
+        default = "" if value is None or value == "" else f" (default {value})"
         rows.append((spec.name, spec.help + default))
     return rows
 
