@@ -1,31 +1,9 @@
 """What every pen plotter shares: the link, stroke-by-stroke plotting with confirmed progress,
 pause at pen-up, pen changes, resume after faults (in process or from a state file), and safe stops.
 
-Longer than 600 lines because the plot loop, the confirmation bookkeeping and the resume decision share
-one job's state (confirmed, sent, damaged and lifted strokes, where the device said it stopped) that the
-state file mirrors; split, each part would reach into the others' fields.  What stands alone has moved
-out (``resume``, ``state``, ``progress``).
-
-A plotter family (HPGL, GRBL, EBB) subclasses :class:`PlotterDisplay` and implements the device core:
-
-* ``_connect()`` — handshake and initialise the device on ``self.link`` (called on every (re)connect);
-* ``_send_stroke(index, points, pen)`` — encode one stroke (integer device units, pen down along it,
-  pen up at its end) and stream it with the family's flow control; it may block while the device's
-  buffer is full, and must call ``self._confirm(k)`` whenever the device confirms strokes < k done;
-* ``_poll()`` — read whatever the device has said without blocking (confirmations, errors);
-* ``_drain()`` — wait until every stroke sent is confirmed;
-* ``_select_pen(pen)`` — take pen ``pen`` (multi-pen devices; single-pen devices never get it);
-* ``_device_paused()`` — True while the device's own pause (button, VIEW, paper lever) holds;
-* ``_make_safe()`` — best effort, never raising: stop motion, pen up, park, motors off;
-
-and, with safe defaults in the base:
-
-* ``_where()`` — on a fresh link, before ``_connect()``: let the device finish (or discard) what the
-  old connection left, then report a :class:`DeviceWhere` (default: position unknown);
-* ``_rehomed()`` — after a lost position the user re-homed and confirmed: take where the device stands as
-  home (default: nothing; the EBB clears its step counters);
-* ``_manual_pen(down)``, ``_manual_pen_state()``, ``_manual_home()``, ``_manual_motors_off()`` —
-  immediate manual control behind :meth:`PlotterDisplay.pen_up` and friends (default: ConfigError).
+A plotter family (HPGL, GRBL, EBB) subclasses :class:`PlotterDisplay` and implements the device core
+(:class:`~pixelpen.devices.plotters.family.PlotterFamily`: handshake, stroke streaming, polling, draining,
+pens, the device's pause, the safe stop; where it stopped and manual control with safe defaults).
 
 Confirmation is the device's word that a stroke is on paper (an output request answered after it,
 a status report, an idle motor query), not merely that its bytes were received.
@@ -46,8 +24,9 @@ confirmation interval); :func:`locate` costs one pass over their points.  A disp
 unfinished state file asks the device where it stopped before its handshake (HP-GL: at least
 ``hpgl.SETTLE_S`` seconds).
 
-Beside this module: ``resume`` (DeviceWhere, locate, ResumePoint), ``state`` (the state file, fingerprint),
-``progress`` (PlotProgress and the ETA); their names are importable from here too.  URL options are
+Beside this module: ``family`` (the device core), ``manual`` (pen up/down, home, motors off), ``resume``
+(DeviceWhere, locate, ResumePoint), ``state`` (the state file, fingerprint), ``progress`` (PlotProgress and
+the ETA); the names importers used are importable from here too.  URL options are
 declared as specs (``OPTIONS``; each family adds its own) and ``sim:`` URLs are split by the generic
 ``Display.split_sim_url`` (``SIM_SHARED``: paper; ``SIM_TRANSPORT``: baud, flow).
 """
@@ -55,7 +34,6 @@ declared as specs (``OPTIONS``; each family adds its own) and ``sim:`` URLs are 
 from __future__ import annotations
 
 import logging
-from abc import abstractmethod
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, ClassVar
@@ -63,6 +41,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from pixelpen.clock import REAL_CLOCK, Clock
+from pixelpen.devices.plotters.manual import ManualControl
 from pixelpen.devices.plotters.progress import (
     PlotProgress,
     ProgressCallback,
@@ -70,7 +49,7 @@ from pixelpen.devices.plotters.progress import (
     estimate_seconds,
 )
 from pixelpen.devices.plotters.resume import DeviceWhere, ResumePoint, in_full_stroke, locate
-from pixelpen.devices.plotters.state import STATE_VERSION, PlotState, fingerprint
+from pixelpen.devices.plotters.state import STATE_VERSION, PlotState, fingerprint, unfinished
 from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.kinds import VectorDisplay
 from pixelpen.drivers.serial import SerialLink
@@ -105,7 +84,7 @@ PauseCallback = Callable[[bool], None]
 """Called with True once the device has actually paused (idle, pen up), with False when it goes on."""
 
 
-class PlotterDisplay(VectorDisplay):
+class PlotterDisplay(VectorDisplay, ManualControl):
     """A pen plotter reached through a Link: plots, confirms, pauses at pen-up, resumes, stops safe."""
 
     simulated: ClassVar[bool] = True
@@ -257,7 +236,7 @@ class PlotterDisplay(VectorDisplay):
         link = self._make_link()
         self._attach(link)
         try:
-            if self.reports_position and self._unfinished_state_file():
+            if self.reports_position and self.state_file is not None and unfinished(self.state_file):
                 self._where_found = self._where()
             self._connect()
         except BaseException:
@@ -302,16 +281,6 @@ class PlotterDisplay(VectorDisplay):
         self._attach(self._make_link())
         self._where_found = self._where() if self._interrupted and self.reports_position else None
         self._connect()
-
-    def _unfinished_state_file(self) -> bool:
-        """True when the state file holds a job that did not finish (a resume may follow: ask the device first)."""
-        if self.state_file is None or not self.state_file.exists():
-            return False
-        try:
-            state = PlotState.load(self.state_file)
-        except ParseError:
-            return False  # plot(resume=True) reports it
-        return state.confirmed < state.strokes
 
     def _attach(self, link: Link) -> None:
         """Use ``link``; a display given no clock keeps time on the link's (a ``speed=fast`` simulator's)."""
@@ -605,36 +574,6 @@ class PlotterDisplay(VectorDisplay):
             if self.on_pause is not None:
                 self.on_pause(paused)
 
-    # -- manual control ------------------------------------------------------------------------
-    def pen_up(self) -> None:
-        """Raise the pen now."""
-        self._manual("pen up")._manual_pen(False)
-
-    def pen_down(self) -> None:
-        """Lower the pen now."""
-        self._manual("pen down")._manual_pen(True)
-
-    def toggle_pen(self) -> None:
-        """Raise the pen if it is down, lower it if it is up."""
-        down = self._manual("pen toggle")._manual_pen_state()
-        if down is None:
-            raise ConfigError(f"{self.profile.name}: cannot tell whether the pen is up or down; use pen up or pen down")
-        self._manual_pen(not down)
-
-    def go_home(self) -> None:
-        """Pen up and travel to the home (park) position now."""
-        self._manual("home")._manual_home()
-
-    def motors_off(self) -> None:
-        """De-energise the motors now (the carriage can then be moved by hand)."""
-        self._manual("motors off")._manual_motors_off()
-
-    def _manual(self, what: str) -> PlotterDisplay:
-        if self.link is None:
-            raise PixelpenError(f"{self.profile.name} is not open ({what})")
-        self._left_as_set = True
-        return self
-
     def _change_pen(self, pen: int) -> None:
         if pen < 1:
             raise ConfigError(f"pen numbers start at 1, got {pen}")
@@ -653,64 +592,6 @@ class PlotterDisplay(VectorDisplay):
             self._poll()
         except Exception as exc:  # noqa: BLE001  (the link is already failing; keep the first error)
             log.debug("poll after fault failed: %s", exc)
-
-    # -- the family's core ---------------------------------------------------------------------
-    @abstractmethod
-    def _connect(self) -> None:
-        """Handshake and initialise the device on ``self.link``."""
-
-    @abstractmethod
-    def _send_stroke(self, index: int, points: np.ndarray, pen: int) -> None:
-        """Stream one stroke (pen down along it, up at its end) with the family's flow control."""
-
-    @abstractmethod
-    def _poll(self) -> None:
-        """Read what the device said without blocking; confirm strokes, raise its errors."""
-
-    @abstractmethod
-    def _drain(self) -> None:
-        """Wait until every stroke sent is confirmed on paper."""
-
-    @abstractmethod
-    def _select_pen(self, pen: int) -> None:
-        """Take pen ``pen`` from the carousel."""
-
-    @abstractmethod
-    def _device_paused(self) -> bool:
-        """True while the device's own pause holds (button, VIEW, paper lever)."""
-
-    @abstractmethod
-    def _make_safe(self) -> None:
-        """Stop, pen up, park, motors off — best effort on ``self.link``."""
-
-    def _where(self) -> DeviceWhere:
-        """On a fresh link before ``_connect()``: let the device settle, say where it is (if ``reports_position``)."""
-        return DeviceWhere(None, None, position_lost=True,
-                           detail=f"the {self.profile.name} driver cannot ask where it stopped")
-
-    def _pen_position(self) -> tuple[float, float] | None:
-        """Where the pen will be once everything sent has run (device units), the next travel's start; None: unknown."""
-        return None
-
-    def _rehomed(self) -> None:
-        """The user re-homed the device after it lost its position: take where it stands as home (default: nothing)."""
-
-    def _manual_pen(self, down: bool) -> None:
-        """Move the pen down or up now and wait until it is there."""
-        raise ConfigError(f"{self.profile.name}: pen {'down' if down else 'up'} is not supported by this driver")
-
-    def _manual_pen_state(self) -> bool | None:
-        """Whether the pen is down now (None: the device cannot tell)."""
-        return None
-
-    def _manual_home(self) -> None:
-        """Pen up and travel home now, waiting until there."""
-        raise ConfigError(f"{self.profile.name}: home is not supported by this driver")
-
-    def _manual_motors_off(self) -> None:
-        """De-energise the motors now."""
-        raise ConfigError(f"{self.profile.name}: motors off is not supported by this driver")
-
 
 
 def _pen_word(down: bool | None) -> str:

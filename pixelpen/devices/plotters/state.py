@@ -112,3 +112,14 @@ class PlotState:
                              token=state.position_lost)
         return state
 
+
+
+def unfinished(path: Path) -> bool:
+    """True when ``path`` holds the state of a job that did not finish (a resume may follow: ask the device first)."""
+    if not path.exists():
+        return False
+    try:
+        state = PlotState.load(path)
+    except ParseError:
+        return False  # plot(resume=True) reports it
+    return state.confirmed < state.strokes
