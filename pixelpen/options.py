@@ -89,7 +89,7 @@ def describe(specs: Iterable[OptionSpec[Any]]) -> list[tuple[str, str]]:
     rows = []
     for spec in specs:
         value = spec.default
-        if isinstance(value, (tuple, list)):
+        if type(value) in (tuple, list):  # a tuple subclass (urls.Size) prints its own URL form
             value = ",".join(str(v) for v in value)
         default = "" if value is None or value == "" else f" (default {value})"
         rows.append((spec.name, spec.help + default))
