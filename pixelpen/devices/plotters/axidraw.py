@@ -1,8 +1,5 @@
 """AxiDraw driver (``axidraw:PORT``): the EiBotBoard over USB serial, moves planned and sliced on the host.
 
-Longer than 600 lines because the EBB's command window, FIFO-count confirmation and motor-power checks are
-one protocol state on the display (the encoding, reply parsing and firmware table are in ``ebb_encode``).
-
 URL: ``axidraw:/dev/ttyACM0?model=se_a3&moves=lm`` (PORT is a device path, a pyserial URL in brackets, or
 ``auto`` for the first USB serial port with the EBB's ID 04D8:FD92); ``sim:axidraw?speed=fast`` plots on
 the simulator.  ``model=`` picks the profile: ``v3`` (default; also V2 and SE/A4), ``se_a3``, ``minikit``.
@@ -39,8 +36,6 @@ from __future__ import annotations
 import logging
 import math
 from collections import deque
-from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -51,23 +46,18 @@ from pixelpen.devices.plotters.ebb_encode import (
     FEATURES,
     VPLUS_MIN_RAW,
     move_commands,
-    parse_error,
-    parse_qc,
     parse_qg,
-    parse_qm,
-    parse_qs,
-    parse_version_reply,
-    reply_shape,
     servo_positions,
     slice_polyline,
     strip_name,
     supports,
     vplus_volts,
 )
+from pixelpen.devices.plotters.ebb_stream import QG_POWER_LOST, EBBStream
 from pixelpen.display.registry import register_display
 from pixelpen.drivers.discovery import list_serial_ports
 from pixelpen.drivers.stream import Link
-from pixelpen.errors import ConfigError, Disconnected, LinkError, LinkTimeout, ParseError, ProtocolError
+from pixelpen.errors import ConfigError, LinkError, ParseError, ProtocolError
 from pixelpen.options import OptionSpec, OptionValues, choice, number
 from pixelpen.profiles.model import DeviceProfile, load_profile
 
@@ -80,35 +70,14 @@ MODELS = {"v3": "axidraw_v3", "v2": "axidraw_v3", "se_a4": "axidraw_v3", "se_a3"
 """``model=`` values and the profile each one uses."""
 SLICE_S = 0.025
 """Longest motion slice (pyaxidraw's SM slices are 25 ms)."""
-WINDOW = 4
-"""Commands written ahead of their replies: the board holds two (FIFO + executing), the rest wait in USB."""
 BUTTON_POLL_S = 0.05
 """Least time between two button polls (pyaxidraw: QB at least 50 ms apart)."""
-IDLE_POLL_S = 0.01
-FIFO_DEPTH = 1
-"""Motion FIFO depth at boot (ebb.html CU,4); the driver does not change it."""
 USB_BAUD = 12_000_000
 """Line speed of a ``sim:axidraw`` link without ``baud=`` (USB full speed, not a serial port's 9600)."""
 FLUSH = "#"
 """Sent alone before the first command: ends any half-received command as a syntax error, so it cannot run."""
 MICROSTEPS = 16
 """``EM,1,1``: 1/16 stepping, what QE reports for an enabled motor."""
-QG_POWER_LOST, QG_BUTTON, QG_PEN_UP = 0x40, 0x20, 0x10
-"""QG status bits (ebb.html QG; bit 6 latches a V+ drop below the CU,60 threshold, fw >= 3.0)."""
-
-
-@dataclass
-class _Sent:
-    """A command written to the board and not yet answered."""
-
-    text: str
-    queued: bool
-    duration_s: float
-    on_reply: Callable[[str], None] | None = None
-    reached: tuple[int, int] | None = None
-    """(stroke, vertex) the pen is down at once this queued command has run."""
-    stroke: int | None = None
-    """The stroke this command belongs to (its travel, pen moves and slices)."""
 
 
 def _model(text: str) -> str:
@@ -120,7 +89,7 @@ _MODEL_NAMES = choice(*MODELS)
 
 
 @register_display("axidraw")
-class AxiDrawPlotter(PlotterDisplay):
+class AxiDrawPlotter(EBBStream):
     """An AxiDraw (EiBotBoard): host-planned sliced moves, servo pen, FIFO-count confirmation, button pause."""
 
     profile_name: ClassVar[str] = "axidraw_v3"
@@ -158,7 +127,7 @@ class AxiDrawPlotter(PlotterDisplay):
         """True when the board answers in the future syntax (``CU,10,1``)."""
         self.position = np.zeros(2, dtype=np.int64)
         """Carriage position in steps (x right, y down) after every command sent."""
-        self._unanswered: deque[_Sent] = deque()
+        self._unanswered = deque()
         self._queued_acked = 0
         self._queued_sent = 0
         self._marks: deque[tuple[int, int]] = deque()
@@ -412,208 +381,6 @@ class AxiDrawPlotter(PlotterDisplay):
         self._marks.clear()
         self.position = np.zeros(2, dtype=np.int64)
         self._zeroed = False
-
-    def _abort_motion(self) -> None:
-        """``ES``: stop now and flush the FIFO, so the moves queued behind a refused one do not run shifted.
-
-        Every move is relative, so once one is refused the ones after it would draw off the path; the step
-        counters still say exactly where the carriage stopped.  Best effort: the error is raised either way.
-        """
-        if not supports(self.version or (0, 0, 0), "ES"):
-            return
-        try:
-            self._link().write(b"ES\r")
-            self._link().flush()
-        except LinkError as exc:
-            log.warning("axidraw: could not stop the motion after the error: %s", exc)
-
-    # -- motor power -----------------------------------------------------------------------------
-    def _power_checkpoint(self) -> None:
-        """Queue a V+ check (``QC``; ``QG`` too on fw >= 3): a good answer certifies the commands finished before it."""
-        certified = self._queued_sent - (FIFO_DEPTH + 1)  # what has run by the time the parser reaches the check
-        self._command("QC", on_reply=lambda data: self._supply(parse_qc(data)[1], certified))
-        if supports(self.version or (0, 0, 0), "queued_EM"):
-            self._command("QG", on_reply=lambda data: self._status_byte(parse_qg(data)))
-
-    def _check_power(self) -> None:
-        """Ask ``QC`` now and raise when the motor supply is off."""
-        self._supply(self._query_vplus(), self._power_good)
-
-    def _supply(self, raw: int, certified: int) -> None:
-        """Act on a V+ reading: below VPLUS_MIN_RAW the motors stood still, so the plot stops with the position lost."""
-        if raw < VPLUS_MIN_RAW:
-            self._lost = f"the motor supply failed during the plot (QC V+ {vplus_volts(raw):.1f} V)"
-            raise Disconnected(
-                f"axidraw: motor power lost: QC reads V+ {vplus_volts(raw):.1f} V (a powered board reads "
-                f"{vplus_volts(VPLUS_MIN_RAW):.1f} V or more); the carriage stopped while the steps were counted, so "
-                "where the pen is is unknown: switch the power on, move the carriage home and resume with the "
-                "position confirmed"
-            )
-        self._power_good = max(self._power_good, certified)
-
-    def _status_byte(self, bits: int) -> None:
-        """A ``QG`` byte: PRG button presses toggle the pause; the power-lost latch stops the plot."""
-        if bits & QG_POWER_LOST:
-            self._lost = "the motor supply dropped during the plot (QG power-lost flag)"
-            raise Disconnected("axidraw: motor power dropped (QG power-lost flag): the position is unknown; "
-                               "move the carriage home and resume with the position confirmed")
-        self._button(bool(bits & QG_BUTTON))
-
-    # -- commands and replies --------------------------------------------------------------------
-    def _command(self, text: str, *, queued: bool = False, duration_s: float = 0.0,
-                 on_reply: Callable[[str], None] | None = None, reached: tuple[int, int] | None = None) -> None:
-        """Write one command (keeping at most WINDOW unanswered); ``queued`` ones enter the motion FIFO."""
-        while len(self._unanswered) >= WINDOW:
-            self._read_reply()
-        self._link().write(text.encode("ascii") + b"\r")
-        self._unanswered.append(_Sent(text, queued, duration_s, on_reply, reached, self._stroke_now))
-        if queued:
-            self._queued_sent += 1
-
-    def _flush_replies(self) -> None:
-        while self._unanswered:
-            self._read_reply()
-
-    def _read_reply(self) -> str | None:
-        """Read the oldest pending command's reply (both syntaxes); ProtocolError names the command on ``!n Err``."""
-        sent = self._unanswered[0]
-        name = _name(sent.text)
-        wait = self.timeout + sum(s.duration_s for s in self._unanswered if s.queued)
-        line = self._line(wait, sent.text)
-        data: str | None = None
-        error = parse_error(line)
-        if error is None and self.future_syntax:
-            if not line.upper().startswith(name):
-                raise ParseError(f"reply to {sent.text!r} should start with {name!r}", source="ebb", token=line)
-            data = line[len(name) + 1:] if len(line) > len(name) else ""
-        elif error is None:
-            shape = reply_shape(name)
-            if shape == "ack":
-                if line.upper() != "OK":
-                    raise ParseError(f"expected OK after {sent.text!r}", source="ebb", token=line)
-            else:
-                data = line
-                if shape == "data_ok":
-                    ok = self._line(wait, sent.text)
-                    error = parse_error(ok)
-                    if error is None and ok.upper() != "OK":
-                        raise ParseError(f"expected OK after the data of {sent.text!r}", source="ebb", token=ok)
-        self._unanswered.popleft()
-        if error is not None:
-            if sent.queued:
-                self._abort_motion()
-            if sent.stroke is not None:
-                self._mark_damaged(range(sent.stroke, sent.stroke + 1))  # redrawn whole: a piece of it never ran
-            raise ProtocolError(f"EBB rejected a command: !{error[0]} Err: {error[1]}", code=error[0],
-                                command=sent.text, device="axidraw")
-        if sent.queued:
-            self._queued_acked += 1
-            if sent.reached is not None:
-                self._reached = sent.reached
-            done = min(self._queued_acked - (FIFO_DEPTH + 1), self._power_good)
-            while self._marks and self._marks[0][0] <= done:
-                _, index = self._marks.popleft()
-                self._confirm(index + 1)
-        if sent.on_reply is not None:
-            sent.on_reply(data or "")
-        return data
-
-    def _line(self, timeout: float, command: str) -> str:
-        """One non-empty reply line (legacy endings \\r\\n and \\n\\r both handled)."""
-        link = self._link()
-        while True:
-            try:
-                raw = link.read_until(b"\n", timeout=timeout, max_size=300)
-            except LinkTimeout as exc:
-                raise LinkTimeout(f"axidraw: no reply to {command!r} within {timeout:.1f}s ({exc})") from exc
-            text = raw.decode("ascii", "replace").strip()
-            if text:
-                return text
-
-    def _await_version(self) -> tuple[tuple[int, int, int], bool]:
-        """Read lines after ``#\\rV\\r`` until the version reply (the flush's error and stale replies are skipped)."""
-        for _ in range(64):
-            line = self._line(self.timeout, "V")
-            try:
-                return parse_version_reply(line)
-            except ParseError:
-                log.debug("axidraw: skipped %r while waiting for the version", line)
-        raise ParseError("no version reply among 64 lines", source="ebb V")
-
-    def _wait_idle(self, limit_s: float) -> None:
-        """Poll ``QM`` until nothing executes and the FIFO is empty (bounded by ``limit_s`` clock seconds)."""
-        deadline = self.clock.now() + limit_s
-        state: list[tuple[int, int, int, int]] = []
-        while True:
-            self._command("QM", on_reply=lambda data: state.append(parse_qm(data)))
-            self._flush_replies()
-            if not any(state[-1]):
-                return
-            if self.clock.now() >= deadline:
-                raise LinkTimeout(f"axidraw: motion still running after {limit_s}s (QM {state[-1]})")
-            self.clock.sleep(IDLE_POLL_S)
-
-    def _query(self, command: str, parse: Callable[[str], Any]) -> Any:
-        """Send an immediate query and return its parsed reply (after every reply before it)."""
-        found: list[Any] = []
-        self._command(command, on_reply=lambda data: found.append(parse(data)))
-        self._flush_replies()
-        return found[0]
-
-    def _query_steps(self) -> np.ndarray:
-        """The carriage position in steps (x, y) from the step counters (``QS``: motor1 = x + y, motor2 = x − y)."""
-        s1, s2 = self._query("QS", parse_qs)
-        return np.array([(s1 + s2) // 2, (s1 - s2) // 2], dtype=np.int64)
-
-    def _query_pen_up(self) -> bool:
-        if supports(self.version or (0, 0, 0), "QG"):
-            bits = self._query("QG", parse_qg)
-            self._button(bool(bits & QG_BUTTON))
-            return bool(bits & QG_PEN_UP)
-        return self._query("QP", lambda data: strip_name("QP", data).strip()) != "0"
-
-    def _query_vplus(self) -> int:
-        return self._query("QC", lambda data: parse_qc(data)[1])
-
-    def _query_enabled(self) -> tuple[int, int]:
-        return self._query("QE", lambda data: _fields_pair(data))
-
-    def _query_status_byte(self) -> int:
-        bits = self._query("QG", parse_qg)
-        self._button(bool(bits & QG_BUTTON))
-        return bits
-
-    def _reset_counts(self) -> None:
-        """Forget what the previous link had in flight (a new link starts counting afresh)."""
-        self._unanswered.clear()
-        self._marks.clear()
-        self._queued_acked = self._queued_sent = self._power_good = 0
-
-    def _button(self, pressed: bool) -> None:
-        if pressed:
-            self._paused = not self._paused
-            log.info("axidraw: PRG button: %s", "pausing at the next pen-up" if self._paused else "resuming")
-
-    def _link(self) -> Link:
-        if self.link is None:
-            raise LinkError("axidraw: the plotter is not connected")
-        return self.link
-
-
-def _fields_pair(data: str) -> tuple[int, int]:
-    """``QE`` data ``m1,m2`` (microstep divisor of each enabled motor, 0 when off)."""
-    fields = strip_name("QE", data.strip()).split(",")
-    if len(fields) != 2 or not all(
-            f.strip().isascii() and f.strip().isdecimal() and len(f.strip()) <= 3 for f in fields):
-        raise ParseError("QE reply must be two numbers", source="ebb QE", token=data)
-    return int(fields[0]), int(fields[1])
-
-
-def _name(command: str) -> str:
-    """The one- or two-character command name (the firmware takes the second character unless it is a comma)."""
-    head = command.split(",", 1)[0]
-    return head[:2].upper()
-
 
 def _v(version: tuple[int, int, int]) -> str:
     return ".".join(str(p) for p in version)
