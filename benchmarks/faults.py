@@ -34,9 +34,9 @@ import signal
 import sys
 import tempfile
 from collections import Counter, defaultdict
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -103,7 +103,7 @@ def compare(intended: DisplayList, drawn: DisplayList, tol: float = TOL_MM) -> T
     unit = (rseg[:, 2:] - rseg[:, :2]) / length[:, None]
     pieces: dict[int, list[tuple[float, float]]] = defaultdict(list)
     tally = Tally()
-    for seg, pen in zip(dseg, dpen):
+    for seg, pen in zip(dseg, dpen, strict=True):
         off = np.maximum(_distance(seg[:2], rseg, length), _distance(seg[2:], rseg, length))
         hits = np.flatnonzero((off <= tol) & (rpen == pen))
         if not len(hits):
@@ -162,14 +162,16 @@ def drawing(family: str, rng: np.random.Generator, strokes: int = STROKES) -> Di
         if i % 5 == 4:
             pts = np.vstack([pts, pts[:1]])  # closed
         polys.append(pts)
-    return DisplayList.from_polylines(polys, pens=[1 + i % pens for i in range(strokes)] if pens > 1 else 1, unit_mm=unit)
+    pen_of = [1 + i % pens for i in range(strokes)] if pens > 1 else 1
+    return DisplayList.from_polylines(polys, pens=pen_of, unit_mm=unit)
 
 
 def write_svg(dl: DisplayList, path: Path) -> None:
     """The drawing as an SVG in millimetres (one single-pen polyline per stroke), for the CLI path."""
     w = max(10.0, float(dl.points[:, 0].max() * dl.unit_mm) + 10)
     h = max(10.0, float(dl.points[:, 1].max() * dl.unit_mm) + 10)
-    lines = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w:.3f}mm" height="{h:.3f}mm" viewBox="0 0 {w:.3f} {h:.3f}">']
+    lines = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w:.3f}mm" height="{h:.3f}mm" '
+             f'viewBox="0 0 {w:.3f} {h:.3f}">']
     for pts in dl.strokes():
         coords = " ".join(f"{x * dl.unit_mm:.3f},{y * dl.unit_mm:.3f}" for x, y in pts)
         lines.append(f'<polyline points="{coords}" fill="none" stroke="black"/>')
@@ -322,7 +324,7 @@ def run_api(family: str, kind: str, at: int, dl: DisplayList, ident: str) -> Out
 
 
 def run_cli(family: str, kind: str, at: int, svg: Path, dl: DisplayList, ident: str, state: Path) -> Outcome:
-    """Plot with the fault through ``pixelpen plot``, then ``--resume`` (and ``--confirm-position`` if asked), compare."""
+    """Plot with the fault through ``pixelpen plot``, then ``--resume`` (``--confirm-position`` if asked); compare."""
     out = Outcome()
     base = ["plot", str(svg), "--state", str(state), "--retries", "0", "--no-optimize"]
     code, text = _main([*base, "--to", url(family, ident, f"{FAULT_OPTION[kind]}={at}")])
@@ -417,14 +419,15 @@ def campaign(families=FAMILIES, paths=PATHS, runs: int = 100, seed: int = 2026,
                                 state.unlink(missing_ok=True)
                             # the CLI places the SVG on its page: there the intended drawing is the reference paper
                             intended = dl if path == "api" else simplify(ref, TOL_MM / 4 / ref.unit_mm)
-                            if compare(intended, ref) != Tally():
-                                raise PixelpenError(f"the uninterrupted plot differs from the drawing: {compare(intended, ref)}")
+                            differs = compare(intended, ref)
+                            if differs != Tally():
+                                raise PixelpenError(f"the uninterrupted plot differs from the drawing: {differs}")
                             at = int(rng.integers(min(60, total // 4), max(61, total - 10)))
                             if kind == "device_error":
                                 at = int(rng.integers(total // 4, max(total // 4 + 1, total - 10)))
                             out = (run_api(family, kind, at, dl, ident) if path == "api"
                                    else run_cli(family, kind, at, svg, intended, ident, state))
-                    except (_Timeout, Exception) as exc:  # a campaign reports every failure, whatever it is
+                    except (_Timeout, Exception) as exc:  # noqa: BLE001  (a campaign reports every failure, whatever it is)
                         out = Outcome(failed=f"{type(exc).__name__}: {exc}")
                     finally:
                         with contextlib.suppress(KeyError):
@@ -462,9 +465,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("-v", "--verbose", action="store_true", help="print every scenario that was not clean")
     ap.add_argument("--table", help="file the table so far is written to after every scenario")
     args = ap.parse_args(argv)
+    def save(t: dict) -> None:
+        if args.table:
+            Path(args.table).write_text(format_table(t) + "\n")
+
     table = campaign(args.family, args.path, args.runs, args.seed, log=print if args.verbose else (lambda s: None),
-                     strokes=args.strokes,
-                     each=(lambda t: Path(args.table).write_text(format_table(t) + "\n")) if args.table else (lambda t: None))
+                     strokes=args.strokes, each=save)
     print(format_table(table))
     return 0
 

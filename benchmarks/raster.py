@@ -15,15 +15,15 @@ import random
 import statistics
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 from PIL import Image, ImageChops, ImageDraw
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from pixelpen.raster.canvas import Canvas  # noqa: E402
+from pixelpen.raster.canvas import Canvas
 
 SEED = 20240601
 SIZE = 1024
@@ -106,7 +106,7 @@ def w3_pillow(data: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
     centres, r = data
     im = Image.new("L", (SIZE, SIZE))
     ellipse = ImageDraw.Draw(im).ellipse
-    for i, ((x, y), rr) in enumerate(zip(centres.tolist(), r.tolist())):
+    for i, ((x, y), rr) in enumerate(zip(centres.tolist(), r.tolist(), strict=True)):
         box = (x - rr, y - rr, x + rr, y + rr)
         if i < 2000:
             ellipse(box, outline=255)

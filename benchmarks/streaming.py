@@ -35,11 +35,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-import pixelpen  # noqa: E402
-from pixelpen.clock import SimulatedClock  # noqa: E402
-from pixelpen.sim.base import create_simulator, forget_simulator, named_simulator  # noqa: E402
-from pixelpen.sim.transports.port import SimPort  # noqa: E402
-from pixelpen.vector.displaylist import DisplayList  # noqa: E402
+import pixelpen
+from pixelpen.clock import SimulatedClock
+from pixelpen.sim.base import create_simulator, forget_simulator, named_simulator
+from pixelpen.sim.transports.port import SimPort
+from pixelpen.vector.displaylist import DisplayList
 
 USB_BAUD = 12_000_000
 """USB full speed (12 Mbit/s) as a byte rate of 1.2 MB/s: the EBB's CDC link is never slow."""
@@ -119,7 +119,7 @@ def _figures(port: SimPort, s0, s1, starved: float) -> Run:
 
 
 def naive_run(model: str, baud: int, commands: list[bytes], primed: int, reply_end: bytes) -> Run:
-    """Send each command, wait for the reply that ends in ``reply_end``, then send the next; measure after ``primed``."""
+    """Send each command, wait for the reply ending in ``reply_end``, then send the next; measure after ``primed``."""
     device = create_simulator(model, clock=SimulatedClock())
     port = SimPort(device, baud=baud, clock=device.clock)
     s0, starved0 = port.stats(), device.stats.starved_time

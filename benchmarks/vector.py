@@ -21,17 +21,17 @@ import io
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from pixelpen.cli import main as pixelpen_main  # noqa: E402
-from pixelpen.vector.displaylist import DisplayList  # noqa: E402
-from pixelpen.vector.merge import merge_paths  # noqa: E402
-from pixelpen.vector.svgimport import read_svg  # noqa: E402
+from pixelpen.cli import main as pixelpen_main
+from pixelpen.vector.displaylist import DisplayList
+from pixelpen.vector.merge import merge_paths
+from pixelpen.vector.svgimport import read_svg
 
 PAGE_MM = (300.0, 200.0)
 PEN_UP_GOAL, WALL_GOAL = 0.85, 1.0
@@ -93,7 +93,7 @@ def map_polylines(seed: int = 0, target_kb: float = 120.0) -> list[np.ndarray]:
     for s in whole.strokes():  # cut each contour into ways of 2..12 segments sharing their end points
         cuts = np.cumsum(rng.integers(2, 13, len(s) // 2 + 1))
         cuts = cuts[cuts < len(s) - 1]
-        ways += [s[a : b + 1] for a, b in zip(np.r_[0, cuts], np.r_[cuts, len(s) - 1])]
+        ways += [s[a : b + 1] for a, b in zip(np.r_[0, cuts], np.r_[cuts, len(s) - 1], strict=True)]
     order = rng.permutation(len(ways))  # map files list ways in no useful order
     ways = [ways[k] for k in order]
     size = len(svg_text(ways)) / 1000
@@ -105,8 +105,11 @@ def text_page() -> list[np.ndarray]:
     from pixelpen.vector.font import text_strokes
 
     rng = np.random.default_rng(0)
-    words = ("plot pen paper ink vector raster stroke path line curve point hatch font order merge travel "
-             "lift drop carousel servo motor step speed corner junction plan time").split()
+    words = [
+        "plot", "pen", "paper", "ink", "vector", "raster", "stroke", "path", "line", "curve", "point", "hatch",
+        "font", "order", "merge", "travel", "lift", "drop", "carousel", "servo", "motor", "step", "speed", "corner",
+        "junction", "plan", "time",
+    ]
     lines = [" ".join(rng.choice(words, 12)) for _ in range(62)]
     return text_strokes("\n".join(lines), position=(10.0, 287.0), height=2.5, valign="top", font="futural")
 
@@ -195,7 +198,7 @@ def main(argv: list[str] | None = None) -> int:
             wall_v, wall_p = run_vpype(src, out_v), run_pixelpen(src, out_p)
             for _ in range(repeats(max(wall_v, wall_p)) - 1):  # interleaved, so both see the same machine load
                 wall_v, wall_p = min(wall_v, run_vpype(src, out_v)), min(wall_p, run_pixelpen(src, out_p))
-            (up_v, down_v, n_v), (up_p, down_p, n_p) = measure(out_v), measure(out_p)
+            (up_v, down_v, _), (up_p, down_p, n_p) = measure(out_v), measure(out_p)
             r_up, r_wall = up_p / up_v, wall_p / wall_v
             ok = "met" if r_up <= PEN_UP_GOAL and r_wall <= WALL_GOAL else "MISSED"
             print(f"{name:18s} {src.stat().st_size / 1000:6.0f} {n_p:7d} {up_v:12,.0f} {up_p:14,.0f} "

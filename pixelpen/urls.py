@@ -25,7 +25,7 @@ file names (:func:`check_path`) without NUL, at most :data:`MAX_NAME` bytes per 
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple, TypeVar
@@ -172,36 +172,6 @@ def _balanced(text: str) -> bool:
         if depth < 0:
             return False
     return depth == 0
-
-
-class Options:
-    """Typed access to a URL's options that refuses unknown ones, naming those it knows."""
-
-    def __init__(self, url: DeviceURL, known: Iterable[str]) -> None:
-        self.url = url
-        self.known = sorted(set(known))
-        unknown = sorted(set(url.options) - set(self.known))
-        if unknown:
-            hint = ""
-            if "://" in url.target or any(k in {"logging", "timeout", "baudrate"} for k in unknown):
-                hint = " (options of a nested port URL go inside brackets: scheme:[rfc2217://host:port?logging=debug])"
-            raise URLError(
-                f"{url}: unknown option(s) {', '.join(unknown)} for scheme {url.scheme!r}; "
-                f"known: {', '.join(self.known) or 'none'}{hint}"
-            )
-
-    def get(self, key: str, convert: Callable[[str], T], default: T) -> T:
-        """Return option ``key`` converted, or ``default``; a bad value names the option and URL."""
-        if key not in self.url.options:
-            return default
-        raw = self.url.options[key]
-        try:
-            return convert(raw)
-        except (ValueError, TypeError) as exc:
-            raise URLError(f"{self.url}: option {key}={raw!r} is not valid: {exc}") from None
-
-    def __contains__(self, key: str) -> bool:
-        return key in self.url.options
 
 
 _MM_PER = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "px": 25.4 / 96}

@@ -14,10 +14,10 @@ from __future__ import annotations
 import random
 import signal
 import time
-import tracemalloc
 import traceback
+import tracemalloc
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import Callable, Iterator, Sequence
 
 from pixelpen.errors import PixelpenError
 
@@ -151,7 +151,7 @@ def campaign(
                 result.rejected += 1
             except _CaseTimeout:
                 result.failures.append(Failure("hang", data, f"still running after {seconds_per_case} s"))
-            except BaseException as exc:  # noqa: BLE001 - the point is to catch what escapes
+            except BaseException as exc:
                 if isinstance(exc, KeyboardInterrupt):
                     raise
                 tb = traceback.format_exception(type(exc), exc, exc.__traceback__)[-3:]

@@ -64,7 +64,7 @@ def test_the_command_line_wins_and_replaces_a_configured_list(tmp_path, config, 
     first, second = tmp_path / "a.png", tmp_path / "b.png"
     config(f'[draw]\nto = ["png:{first}"]\n[plot]\nto = "sim:grbl?speed=fast"\n')
     assert main(["draw", str(picture), "--to", f"png:{second}"]) == 0
-    assert second.exists() and not first.exists()  # the command line's --to replaced the configured one, not added to it
+    assert second.exists() and not first.exists()  # the command line's --to replaced the configured one
     assert main(["plot", drawing(tmp_path), "--to", "png:x.png"]) == 2
     assert "not a pen plotter" in capsys.readouterr().err
 
@@ -95,7 +95,8 @@ def test_a_bad_file_is_one_error_line_naming_the_file_and_the_key(tmp_path, conf
     path = config(text)
     assert main(["plot", drawing(tmp_path), "--to", "sim:grbl"]) == 2
     (line,) = capsys.readouterr().err.strip().splitlines()
-    assert re.match(rf"pixelpen: error in the configuration file: {re.escape(str(path))}(, line \d+(, column \d+)?)?: ", line), line
+    where = rf"pixelpen: error in the configuration file: {re.escape(str(path))}(, line \d+(, column \d+)?)?: "
+    assert re.match(where, line), line
     assert needle in line, line
 
 
@@ -130,8 +131,8 @@ CONFIG_SEEDS = [
 
 
 def config_campaign(tmp_path, cases, seed):
-    from tests.fuzzing import campaign
     from pixelpen.cli import build_parser
+    from tests.fuzzing import campaign
 
     commands = build_parser().commands
     path = tmp_path / "fuzz.toml"

@@ -5,7 +5,13 @@ from __future__ import annotations
 import pytest
 
 from pixelpen.errors import (
-    TOKEN_CHARS, ConfigError, InvalidArgument, InvalidArgumentType, ParseError, PixelpenError, quote_token,
+    TOKEN_CHARS,
+    ConfigError,
+    InvalidArgument,
+    InvalidArgumentType,
+    ParseError,
+    PixelpenError,
+    quote_token,
 )
 
 

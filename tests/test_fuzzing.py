@@ -27,7 +27,7 @@ def test_a_crash_is_reported_with_its_input():
             raise IndexError("boom")
 
     result = campaign("crashy", crashy, [b"abc"], 100, tokens=(b"\x00",))
-    with pytest.raises(AssertionError, match="(?s)crash.*IndexError"):
+    with pytest.raises(AssertionError, match=r"(?s)crash.*IndexError"):
         result.check()
 
 

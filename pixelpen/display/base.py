@@ -19,7 +19,7 @@ from pixelpen.display.flatten import DeviceShape, flatten_picture
 from pixelpen.display.picture import PRIMITIVE_TYPES, Picture, Primitive, Segment
 from pixelpen.errors import ConfigError, InvalidArgumentType, PixelpenError
 from pixelpen.options import OptionSpec, OptionValues, read_options
-from pixelpen.urls import DeviceURL, Options
+from pixelpen.urls import DeviceURL
 
 log = logging.getLogger(__name__)
 
@@ -33,8 +33,6 @@ class Display(ABC):
     schemes: ClassVar[tuple[str, ...]] = ()
     OPTIONS: ClassVar[tuple[OptionSpec[Any], ...]] = ()
     """The options the scheme's URLs accept, as specs (read by ``read_url_options``, listed by ``pixelpen devices``)."""
-    url_options: ClassVar[dict[str, str]] = {}
-    """The older help table of the options (kept while tests read it; ``OPTIONS`` replaces it)."""
     simulated: ClassVar[bool] = False
     """True when ``sim:<scheme>`` gives a simulated device of this model."""
     SIM_SHARED: ClassVar[frozenset[str]] = frozenset()
@@ -79,11 +77,6 @@ class Display(ABC):
         own = {k: v for k, v in url.options.items() if k in declared and k not in cls.SIM_TRANSPORT}
         sim = {k: v for k, v in url.options.items() if k not in own or k in cls.SIM_SHARED}
         return DeviceURL(url.target, "", own, str(url)), sim
-
-    @classmethod
-    def options_of(cls, url: DeviceURL) -> Options:
-        """The older reader of ``url_options`` (kept while tests call it; ``read_url_options`` replaces it)."""
-        return Options(url, cls.url_options)
 
     # -- life cycle --------------------------------------------------------------------------
     def open(self) -> Display:

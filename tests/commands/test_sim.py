@@ -200,7 +200,7 @@ def test_grbl_simulator_defaults_are_the_machine_the_driver_plots_for():
     from pixelpen.urls import parse_url
 
     profile = load_profile("grbl")
-    wanted = GrblPlotter.simulator_options({}, GrblPlotter.options_of(parse_url("grbl:x")), profile)
+    wanted = GrblPlotter.simulator_options({}, GrblPlotter.read_url_options(parse_url("grbl:x")), profile)
     device, transport = simcmd.open_simulator("grbl", {}, "fast")
     width, height = (float(v) for v in wanted["size"].split("x"))
     assert (device.paper.width_mm, device.paper.height_mm) == (width, height) == (297.0, 210.0)

@@ -210,11 +210,6 @@ class PlotterDisplay(VectorDisplay, ManualControl):
         )
 
     @classmethod
-    def options_of(cls, url: DeviceURL) -> OptionValues:  # type: ignore[override]
-        """The URL's options read against ``OPTIONS`` (the older name of ``read_url_options``, kept for its callers)."""
-        return cls.read_url_options(url)
-
-    @classmethod
     def default_profile(cls, options: OptionValues) -> DeviceProfile:
         """The built-in profile of a URL without ``profile=`` (a family with several models reads its option)."""
         return load_profile(cls.profile_name)

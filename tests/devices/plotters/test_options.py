@@ -29,7 +29,7 @@ def test_every_family_declares_the_base_options_first_and_each_name_once(cls):
 def test_the_help_table_pixelpen_devices_prints_comes_from_the_specs(cls):
     rows = dict(describe(cls.OPTIONS))
     assert list(rows) == [spec.name for spec in cls.OPTIONS]
-    assert cls.url_options == {}  # the older help table is not kept beside the specs
+    assert not hasattr(cls, "url_options")  # the older help table is not kept beside the specs
 
 
 def test_family_options_and_their_defaults():

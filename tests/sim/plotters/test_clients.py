@@ -19,8 +19,8 @@ import serial
 import pixelpen.sim.transports.urlhandler  # noqa: F401  (registers sim://)
 from pixelpen.clock import SimulatedClock
 from pixelpen.sim.base import create_simulator
-from pixelpen.sim.transports.pty import PtyBridge
 from pixelpen.sim.transports.port import SimPort
+from pixelpen.sim.transports.pty import PtyBridge
 
 SVG_NS = "{http://www.w3.org/2000/svg}"
 
@@ -243,7 +243,7 @@ def test_grbl_streamer_library_over_the_pty():
                 time.sleep(0.01)
             assert events["on_boot"].wait(10), "grbl-streamer never saw the banner"
             time.sleep(1.0)  # both boots are seen (a boot arriving later would clear the job)
-            grbl.write("\n".join(GCODE + ["G4 P0"]))
+            grbl.write("\n".join([*GCODE, "G4 P0"]))
             grbl.job_run()
             deadline = time.monotonic() + 60
             def finished() -> bool:  # the closing G4 P0 waits for the planner: after it, all has moved
