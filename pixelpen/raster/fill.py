@@ -10,11 +10,11 @@ are found with ``scipy.ndimage.label`` (C speed, no recursion, any region size);
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage
 
 from pixelpen.errors import ConfigError
 
-_STRUCTURES = {4: ndimage.generate_binary_structure(2, 1), 8: ndimage.generate_binary_structure(2, 2)}
+_STRUCTURES = {4: np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], bool), 8: np.ones((3, 3), bool)}
+"""4- and 8-neighbour structures (scipy.ndimage.generate_binary_structure(2, 1) and (2, 2))."""
 
 
 def check_seed(seed: object, width: int, height: int) -> tuple[int, int]:
@@ -53,6 +53,8 @@ def connected_region(fillable: np.ndarray, seed: tuple[int, int], connectivity: 
     x, y = seed
     if not fillable[y, x]:
         return None
+    from scipy import ndimage  # imported here: a display that never fills need not load scipy (0.5 s)
+
     labels, _ = ndimage.label(fillable, structure=_STRUCTURES[check_connectivity(connectivity)])
     label = int(labels[y, x])
     box = ndimage.find_objects(labels, max_label=label)[label - 1]
