@@ -78,11 +78,8 @@ class PacedDevice:
         return self.device.next_event_time()
 
     def inject(self, fault: Fault | str, at: int | None = None) -> None:
-        """Pass a fault on to the device (``at`` only when given: older devices take the fault alone)."""
-        if at is None:
-            self.device.inject(fault)
-        else:
-            self.device.inject(fault, at=at)
+        """Pass a fault on to the device."""
+        self.device.inject(fault, at=at)
 
     def close(self) -> None:
         """Close the device."""
