@@ -184,6 +184,9 @@ class PlotterDisplay(VectorDisplay, ManualControl):
         """Strokes after which the family lifted the pen without moving (None: unknown, any may be)."""
         self._redo = range(0)
         """Whole strokes a resume draws again before it continues (a damaged stretch)."""
+        self._missing: list[tuple[int, np.ndarray]] = []
+        """(stroke, points): pieces of strokes the device skipped, found exactly (``_mark_missing``); a resume
+        draws them first."""
 
     # -- construction ------------------------------------------------------------------------
     @classmethod
@@ -308,6 +311,7 @@ class PlotterDisplay(VectorDisplay, ManualControl):
         self._head = None
         redo, self._redo = self._redo, range(0)
         try:
+            self._draw_missing(dl)
             for i in [*redo, *range(start.stroke, len(dl))]:
                 self._hold_while_paused()
                 pen = int(dl.pens[i])
@@ -369,6 +373,7 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             self._position_lost = self._position_lost or state.position_lost
             if state.damaged is not None:
                 self._mark_damaged(range(*state.damaged))
+            self._missing = [(int(m[0]), np.asarray(m[1:], np.int64).reshape(-1, 2)) for m in state.missing or []]
             self._lifts = None if state.lifts is None else set(state.lifts)
             if self._where_found is None and self.reports_position:
                 self._interrupted = True
@@ -389,6 +394,7 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             raise ConfigError("nothing to resume: no interrupted plot in this process and no state file")
         else:
             self._lifts, self._damaged, self._position_lost, self._redo = set(), None, False, range(0)
+            self._missing = []
         self._job = dl
         self._job_state = PlotState(self.port, fp, len(dl), self._redo.start if self._redo else start.stroke)
         self._cum_mm = cumulative_pen_down_mm(dl)
@@ -512,6 +518,7 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             self._job_state.sent = sent
             self._job_state.position_lost = self._position_lost
             self._job_state.damaged = [self._damaged.start, self._damaged.stop] if self._damaged else None
+            self._job_state.missing = [[s, *(int(v) for v in p.ravel())] for s, p in self._missing] or None
             lifts = self._lifts
             self._job_state.lifts = None if lifts is None else sorted(s for s in lifts if s >= self.confirmed)
             at = self._stopped_at
@@ -533,6 +540,29 @@ class PlotterDisplay(VectorDisplay, ManualControl):
         if announced:
             log.info("%s: resumed", self.profile.name)
             self._pause_changed(False)
+
+    def _draw_missing(self, dl: DisplayList) -> None:
+        """Draw the pieces the device skipped (``_mark_missing``) and wait until they are confirmed."""
+        patches = list(self._missing)
+        if not patches:
+            return
+        for stroke, points in patches:
+            pen = int(dl.pens[stroke])
+            if pen != self.pen:
+                self._change_pen(pen)
+            self._send_stroke(stroke, points, pen)
+            self._poll()
+        self._drain()
+        self._missing = self._missing[len(patches):]
+        self._save_state()
+
+    def _mark_missing(self, stroke: int, points: np.ndarray) -> None:
+        """Families call this before raising for an error when they know exactly what the device skipped.
+
+        ``points`` (device units, as given to ``_send_stroke``) is the piece of ``stroke`` that is not on paper;
+        the resume draws it before it continues where the device stopped: nothing drawn twice.
+        """
+        self._missing.append((stroke, np.asarray(points, np.int64).reshape(-1, 2).copy()))
 
     def _mark_damaged(self, strokes: range) -> None:
         """Families call this before raising for an error the device found in ``strokes`` (skipped or misread).

@@ -53,7 +53,7 @@ from pixelpen.devices.plotters.hpgl_replies import (
     clean,
     is_marker,
 )
-from pixelpen.devices.plotters.hpgl_stream import MAX_POLL_S, HPGLStream, SyncPoint, Wire
+from pixelpen.devices.plotters.hpgl_stream import MAX_POLL_S, Check, HPGLStream, SyncPoint, Wire
 from pixelpen.display.registry import register_display
 from pixelpen.drivers import discovery
 from pixelpen.drivers.serial import SerialLink
@@ -75,6 +75,9 @@ QUIET_S = 0.2
 SAFE_WAIT_S = 10.0
 """Longest wait for the safe-stop sequence to be executed before closing."""
 DISCOVERY_TIMEOUT_S = 0.5
+
+VERIFY = ("instruction", "sync")
+"""How closely the plot is checked (option ``verify``)."""
 
 _FLOW_OF = {"escb": "none", "none": "none", "xonxoff": "xonxoff", "hardwire": "rtscts"}
 
@@ -110,6 +113,9 @@ class HPGLDisplay(HPGLStream):
         OptionSpec("ps", boolean, None,
                    "send PS (paper size) after IN: true or false; default true where the model knows PS"),
         OptionSpec("stall", positive, 60.0, "seconds without progress (and no pause) before a plot counts as stalled"),
+        OptionSpec("verify", choice(*VERIFY), "instruction",
+                   "instruction: OA;OE; after every instruction, so a garbled one costs only what it missed; "
+                   "sync: only at sync points (fewer bytes; a damaged stretch is drawn again whole)"),
     )
 
     def __init__(
@@ -123,6 +129,7 @@ class HPGLDisplay(HPGLStream):
         velocity: float | None = None,
         ps: bool | None = None,
         stall: float = 60.0,
+        verify: str = "instruction",
         flow: str | None = None,
         usb_backend: Any = None,
         **kwargs: Any,
@@ -132,6 +139,8 @@ class HPGLDisplay(HPGLStream):
         wanted = _FLOW_OF[handshake]
         if flow is not None and handshake in ("xonxoff", "hardwire") and flow != wanted:
             raise ConfigError(f"handshake={handshake} needs flow={wanted}, got flow={flow}")
+        if verify not in VERIFY:
+            raise ConfigError(f"verify must be one of {', '.join(VERIFY)}, got {verify!r}")
         if reserve < 0 or sync_strokes < 1 or sync_bytes < 1 or not stall > 0:
             raise ConfigError("reserve must be >= 0, sync_strokes and sync_bytes >= 1 and stall > 0")
         super().__init__(port, flow=flow or wanted, **kwargs)
@@ -140,6 +149,7 @@ class HPGLDisplay(HPGLStream):
         self.sync_strokes = sync_strokes
         self.sync_bytes = sync_bytes
         self.stall_s = float(stall)
+        self.verify = verify
         top = self.max_velocity_cm_s
         profile_cm_s = self.profile.pen_down.speed / 10.0
         self.velocity_cm_s = velocity if velocity is not None else (profile_cm_s if profile_cm_s < top else None)
@@ -156,7 +166,7 @@ class HPGLDisplay(HPGLStream):
     def family_options(cls, options: OptionValues, profile: DeviceProfile) -> dict[str, Any]:
         """Constructor keywords from the HP-GL options of a URL (see ``OPTIONS``)."""
         return {name: options[name] for name in ("handshake", "reserve", "sync_strokes", "sync_bytes", "velocity", "ps",
-                                                 "stall")}
+                                                 "stall", "verify")}
 
     @classmethod
     def simulator_options(
@@ -260,7 +270,12 @@ class HPGLDisplay(HPGLStream):
         instructions = enc.stroke(points, index=index)
         if w.strokes_sent != index:  # a resumed job starts a new window at its first stroke
             w.window_first = index
-        self._send(instructions)
+        if self.verify == "instruction":
+            if w.pending_pen is not None:
+                w.pending_pen.stroke, w.pending_pen = index, None
+            self._send_checked(_checks(index, points, instructions))
+        else:
+            self._send(instructions)
         w.strokes_sent = index + 1
         w.last_point = (int(points[-1, 0]), int(points[-1, 1]))
         if w.size is not None:
@@ -283,7 +298,11 @@ class HPGLDisplay(HPGLStream):
     def _select_pen(self, pen: int) -> None:
         if self._wire.strokes_sent:
             self._lifted_in_place(self._wire.strokes_sent - 1)  # SP lifts the pen where it stands
-        self._send([enc.select_pen(pen)])
+        if self.verify == "instruction":
+            self._wire.pending_pen = check = Check("SP", None)
+            self._send_checked([(enc.select_pen(pen), check)])
+        else:
+            self._send([enc.select_pen(pen)])
 
     def _device_paused(self) -> bool:
         self._pump()
@@ -421,6 +440,18 @@ class HPGLDisplay(HPGLStream):
         return point.seen
 
 
+
+
+def _checks(index: int, points: np.ndarray, instructions: list[bytes]) -> list[tuple[bytes, Check]]:
+    """Each instruction of stroke ``index`` (``PUx,y;`` then PD lists) with what its checkpoint must find."""
+    out = [(instructions[0], Check("PU", index, points))]
+    k = 1
+    for n, instruction in enumerate(instructions[1:], 2):
+        pairs = (instruction.count(b",") + 1) // 2
+        lo, hi = (0, 0) if len(points) == 1 else (k, k + pairs - 1)
+        out.append((instruction, Check("PD", index, points, lo, hi, last=n == len(instructions))))
+        k += pairs
+    return out
 
 
 @register_display("hp7475a")

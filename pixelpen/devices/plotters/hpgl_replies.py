@@ -25,6 +25,8 @@ IO_ERRORS: dict[int, str] = {
     16: "input buffer overflow",
 }
 """ESC.E RS-232 error numbers (plotters.md §1.4)."""
+BYTES_LOST = frozenset({15, 16})
+"""ESC.E errors that lose received bytes (framing/overrun, buffer overflow); 11..14 concern device control only."""
 ERROR_OUTPUT_BUSY = 10
 """ESC.E 10: an output request came while an answer went out and was ignored (a link hiccup, not a drawing error)."""
 STATUS_VIEW = 16

@@ -49,9 +49,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import ClassVar
 
+import numpy as np
+
 from pixelpen.devices.plotters import hpgl_encode as enc
 from pixelpen.devices.plotters.base import PlotterDisplay
 from pixelpen.devices.plotters.hpgl_replies import (
+    BYTES_LOST,
     ERROR_OUTPUT_BUSY,
     HPGL_ERRORS,
     IO_ERRORS,
@@ -100,6 +103,26 @@ class SyncPoint:
     """The marker's answer once it came."""
     expect: tuple[int, int] | None = None
     """Where OA must find the pen (the end of the last stroke before the sync point; None: not checked)."""
+    check: Check | None = None
+    """The one instruction this checkpoint follows (``verify=instruction``); None: a sync point."""
+
+
+@dataclass
+class Check:
+    """What one instruction of a stroke should have done, for the ``OA;OE;`` checkpoint behind it."""
+
+    kind: str
+    """``SP`` (pen select), ``PU`` (travel to the stroke's first point) or ``PD`` (a vector list)."""
+    stroke: int | None
+    """The stroke it belongs to (SP: the stroke after it, set when that stroke is sent)."""
+    points: np.ndarray | None = None
+    """The points given to ``_send_stroke`` for that stroke."""
+    lo: int = 0
+    """PD: the first vertex it draws to (its vectors start from the one before); PU: 0."""
+    hi: int = 0
+    """The vertex the pen stands on once it ran (PU: 0)."""
+    last: bool = False
+    """The stroke's last instruction: its checkpoint confirms the stroke."""
 
 
 @dataclass
@@ -153,6 +176,8 @@ class Wire:
     last_status_ask: float = -math.inf
     received_any: bool = False
     connecting: bool = False
+    pending_pen: Check | None = None
+    """The check of an SP sent before the stroke it selects the pen for."""
 
 
 class HPGLStream(PlotterDisplay):
@@ -161,6 +186,7 @@ class HPGLStream(PlotterDisplay):
     mnemonics: ClassVar[frozenset[str]]
     """HP-GL instructions the model knows (an error 1 names a sent one outside it)."""
     handshake: str
+    verify: str
     reserve: int
     sync_strokes: int
     sync_bytes: int
@@ -191,6 +217,14 @@ class HPGLStream(PlotterDisplay):
             i = j
             if self._room() <= LOW_WATER and not self._asking("B"):
                 self._ask("B")
+
+    def _send_checked(self, items: list[tuple[bytes, Check]]) -> None:
+        """Write instructions each followed by its ``OA;OE;`` checkpoint (``verify=instruction``)."""
+        w = self._wire
+        for instruction, check in items:
+            s = check.stroke if check.stroke is not None else 0
+            w.syncs.append(SyncPoint(s + 1 if check.last else None, [instruction], s, check=check))
+        self._send([part for instruction, _ in items for part in (instruction, enc.SYNC_REQUEST)])
 
     def _wait_for_room(self, need: int) -> None:
         self._wait(lambda: self._room() >= need, "waiting for room in the plotter's buffer", poll=POLL_S, backoff=True)
@@ -350,7 +384,8 @@ class HPGLStream(PlotterDisplay):
             if head.expect is not None:
                 x, y, _ = (int(v) for v in text.split(","))
                 if (x, y) != head.expect:
-                    self._mark_damaged(range(head.first_stroke, head.confirms or head.first_stroke))
+                    if self.verify != "instruction":  # with checkpoints every drawing instruction was checked
+                        self._mark_damaged(range(head.first_stroke, head.confirms or head.first_stroke))
                     raise LinkError(
                         f"{self._name()}: OA found the pen at {x},{y} after {_strokes(head)}, not at "
                         f"{head.expect[0]},{head.expect[1]} where they end (an instruction was corrupted or lost)"
@@ -371,7 +406,15 @@ class HPGLStream(PlotterDisplay):
     def _on_oe(self, point: SyncPoint, code: int) -> None:
         w = self._wire
         w.syncs.popleft()
-        if code:
+        if point.check is not None:
+            self._on_check(point, point.check, code)
+        elif code and point.confirms is not None and self.verify == "instruction":
+            # every instruction before this sync point passed its own checkpoint: the error hit the PU; or
+            # bytes outside any drawing instruction (a garbled ESC query), and nothing is missing from the paper
+            log.warning("%s: HP-GL error %d (%s) after %s, outside every drawing instruction (each checked); "
+                        "nothing is missing", self.profile.name, code, HPGL_ERRORS.get(code, "unknown error"),
+                        _strokes(point))
+        elif code:
             strokes = "the setup instructions" if point.confirms is None else _strokes(point)
             if point.confirms is not None:
                 self._mark_damaged(range(point.first_stroke, point.confirms))
@@ -383,6 +426,76 @@ class HPGLStream(PlotterDisplay):
         w.status = 0
         if point.confirms is not None:
             self._confirm(point.confirms)
+
+    def _on_check(self, point: SyncPoint, check: Check, code: int) -> None:
+        """An instruction's checkpoint answered: fine, or record exactly what of it is missing and raise.
+
+        HP-GL runs on after an erroneous instruction (plotters.md §1.4), so a garbled byte costs one instruction
+        at most: an SP not done, a PU not done or gone to a truncated point, or a PD list cut short at a pair
+        (a pair whose Y lost its tail digits is drawn to that point first).  OA tells which: the stroke's
+        points from where the pen stopped to the instruction's end are missing (``_mark_missing``), nothing else.
+        OA where the instruction ends means it ran whole (a garbled terminator); OA elsewhere with OE 0 means
+        the answers are out of step (a link fault, nothing marked).
+        """
+        seen = point.seen or ""
+        x, y, pen = (int(v) for v in seen.split(","))
+        s = check.stroke if check.stroke is not None else self._sent_end
+        what = f"HP-GL error {code} ({HPGL_ERRORS.get(code, 'unknown error')}) in stroke {s}"
+        command = describe_instructions(point.instructions)
+        if check.kind == "SP":
+            if not code:
+                return
+            job = self._job
+            stop = s + 1
+            while job is not None and stop < len(job) and int(job.pens[stop]) == int(job.pens[s]):
+                stop += 1
+            self._mark_damaged(range(s, stop))  # drawn with the pen held before: all of them again, in their pen
+            raise ProtocolError(f"{what}: the pen was not changed", code=code, command=command,
+                                device=self.profile.name)
+        pts = check.points
+        assert pts is not None
+        end = (int(pts[check.hi, 0]), int(pts[check.hi, 1]))
+        if (x, y) == end and bool(pen) == (check.kind == "PD"):
+            if code:
+                log.warning("%s: %s, but OA shows it drawn as sent (a garbled terminator); nothing is missing",
+                            self.profile.name, what)
+            if point.confirms is not None:
+                self._confirm(point.confirms)
+            return
+        if not code:
+            raise LinkError(f"{self._name()}: OA answered {seen} after stroke {s}'s {check.kind}, not "
+                            f"{end[0]},{end[1]}, with no HP-GL error: the answers are out of step")
+        missing = self._missing_after(check, (x, y))
+        if missing is None:
+            self._mark_damaged(range(s, s + 1))  # where it stopped fits no single place: the stroke again whole
+        else:
+            self._mark_missing(s, missing)
+        self._confirm(s + 1)
+        raise ProtocolError(
+            f"{what}: the plotter stopped its {check.kind} at {x},{y}; "
+            + ("the stroke is drawn again" if missing is None else f"the resume draws the {len(missing) - 1} "
+               "missing segment(s) only"),
+            code=code, command=command, device=self.profile.name,
+        )
+
+    @staticmethod
+    def _missing_after(check: Check, at: tuple[int, int]) -> np.ndarray | None:
+        """The points of the stroke still to draw after ``check``'s instruction stopped at ``at`` (None: unknown)."""
+        pts = check.points
+        assert pts is not None
+        if check.kind == "PU":
+            return pts[: min(2, len(pts))].copy()  # the PD after it drew from the wrong place to point 1
+        tail = min(len(pts), check.hi + (1 if check.last else 2))  # a PD after it joined its end to the next point
+        start = max(0, check.lo - 1)
+        stops = [j for j in range(start, check.hi) if (int(pts[j, 0]), int(pts[j, 1])) == at]
+        if len(stops) == 1:
+            return pts[stops[0]:tail].copy()  # a pair failed: the list stopped on the vertex before it
+        if stops:
+            return None
+        # a pair whose Y lost its last digits was drawn to (X, truncated Y): the list stopped there
+        cut = [j for j in range(max(1, check.lo), check.hi + 1) if int(pts[j, 0]) == at[0]
+               and str(int(pts[j, 1])).startswith(str(at[1])) and str(int(pts[j, 1])) != str(at[1])]
+        return pts[cut[0] - 1:tail].copy() if len(cut) == 1 else None
 
     def _on_query_answer(self, q: Query, value: int) -> None:
         w = self._wire
@@ -410,7 +523,7 @@ class HPGLStream(PlotterDisplay):
                 log.warning("%s: the plotter held RS-232 error %d (%s) from before; cleared",
                             self.profile.name, value, IO_ERRORS[value])
             elif value and q.sync is not None:
-                if q.sync.confirms is not None:
+                if q.sync.confirms is not None and value in BYTES_LOST:  # 11..14: device control, no HP-GL hit
                     self._mark_damaged(range(q.sync.first_stroke, q.sync.confirms))
                 raise ProtocolError(
                     f"RS-232 error {value} ({IO_ERRORS[value]}) while receiving {_strokes(q.sync)}",

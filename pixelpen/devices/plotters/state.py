@@ -42,6 +42,8 @@ class PlotState:
     """The device said it lost its position; a resume needs ``position_confirmed``."""
     damaged: list[int] | None = None
     """[start, stop) of strokes the device reported it did not draw as sent; a resume draws them again."""
+    missing: list[list[int]] | None = None
+    """[stroke, x0, y0, x1, y1, ...]: pieces of strokes the device skipped; a resume draws them first."""
     lifts: list[int] | None = None
     """Unconfirmed strokes after which the pen was lifted in place (None: unknown)."""
     stopped_at: list[float] | None = None
@@ -88,6 +90,14 @@ class PlotState:
         ):
             raise ParseError("plot state field 'damaged' is not a [start, stop] stroke range", source=str(path),
                              token=state.damaged)
+        if state.missing is not None and not (
+            isinstance(state.missing, list) and all(
+                isinstance(m, list) and len(m) >= 3 and len(m) % 2 == 1
+                and all(isinstance(v, int) and not isinstance(v, bool) for v in m) and 0 <= m[0] < state.strokes
+                for m in state.missing)
+        ):
+            raise ParseError("plot state field 'missing' is not a list of [stroke, x0, y0, ...]", source=str(path),
+                             token=state.missing)
         if state.lifts is not None and not (
             isinstance(state.lifts, list) and all(isinstance(v, int) and 0 <= v < state.strokes for v in state.lifts)
         ):
@@ -122,4 +132,4 @@ def unfinished(path: Path) -> bool:
         state = PlotState.load(path)
     except ParseError:
         return False  # plot(resume=True) reports it
-    return state.confirmed < state.strokes
+    return state.confirmed < state.strokes or bool(state.missing)

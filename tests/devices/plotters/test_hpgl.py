@@ -162,6 +162,19 @@ def test_wire_bytes_of_a_square_are_exact():
     rig = Rig()
     with rig.display as d:
         d.plot(DisplayList.from_polylines([square(1000, 1000)], pens=1, unit_mm=UNIT))
+    # as below (verify=sync), with the OA;OE; checkpoint of verify=instruction behind every instruction
+    assert graphics(rig.sent) == (
+        b"\x1b.(\x1b.K\x1b.(;IN;OS;OI;OE;"
+        b"SP1;OA;OE;PU1000,1000;OA;OE;PD3000,1000,3000,3000,1000,3000,1000,1000;OA;OE;PU;OA;OE;"
+        b"\x1b.KPU;SP0;PU11040,7721;OI;"
+    )
+    assert rig.device.error_log == [] and rig.device.selected_pen == 0
+
+
+def test_wire_bytes_of_a_square_are_exact_with_checks_at_sync_points_only():
+    rig = Rig(options="verify=sync")
+    with rig.display as d:
+        d.plot(DisplayList.from_polylines([square(1000, 1000)], pens=1, unit_mm=UNIT))
     # ESC.( plotter on, ESC.K abort leftovers, ESC.(; (the escb preamble); IN, OS (clears its bit 8, so that
     # a later OS can tell a power cycle), OI/OE to identify and check; pen 1; the square; PU;OA;OE; to confirm it;
     # on close ESC.K, PU;SP0;, the A4 park position
@@ -176,7 +189,7 @@ def test_wire_bytes_of_a_square_are_exact():
 
 
 def test_velocity_and_paper_size_go_after_in():
-    rig = Rig("hp7550a", "velocity=20")
+    rig = Rig("hp7550a", "velocity=20&verify=sync")
     with rig.display as d:
         d.plot(DisplayList.from_polylines([square(500, 500)], pens=3, unit_mm=0.025))
     assert graphics(rig.sent).startswith(b"\x1b.(\x1b.K\x1b.(;IN;PS4;VS20;OS;OI;OE;SP3;PU500,500;")
@@ -391,12 +404,12 @@ def _stream_offset(wire: bytes, needle: bytes) -> int:
 
 def test_a_corrupted_byte_is_reported_with_the_instructions_it_hit():
     dl = DisplayList.from_polylines([square(500, 500), square(3000, 500), square(5500, 500)], pens=1, unit_mm=UNIT)
-    clean = Rig(options="sync_strokes=1")
+    clean = Rig(options="sync_strokes=1&verify=sync")
     clean.display.plot(dl)
     clean.display.close()
     target = b"PD7500,500"  # stroke 2's first vector; corrupt its '7'
     offset = _stream_offset(clean.sent, target) + 2
-    rig = Rig(options="sync_strokes=1", first_link={"corrupt_at": str(offset)})
+    rig = Rig(options="sync_strokes=1&verify=sync", first_link={"corrupt_at": str(offset)})
     with pytest.raises(ProtocolError) as info:
         rig.display.plot(dl)
     err = info.value
@@ -618,7 +631,7 @@ def test_a_stroke_cut_mid_way_is_finished_from_where_the_pen_stopped():
     rig, n, asked = _plot_through_faults(dl, {"drop_after": str(total - 160)}, "sync_strokes=1")
     assert (n, asked) == (1, []) and _segments(rig.device) == expected
     resumed = graphics(bytes(rig.links[1].sent))
-    first_pu = re.search(rb"(?<=;)PU(\d+),(\d+);PD", resumed)
+    first_pu = re.search(rb"(?<=;)PU(\d+),(\d+);(?:OA;OE;)?PD", resumed)
     assert first_pu and (int(first_pu[1]), int(first_pu[2])) != (500, 1000)  # not the stroke's start again
     assert [int(first_pu[1]), int(first_pu[2])] in zigzag[1:].astype(int).tolist()  # a vertex the pen reached
 
@@ -667,7 +680,7 @@ def test_a_garbled_answer_interrupts_and_the_resume_draws_each_segment_once():
 
 def test_a_wrong_position_at_a_confirmation_is_a_fault_and_the_strokes_are_redrawn():
     dl = drawing(n=6, seed=2)
-    expected, _ = _reference(dl, "sync_strokes=2")
+    expected, _ = _reference(dl, "sync_strokes=2&verify=sync")
     oa = re.compile(rb"-?\d+,-?\d+,\d\r")
     line, answers = bytearray(), []
 
@@ -683,7 +696,7 @@ def test_a_wrong_position_at_a_confirmation_is_a_fault_and_the_strokes_are_redra
                 line.clear()
         return bytes(out)
 
-    rig = Rig(options="sync_strokes=2", mangle=wrong_oa)
+    rig = Rig(options="sync_strokes=2&verify=sync", mangle=wrong_oa)
     with pytest.raises(PlotInterrupted, match=r"OA found the pen at 1,1 after strokes 2\.\.3"):
         rig.display.plot(dl)
     rig.display.resume_after_fault()
