@@ -180,7 +180,7 @@ def write_svg(dl: DisplayList, path: Path) -> None:
 
 
 def paper_of(ident: str) -> DisplayList:
-    """The named simulator's sheet as a DisplayList (HP-GL: plotter units; GRBL, EBB: their Paper in mm)."""
+    """The named simulator's sheet as a DisplayList (HP-GL: plotter units; GRBL, EBB: their Sheet in mm)."""
     device = named_simulator(ident)
     paper = getattr(device, "paper", None)
     return paper.display_list() if hasattr(paper, "display_list") else device.display_list()

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from pixelpen.errors import ConfigError, URLError
 from pixelpen.sim.base import create_simulator
-from pixelpen.sim.plotters.sheet import Paper, blank_sheet, clamp_path, draw_segments
+from pixelpen.sim.plotters.sheet import Sheet, blank_sheet, clamp_path, draw_segments
 
 LO = np.array([0.0, 0.0])
 HI = np.array([100.0, 50.0])
@@ -48,7 +48,7 @@ def test_clamp_path_is_the_pointwise_clamp(v):
 
 
 def test_paper_strokes_dots_and_length():
-    paper = Paper(100, 50, y_down=True)
+    paper = Sheet(100, 50, y_down=True)
     paper.pen_down([1, 2])
     paper.line_to([[1, 2], [4, 6]])
     paper.line_to([[4, 6], [4, 10]])
@@ -66,7 +66,7 @@ def test_paper_strokes_dots_and_length():
 
 def test_paper_image_draws_ink_where_the_strokes_are():
     pytest.importorskip("pixelpen.raster.canvas")
-    paper = Paper(100, 50, y_down=False, pen_colours={1: "red"}, pen_width_mm=0.3)
+    paper = Sheet(100, 50, y_down=False, pen_colours={1: "red"}, pen_width_mm=0.3)
     paper.pen_down([10, 10])
     paper.line_to([[10, 10], [90, 10]])
     paper.pen_up()

@@ -49,7 +49,7 @@ from pixelpen.sim.plotters.ebb.params import parse_version
 from pixelpen.sim.plotters.ebb.pen import CONTACT_DEFAULT
 from pixelpen.sim.plotters.ebb.pen_commands import PenCommands
 from pixelpen.sim.plotters.ebb.query_commands import QueryCommands
-from pixelpen.sim.plotters.sheet import Paper
+from pixelpen.sim.plotters.sheet import Sheet
 
 if TYPE_CHECKING:
     from pixelpen.raster.canvas import Canvas
@@ -88,7 +88,7 @@ class EbbSimulator(MotionCommands, PenCommands, QueryCommands, ConfigCommands):
         return self._pen.commanded_up
 
     @property
-    def paper(self) -> Paper:
+    def paper(self) -> Sheet:
         """The sheet, with the executing move inked up to the current clock time."""
         self._catch_up()
         self._split_ink(self._now)

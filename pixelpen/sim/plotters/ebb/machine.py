@@ -24,7 +24,7 @@ from pixelpen.sim.plotters.ebb.motion import TICK, AccumulatorAxis
 from pixelpen.sim.plotters.ebb.params import parse_version
 from pixelpen.sim.plotters.ebb.pen import CONTACT_DEFAULT, SERVO_BOOT, SERVO_BOOT_OLD, PenServo
 from pixelpen.sim.plotters.ebb.ports import Ports
-from pixelpen.sim.plotters.sheet import Paper, WireStats, clamp_path
+from pixelpen.sim.plotters.sheet import Sheet, WireStats, clamp_path
 
 if TYPE_CHECKING:
     from pixelpen.sim.plotters.ebb.commands import CommandEntry
@@ -117,7 +117,7 @@ class EbbMachine(SimulatedDevice):
         self._servo_defaults = SERVO_BOOT if self.version >= (2, 6, 0) else SERVO_BOOT_OLD
         super().__init__(clock)
         width, height = TRAVEL_MM[machine]
-        self._paper = Paper(width, height, y_down=True, pen_colours={1: pen_colour}, pen_width_mm=pen_width)
+        self._paper = Sheet(width, height, y_down=True, pen_colours={1: pen_colour}, pen_width_mm=pen_width)
         self.stats = WireStats()
         self.log: list[tuple[float, str]] = []
         self.nickname = ""

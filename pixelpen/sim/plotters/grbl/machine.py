@@ -21,7 +21,7 @@ from pixelpen.sim.base import SimulatedDevice
 from pixelpen.sim.plotters.grbl.modal import GcodeState, Persistent
 from pixelpen.sim.plotters.grbl.planner import AxisLimits, Block, Planner
 from pixelpen.sim.plotters.grbl.settings import default_settings
-from pixelpen.sim.plotters.sheet import Paper, WireStats, clamp_path
+from pixelpen.sim.plotters.sheet import Sheet, WireStats, clamp_path
 
 __all__ = ["PEN_MODES", "RESUMED", "ROOM", "SYNC", "GrblMachine", "MovePayload", "Wait"]
 
@@ -63,7 +63,7 @@ class GrblMachine(SimulatedDevice):
         self.pen_threshold = float(pen_threshold)
         self.settings: dict[int, float] = default_settings(size)
         self.persistent = Persistent()
-        self.paper = Paper(size[0], size[1], y_down=False, pen_colours={1: pen_colour}, pen_width_mm=pen_width)
+        self.paper = Sheet(size[0], size[1], y_down=False, pen_colours={1: pen_colour}, pen_width_mm=pen_width)
         self.stats = WireStats()
         self.log: list[tuple[float, str]] = []
         self.planner = Planner(planner - 1, self._limits, lambda: (self.feed_ovr, self.rapid_ovr))
