@@ -35,7 +35,7 @@ def run_optimize(args: argparse.Namespace) -> int:
 
     profile = None
     if args.device is not None:
-        from pixelpen.profiles.model import load_profile
+        from pixelpen.profiles import load_profile
 
         profile = load_profile(args.device)
     dl = read_svg(args.input, tolerance=args.tolerance)
@@ -116,7 +116,7 @@ def _device_preview(args: argparse.Namespace) -> list[str]:
     from pixelpen.devices.plotters.job import plotter_for
     from pixelpen.devices.plotters.layout import CUT_REPORT_MM, Layout, clip_to_device, load_drawing, sheet_to_device
     from pixelpen.display.registry import display_class
-    from pixelpen.profiles.model import load_profile
+    from pixelpen.profiles import load_profile
     from pixelpen.urls import format_url
     from pixelpen.vector.preview import CUT_COLOUR, render_preview
 

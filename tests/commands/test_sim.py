@@ -196,7 +196,7 @@ def test_pty_command_writes_the_paper_on_sigterm(tmp_path):
 def test_grbl_simulator_defaults_are_the_machine_the_driver_plots_for():
     # one machine description: what the GRBL driver asks a sim:grbl for equals what pixelpen sim grbl builds
     from pixelpen.devices.plotters.grbl import GrblPlotter
-    from pixelpen.profiles.model import load_profile
+    from pixelpen.profiles import load_profile
     from pixelpen.urls import parse_url
 
     profile = load_profile("grbl")

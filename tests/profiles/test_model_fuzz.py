@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from pixelpen.profiles.model import MAX_PAPERS, MAX_PENS, load_profile, load_vpype_config
+from pixelpen.profiles import load_profile, load_vpype_config
+from pixelpen.profiles.model import MAX_PAPERS, MAX_PENS
 from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
 from tests.profiles.test_model import VPYPE
 

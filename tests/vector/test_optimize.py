@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pixelpen.profiles.model import load_profile
+from pixelpen.profiles import load_profile
 from pixelpen.vector.dedupe import DuplicateRemoval, remove_duplicates
 from pixelpen.vector.displaylist import DisplayList
 from pixelpen.vector.motion import estimate_time

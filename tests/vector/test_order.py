@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pixelpen.errors import ConfigError
-from pixelpen.profiles.model import load_profile
+from pixelpen.profiles import load_profile
 from pixelpen.vector.displaylist import DisplayList
 from pixelpen.vector.motion import estimate_time
 from pixelpen.vector.order import order_paths, stroke_groups

@@ -358,7 +358,7 @@ def machine_defaults(profile: str = PROFILE) -> dict[str, object]:
 
 @lru_cache(maxsize=8)
 def _machine_defaults(profile: str) -> tuple[tuple[str, object], ...]:
-    from pixelpen.profiles.model import load_profile
+    from pixelpen.profiles import load_profile
 
     prof = load_profile(profile)
     paper = prof.paper(None)
