@@ -96,6 +96,9 @@ class PlotterDisplay(VectorDisplay, ManualControl):
     """The device may rest with the pen lifted at the end of any stroke (False: only after ``_lifted_in_place``)."""
     rests_pen_down_at_start: bool = True
     """The device may rest with the pen lowered on a stroke's first point before drawing it."""
+    restarts_at_home: ClassVar[bool] = False
+    """After a power cycle the device stands at home with its coordinates unchanged (HP-GL): the points it
+    acknowledged before (``_acknowledged``) still hold, and a confirmed resume continues from the last one."""
     reports_position: ClassVar[bool] = False
     """True when the family implements ``_where``; otherwise a resume restarts at the last confirmed stroke
     (strokes drawn since are drawn again) without asking the device."""
@@ -184,6 +187,8 @@ class PlotterDisplay(VectorDisplay, ManualControl):
         """Strokes after which the family lifted the pen without moving (None: unknown, any may be)."""
         self._redo = range(0)
         """Whole strokes a resume draws again before it continues (a damaged stretch)."""
+        self._ack: ResumePoint | None = None
+        """(stroke, vertex) the device last acknowledged reaching (``_acknowledged``), in the job's whole strokes."""
         self._missing: list[tuple[int, np.ndarray]] = []
         """(stroke, points): pieces of strokes the device skipped, found exactly (``_mark_missing``); a resume
         draws them first."""
@@ -374,6 +379,9 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             if state.damaged is not None:
                 self._mark_damaged(range(*state.damaged))
             self._missing = [(int(m[0]), np.asarray(m[1:], np.int64).reshape(-1, 2)) for m in state.missing or []]
+            self._ack = None if state.reached is None else ResumePoint(
+                int(state.reached[0]), int(state.reached[1]),
+                None if len(state.reached) == 2 else (float(state.reached[2]), float(state.reached[3])))
             self._lifts = None if state.lifts is None else set(state.lifts)
             if self._where_found is None and self.reports_position:
                 self._interrupted = True
@@ -394,7 +402,7 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             raise ConfigError("nothing to resume: no interrupted plot in this process and no state file")
         else:
             self._lifts, self._damaged, self._position_lost, self._redo = set(), None, False, range(0)
-            self._missing = []
+            self._missing, self._ack = [], None
         self._job = dl
         self._job_state = PlotState(self.port, fp, len(dl), self._redo.start if self._redo else start.stroke)
         self._cum_mm = cumulative_pen_down_mm(dl)
@@ -453,10 +461,13 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             found = [ResumePoint(first)]  # off every stroke, or several places after the damage: redraw from it on
         if len(found) == 1 and not self._position_lost:
             return found[0]
+        acked = self._acked_since(confirmed) if lost and self.restarts_at_home else None
         if confirmed_by_user:
             self._position_lost = False
             if lost:
                 self._rehomed()
+            if acked is not None:
+                return acked  # the device restarted at home: what it acknowledged is on paper, the rest is not
             return found[0] if found and not lost else ResumePoint(confirmed)
         if confirmed == sent:
             return ResumePoint(confirmed)  # nothing was in doubt
@@ -478,8 +489,10 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             f"Re-home the device or check the sheet, then resume with position_confirmed=True "
             "(pixelpen plot --resume --confirm-position): it continues from stroke "
             f"{found[0].stroke if found else confirmed}"
-            + ("" if found else ", redrawing what was drawn since"),
-            resume_from=found[0].stroke if found else confirmed, strokes=strokes,
+            + ("" if found else f" after vertex {acked.vertex}, the last point the device acknowledged; it may redraw "
+               "the part of the next instruction it drew before it stopped" if acked is not None and acked.vertex
+               else ", redrawing what was drawn since"),
+            resume_from=found[0].stroke if found else acked.stroke if acked is not None else confirmed, strokes=strokes,
         )
 
     def _device_points(self, dl: DisplayList) -> np.ndarray:
@@ -519,6 +532,8 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             self._job_state.position_lost = self._position_lost
             self._job_state.damaged = [self._damaged.start, self._damaged.stop] if self._damaged else None
             self._job_state.missing = [[s, *(int(v) for v in p.ravel())] for s, p in self._missing] or None
+            ack = self._ack
+            self._job_state.reached = None if ack is None else [ack.stroke, ack.vertex, *(ack.at or ())]
             lifts = self._lifts
             self._job_state.lifts = None if lifts is None else sorted(s for s in lifts if s >= self.confirmed)
             at = self._stopped_at
@@ -555,6 +570,22 @@ class PlotterDisplay(VectorDisplay, ManualControl):
         self._drain()
         self._missing = self._missing[len(patches):]
         self._save_state()
+
+    def _acknowledged(self, stroke: int, k: int) -> None:
+        """Families call this when the device acknowledged reaching point k of the points sent for ``stroke``."""
+        if stroke < self.confirmed or self._job is None:
+            return  # a piece drawn again (``_mark_missing``), or already confirmed whole
+        head = self._head
+        if head is not None and head[0] == stroke:
+            short = len(self._job.stroke(stroke)) - len(head[1])
+            self._ack = in_full_stroke(ResumePoint(stroke, k), stroke, short, head[2])
+        else:
+            self._ack = ResumePoint(stroke, k)
+
+    def _acked_since(self, confirmed: int) -> ResumePoint | None:
+        """The last point the device acknowledged, if it is at or after stroke ``confirmed``'s start."""
+        ack = self._ack
+        return None if ack is None or ack.stroke < confirmed else ack
 
     def _mark_missing(self, stroke: int, points: np.ndarray) -> None:
         """Families call this before raising for an error when they know exactly what the device skipped.

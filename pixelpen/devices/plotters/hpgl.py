@@ -86,6 +86,7 @@ class HPGLDisplay(HPGLStream):
     """An HP-GL plotter on RS-232, rfc2217:// or a USB printer-class adapter (see the module docstring)."""
 
     reports_position = True
+    restarts_at_home = True  # power-up: pen at 0,0 and the same absolute coordinates (IN, default P1/P2)
     lifts_after_each_stroke = False  # PUx,y lifts and travels in one instruction; a bare PU; only at sync points
     rests_pen_down_at_start = False  # PD always comes with the vectors it draws
     ident: ClassVar[str] = ""

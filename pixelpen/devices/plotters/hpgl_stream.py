@@ -456,6 +456,8 @@ class HPGLStream(PlotterDisplay):
         assert pts is not None
         end = (int(pts[check.hi, 0]), int(pts[check.hi, 1]))
         if (x, y) == end and bool(pen) == (check.kind == "PD"):
+            if check.stroke is not None:
+                self._acknowledged(check.stroke, check.hi)
             if code:
                 log.warning("%s: %s, but OA shows it drawn as sent (a garbled terminator); nothing is missing",
                             self.profile.name, what)

@@ -44,6 +44,9 @@ class PlotState:
     """[start, stop) of strokes the device reported it did not draw as sent; a resume draws them again."""
     missing: list[list[int]] | None = None
     """[stroke, x0, y0, x1, y1, ...]: pieces of strokes the device skipped; a resume draws them first."""
+    reached: list[float] | None = None
+    """[stroke, vertex(, x, y)]: the last point of the job the device acknowledged reaching (x, y: inside the
+    segment after the vertex, where a resume had started); None: none since the last confirmation."""
     lifts: list[int] | None = None
     """Unconfirmed strokes after which the pen was lifted in place (None: unknown)."""
     stopped_at: list[float] | None = None
@@ -98,6 +101,15 @@ class PlotState:
         ):
             raise ParseError("plot state field 'missing' is not a list of [stroke, x0, y0, ...]", source=str(path),
                              token=state.missing)
+        if state.reached is not None and not (
+            isinstance(state.reached, list) and len(state.reached) in (2, 4)
+            and all(isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in state.reached[:2])
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                    for v in state.reached[2:])
+            and state.reached[0] < state.strokes
+        ):
+            raise ParseError("plot state field 'reached' is not [stroke, vertex(, x, y)]", source=str(path),
+                             token=state.reached)
         if state.lifts is not None and not (
             isinstance(state.lifts, list) and all(isinstance(v, int) and 0 <= v < state.strokes for v in state.lifts)
         ):
