@@ -187,6 +187,8 @@ class PlotterDisplay(VectorDisplay, ManualControl):
         """Strokes after which the family lifted the pen without moving (None: unknown, any may be)."""
         self._redo = range(0)
         """Whole strokes a resume draws again before it continues (a damaged stretch)."""
+        self._ceiling: ResumePoint | None = None
+        """The furthest place the bytes that went out in the current run can draw to (``_written_to``)."""
         self._ack: ResumePoint | None = None
         """(stroke, vertex) the device last acknowledged reaching (``_acknowledged``), in the job's whole strokes."""
         self._missing: list[tuple[int, np.ndarray]] = []
@@ -379,6 +381,9 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             if state.damaged is not None:
                 self._mark_damaged(range(*state.damaged))
             self._missing = [(int(m[0]), np.asarray(m[1:], np.int64).reshape(-1, 2)) for m in state.missing or []]
+            self._ceiling = None if state.written is None else ResumePoint(
+                int(state.written[0]), int(state.written[1]),
+                None if len(state.written) == 2 else (float(state.written[2]), float(state.written[3])))
             self._ack = None if state.reached is None else ResumePoint(
                 int(state.reached[0]), int(state.reached[1]),
                 None if len(state.reached) == 2 else (float(state.reached[2]), float(state.reached[3])))
@@ -403,7 +408,7 @@ class PlotterDisplay(VectorDisplay, ManualControl):
         else:
             self._lifts, self._damaged, self._position_lost, self._redo = set(), None, False, range(0)
             self._missing, self._ack = [], None
-        self._job = dl
+        self._job, self._ack, self._ceiling = dl, None, None  # both describe one run of the job
         self._job_state = PlotState(self.port, fp, len(dl), self._redo.start if self._redo else start.stroke)
         self._cum_mm = cumulative_pen_down_mm(dl)
         self._estimate_s = estimate_seconds(dl, self.profile)
@@ -446,6 +451,7 @@ class PlotterDisplay(VectorDisplay, ManualControl):
         if head is not None:
             short = len(pts[dl.offsets[head[0]] : dl.offsets[head[0] + 1]]) - len(head[1])
             found = [in_full_stroke(r, head[0], short, head[2]) for r in found]
+        found = [r for r in found if self._possible(r, dl)]
         damaged, self._damaged = self._damaged, None
         self._redo = range(0)
         first = max(confirmed, damaged.start) if damaged is not None else confirmed
@@ -532,8 +538,9 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             self._job_state.position_lost = self._position_lost
             self._job_state.damaged = [self._damaged.start, self._damaged.stop] if self._damaged else None
             self._job_state.missing = [[s, *(int(v) for v in p.ravel())] for s, p in self._missing] or None
-            ack = self._ack
+            ack, top = self._ack, self._ceiling
             self._job_state.reached = None if ack is None else [ack.stroke, ack.vertex, *(ack.at or ())]
+            self._job_state.written = None if top is None else [top.stroke, top.vertex, *(top.at or ())]
             lifts = self._lifts
             self._job_state.lifts = None if lifts is None else sorted(s for s in lifts if s >= self.confirmed)
             at = self._stopped_at
@@ -573,14 +580,39 @@ class PlotterDisplay(VectorDisplay, ManualControl):
 
     def _acknowledged(self, stroke: int, k: int) -> None:
         """Families call this when the device acknowledged reaching point k of the points sent for ``stroke``."""
-        if stroke < self.confirmed or self._job is None:
-            return  # a piece drawn again (``_mark_missing``), or already confirmed whole
+        if stroke >= self.confirmed:  # else a piece drawn again (``_mark_missing``), or confirmed whole already
+            self._ack = self._in_job(stroke, k)
+
+    def _written_to(self, stroke: int, k: int) -> None:
+        """Families call this before the bytes up to point k of the points sent for ``stroke`` start going out.
+
+        Nothing after that point can have reached the device: a resume drops the places after it.
+        """
+        if stroke >= self.confirmed:
+            self._ceiling = self._in_job(stroke, k)
+
+    def _in_job(self, stroke: int, k: int) -> ResumePoint:
+        """Point k of the points sent for ``stroke`` (a resumed remainder, ``_head``) as a place in the whole stroke."""
         head = self._head
-        if head is not None and head[0] == stroke:
+        if head is not None and head[0] == stroke and self._job is not None:
             short = len(self._job.stroke(stroke)) - len(head[1])
-            self._ack = in_full_stroke(ResumePoint(stroke, k), stroke, short, head[2])
-        else:
-            self._ack = ResumePoint(stroke, k)
+            return in_full_stroke(ResumePoint(stroke, k), stroke, short, head[2])
+        return ResumePoint(stroke, k)
+
+    def _possible(self, r: ResumePoint, dl: DisplayList) -> bool:
+        """False when place ``r`` lies after everything written (``_written_to``) could have drawn."""
+        c = self._ceiling
+        if c is None:
+            return True
+
+        def drawn(p: ResumePoint) -> tuple[int, int]:
+            if p.at is not None:
+                return p.stroke, p.vertex + 1
+            if p.vertex == 0 and p.stroke > 0:
+                return p.stroke - 1, len(dl.stroke(p.stroke - 1)) - 1  # stroke s not begun: s - 1 done
+            return p.stroke, p.vertex
+
+        return drawn(r) <= drawn(c)
 
     def _acked_since(self, confirmed: int) -> ResumePoint | None:
         """The last point the device acknowledged, if it is at or after stroke ``confirmed``'s start."""

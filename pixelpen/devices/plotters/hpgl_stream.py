@@ -193,11 +193,16 @@ class HPGLStream(PlotterDisplay):
     stall_s: float
     _wire: Wire
 
-    def _send(self, instructions: list[bytes]) -> None:
-        """Write HP-GL instructions under the handshake, recording them in the current sync window."""
+    def _send(self, instructions: list[bytes], before_write: Callable[[int], None] | None = None) -> None:
+        """Write HP-GL instructions under the handshake, recording them in the current sync window.
+
+        ``before_write(j)`` is called before instructions up to ``j`` (exclusive) start going out.
+        """
         w = self._wire
         w.window.extend(instructions)
         if self.handshake != "escb":
+            if before_write is not None:
+                before_write(len(instructions))
             self._write(b"".join(instructions), graphics=True)
             return
         i = 0
@@ -213,6 +218,8 @@ class HPGLStream(PlotterDisplay):
             if j == i:
                 self._wait_for_room(len(instructions[i]))
                 continue
+            if before_write is not None:
+                before_write(j)
             self._write(b"".join(instructions[i:j]), graphics=True)
             i = j
             if self._room() <= LOW_WATER and not self._asking("B"):
@@ -224,7 +231,13 @@ class HPGLStream(PlotterDisplay):
         for instruction, check in items:
             s = check.stroke if check.stroke is not None else 0
             w.syncs.append(SyncPoint(s + 1 if check.last else None, [instruction], s, check=check))
-        self._send([part for instruction, _ in items for part in (instruction, enc.SYNC_REQUEST)])
+
+        def going_out(j: int) -> None:  # parts[:j] may reach the plotter: the last instruction among them bounds it
+            check = items[(j - 1) // 2][1]
+            if check.stroke is not None and check.kind != "SP":
+                self._written_to(check.stroke, check.hi)
+
+        self._send([part for instruction, _ in items for part in (instruction, enc.SYNC_REQUEST)], going_out)
 
     def _wait_for_room(self, need: int) -> None:
         self._wait(lambda: self._room() >= need, "waiting for room in the plotter's buffer", poll=POLL_S, backoff=True)

@@ -47,6 +47,8 @@ class PlotState:
     reached: list[float] | None = None
     """[stroke, vertex(, x, y)]: the last point of the job the device acknowledged reaching (x, y: inside the
     segment after the vertex, where a resume had started); None: none since the last confirmation."""
+    written: list[float] | None = None
+    """[stroke, vertex(, x, y)]: the furthest place the bytes sent in the last run can draw to (None: unknown)."""
     lifts: list[int] | None = None
     """Unconfirmed strokes after which the pen was lifted in place (None: unknown)."""
     stopped_at: list[float] | None = None
@@ -101,15 +103,17 @@ class PlotState:
         ):
             raise ParseError("plot state field 'missing' is not a list of [stroke, x0, y0, ...]", source=str(path),
                              token=state.missing)
-        if state.reached is not None and not (
-            isinstance(state.reached, list) and len(state.reached) in (2, 4)
-            and all(isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in state.reached[:2])
-            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-                    for v in state.reached[2:])
-            and state.reached[0] < state.strokes
-        ):
-            raise ParseError("plot state field 'reached' is not [stroke, vertex(, x, y)]", source=str(path),
-                             token=state.reached)
+        for name in ("reached", "written"):
+            place = getattr(state, name)
+            if place is not None and not (
+                isinstance(place, list) and len(place) in (2, 4)
+                and all(isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in place[:2])
+                and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                        for v in place[2:])
+                and place[0] < state.strokes
+            ):
+                raise ParseError(f"plot state field {name!r} is not [stroke, vertex(, x, y)]", source=str(path),
+                                 token=place)
         if state.lifts is not None and not (
             isinstance(state.lifts, list) and all(isinstance(v, int) and 0 <= v < state.strokes for v in state.lifts)
         ):

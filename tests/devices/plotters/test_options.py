@@ -35,7 +35,7 @@ def test_the_help_table_pixelpen_devices_prints_comes_from_the_specs(cls):
 def test_family_options_and_their_defaults():
     assert {s.name: s.default for s in HP7475A.OPTIONS[len(BASE):]} == {
         "handshake": "escb", "reserve": 128, "sync_strokes": 16, "sync_bytes": 512, "velocity": None, "ps": None,
-        "stall": 60.0}
+        "stall": 60.0, "verify": "instruction"}
     assert [s.name for s in GrblPlotter.OPTIONS[len(BASE):]] == [
         "stream", "pen", "pen_up", "pen_down", "dwell", "feed", "rx_buffer", "unlock"]
     assert [s.name for s in AxiDrawPlotter.OPTIONS[len(BASE):]] == ["model", "moves", "pen_up", "pen_down"]
