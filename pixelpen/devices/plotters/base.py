@@ -17,12 +17,19 @@ drawing (a closed stroke seen with the pen up at its start/end, a path that revi
 that the device lost (power loss, reset) raises :class:`PositionUnknown` instead of guessing; a
 resume with ``position_confirmed=True`` then continues from the earliest possible point (the last
 confirmed stroke when nothing is known): it may redraw, it never loses.  A device error in known strokes
-(``_mark_damaged``) has those strokes drawn again whole before the plot goes on from where it stopped.
+(``_mark_damaged``) has those strokes drawn again whole before the plot goes on from where it stopped; one whose
+damage the family measured (``_mark_missing``: the exact piece the device skipped) has only that piece drawn.
+Families also say what the device acknowledged reaching (``_acknowledged``: after a power cycle a device that
+restarts at home, ``restarts_at_home``, continues from there once confirmed) and what went out
+(``_written_to``: no place after it is a candidate for :func:`locate`).
 
 Limits: the strokes in doubt are those sent since the last confirmation (bounded by the family's
 confirmation interval); :func:`locate` costs one pass over their points.  A display opened with an
 unfinished state file asks the device where it stopped before its handshake (HP-GL: at least
 ``hpgl.SETTLE_S`` seconds).
+
+Longer than 600 lines because the resume is one piece of state (confirmed, sent, written, acknowledged,
+damaged, missing, lifts) read and written by the plot loop, the fault handlers and the state file alike.
 
 Beside this module: ``family`` (the device core), ``manual`` (pen up/down, home, motors off), ``resume``
 (DeviceWhere, locate, ResumePoint), ``state`` (the state file, fingerprint), ``progress`` (PlotProgress and
@@ -48,7 +55,7 @@ from pixelpen.devices.plotters.progress import (
     cumulative_pen_down_mm,
     estimate_seconds,
 )
-from pixelpen.devices.plotters.resume import DeviceWhere, ResumePoint, in_full_stroke, locate
+from pixelpen.devices.plotters.resume import DeviceWhere, ResumePoint, in_full_stroke, locate, not_after
 from pixelpen.devices.plotters.state import STATE_VERSION, PlotState, fingerprint, unfinished
 from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.kinds import VectorDisplay
@@ -451,7 +458,9 @@ class PlotterDisplay(VectorDisplay, ManualControl):
         if head is not None:
             short = len(pts[dl.offsets[head[0]] : dl.offsets[head[0] + 1]]) - len(head[1])
             found = [in_full_stroke(r, head[0], short, head[2]) for r in found]
-        found = [r for r in found if self._possible(r, dl)]
+        if self._ceiling is not None:
+            top = self._ceiling
+            found = [r for r in found if not_after(r, top, lambda i: len(dl.stroke(i)))]
         damaged, self._damaged = self._damaged, None
         self._redo = range(0)
         first = max(confirmed, damaged.start) if damaged is not None else confirmed
@@ -599,20 +608,6 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             return in_full_stroke(ResumePoint(stroke, k), stroke, short, head[2])
         return ResumePoint(stroke, k)
 
-    def _possible(self, r: ResumePoint, dl: DisplayList) -> bool:
-        """False when place ``r`` lies after everything written (``_written_to``) could have drawn."""
-        c = self._ceiling
-        if c is None:
-            return True
-
-        def drawn(p: ResumePoint) -> tuple[int, int]:
-            if p.at is not None:
-                return p.stroke, p.vertex + 1
-            if p.vertex == 0 and p.stroke > 0:
-                return p.stroke - 1, len(dl.stroke(p.stroke - 1)) - 1  # stroke s not begun: s - 1 done
-            return p.stroke, p.vertex
-
-        return drawn(r) <= drawn(c)
 
     def _acked_since(self, confirmed: int) -> ResumePoint | None:
         """The last point the device acknowledged, if it is at or after stroke ``confirmed``'s start."""

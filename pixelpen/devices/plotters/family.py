@@ -12,6 +12,11 @@ A plotter family (HPGL, GRBL, EBB) subclasses :class:`PlotterDisplay` and implem
 * ``_device_paused()`` — True while the device's own pause (button, VIEW, paper lever) holds;
 * ``_make_safe()`` — best effort, never raising: stop motion, pen up, park, motors off;
 
+Reporting to the base (optional, see :mod:`~pixelpen.devices.plotters.base`): ``self._mark_damaged(strokes)``
+(drawn again whole), ``self._mark_missing(stroke, points)`` (exactly that piece drawn again),
+``self._acknowledged(stroke, k)`` (the device said it reached point k), ``self._written_to(stroke, k)`` (bytes
+up to point k start going out), ``self._lifted_in_place(stroke)``;
+
 and, with safe defaults (here; the ``_manual_*`` ones in :mod:`~pixelpen.devices.plotters.manual`):
 
 * ``_where()`` — on a fresh link, before ``_connect()``: let the device finish (or discard) what the

@@ -25,6 +25,16 @@ must be the end of the last stroke sent before it; another position is a fault (
 coordinate or a skipped instruction).
 
 
+Checkpoints (option ``verify``, default ``instruction``): every instruction of a stroke (SP, the PU travel,
+each PD list) is followed by ``OA;OE;``.  HP-GL executes on after an erroneous instruction, so a garbled byte
+costs one instruction at most, and its checkpoint tells what of it ran (a PD list stops at the pair before a
+bad one, a Y that lost digits is drawn to first): only the missing piece is drawn again, nothing twice.  An
+error whose OA shows the instruction ran whole (a garbled terminator) is logged and the plot goes on.  The
+answers also prove how far the plotter got: after a power cut (the plotter restarts at home with the same
+coordinates) a confirmed resume continues from the last acknowledged point; only the one instruction under
+way at the cut may be partly drawn again, which the plotter cannot tell.  ``verify=sync`` checks only at sync
+points (fewer bytes; a damaged stretch is drawn again whole).
+
 Streaming, flow control (option ``handshake``), confirmation and the device's errors:
 :mod:`~pixelpen.devices.plotters.hpgl_stream`.
 """

@@ -145,3 +145,15 @@ def in_full_stroke(r: ResumePoint, stroke: int, offset: int, head: ResumePoint) 
         return head  # nothing of the remainder drawn: where the last resume started
     return ResumePoint(stroke, r.vertex + offset, r.at)
 
+
+def not_after(r: ResumePoint, top: ResumePoint, length: Callable[[int], int]) -> bool:
+    """True unless place ``r`` needs more drawing than place ``top`` (``length(s)``: points of stroke s)."""
+
+    def drawn(p: ResumePoint) -> tuple[int, int]:
+        if p.at is not None:
+            return p.stroke, p.vertex + 1
+        if p.vertex == 0 and p.stroke > 0:
+            return p.stroke - 1, length(p.stroke - 1) - 1  # stroke s not begun: stroke s - 1 done
+        return p.stroke, p.vertex
+
+    return drawn(r) <= drawn(top)

@@ -19,6 +19,8 @@ from pixelpen.devices.plotters.base import (
     ResumePoint,
     locate,
 )
+from pixelpen.devices.plotters.resume import not_after
+from pixelpen.devices.plotters.state import unfinished
 from pixelpen.drivers.stream import Link
 from pixelpen.errors import ConfigError, Disconnected, ParseError
 from pixelpen.profiles.model import load_profile
@@ -127,6 +129,22 @@ def test_a_remainder_starts_where_the_pen_stopped():
     assert ResumePoint(5, 0, (4.6, 0.2)).remainder(pts).tolist() == [[5, 0], [10, 0], [10, 10]]
 
 
+def test_a_place_after_what_went_out_is_not_possible():
+    length = {0: 3, 1: 4, 2: 2}.__getitem__
+    top = ResumePoint(1, 2)  # bytes up to stroke 1's vertex 2 went out
+    assert not_after(ResumePoint(1), top, length) and not_after(ResumePoint(1, 2), top, length)
+    assert not_after(ResumePoint(1, 1, (3.0, 4.0)), top, length)  # inside segment 1..2
+    assert not not_after(ResumePoint(1, 2, (3.0, 4.0)), top, length) and not not_after(ResumePoint(2), top, length)
+    assert not_after(ResumePoint(2), ResumePoint(1, 3), length)  # stroke 1 done = stroke 2 not begun
+
+
+def test_pieces_still_missing_keep_a_job_unfinished(tmp_path):
+    path = tmp_path / "s.json"
+    PlotState("x", "f", 3, 3, missing=[[1, 0, 0, 5, 5]], reached=[2, 1], written=[2, 1, 3.5, 4.0]).save(path)
+    state = PlotState.load(path)
+    assert unfinished(path) and state.missing == [[1, 0, 0, 5, 5]] and state.written == [2, 1, 3.5, 4.0]
+
+
 # -- the state file ---------------------------------------------------------------------------------------
 
 
@@ -142,7 +160,9 @@ def test_a_version_1_state_file_still_loads_with_every_unconfirmed_stroke_in_dou
     [({"sent": 9}, "'sent' is out of range"), ({"sent": 1}, "'sent' is out of range"),
      ({"position_lost": "yes"}, "'position_lost' is not true or false"), ({"version": 3}, "not a version-2"),
      ({"start": [9, 0, 0]}, "'start' is not"), ({"start": [1.5, 0, 0]}, "'start' is not"),
-     ({"start": [0, 1]}, "'start' is not")],
+     ({"start": [0, 1]}, "'start' is not"), ({"missing": [[9, 0, 0]]}, "'missing' is not"),
+     ({"missing": [[1, 0]]}, "'missing' is not"), ({"reached": [1]}, "'reached' is not"),
+     ({"written": [1, -1]}, "'written' is not"), ({"written": [7, 0]}, "'written' is not")],
 )
 def test_bad_state_fields_are_named(tmp_path, fields, message):
     path = tmp_path / "s.json"
