@@ -485,7 +485,7 @@ class HPGLStream(PlotterDisplay):
             self._mark_damaged(range(s, s + 1))  # where it stopped fits no single place: the stroke again whole
         else:
             self._mark_missing(s, missing)
-        self._confirm(s + 1)
+            self._confirm(s + 1)  # the rest of it is on paper; the missing piece is kept apart
         raise ProtocolError(
             f"{what}: the plotter stopped its {check.kind} at {x},{y}; "
             + ("the stroke is drawn again" if missing is None else f"the resume draws the {len(missing) - 1} "

@@ -11,6 +11,7 @@ import pytest
 
 import pixelpen
 from pixelpen.devices.plotters.base import PlotState
+from pixelpen.devices.plotters.hpgl_stream import Check, HPGLStream
 from pixelpen.errors import ProtocolError
 from pixelpen.sim.transports.port import open_sim_port
 from pixelpen.vector.displaylist import DisplayList
@@ -131,3 +132,17 @@ def test_a_power_cut_resumes_from_the_last_acknowledged_point():
         assert len(extra) <= longest, f"power_loss_after={at}: {extra}"
         extras += len(extra)
     assert extras <= 1  # verify=sync, resuming from the last confirmed stroke, draws 5 segments again here
+
+
+def test_what_an_instruction_missed_is_read_from_where_it_stopped():
+    pts = np.array([[0, 0], [100, 0], [100, 100], [0, 100], [0, 0]])
+    pd = Check("PD", 3, pts, lo=1, hi=4, last=True)
+    assert HPGLStream._missing_after(pd, (100, 100)).tolist() == pts[2:].tolist()  # pair 3 failed
+    assert HPGLStream._missing_after(pd, (0, 1)).tolist() == pts[2:].tolist()  # pair 3 drawn to 0,1 (Y cut)
+    assert HPGLStream._missing_after(pd, (0, 0)).tolist() == pts.tolist()  # pen down at the end is no damage
+    back = np.array([[0, 0], [100, 0], [100, 100], [100, 0], [200, 0]])  # passes 100,0 twice: which is unknowable
+    assert HPGLStream._missing_after(Check("PD", 3, back, lo=1, hi=4, last=True), (100, 0)) is None
+    assert HPGLStream._missing_after(pd, (55, 55)) is None
+    first = Check("PD", 3, pts, lo=1, hi=2, last=False)  # another PD list follows: it joined 2 to 3
+    assert HPGLStream._missing_after(first, (100, 0)).tolist() == pts[1:4].tolist()
+    assert HPGLStream._missing_after(Check("PU", 3, pts), (7, 7)).tolist() == pts[:2].tolist()
