@@ -34,7 +34,7 @@ import pytest
 if TYPE_CHECKING:
     import numpy as np
 
-    from pixelpen.sim.base import WireDevice
+    from pixelpen.sim.base import StreamDevice
 
 DEFAULT_MODEL = "hp7475a"
 """The model ``sim_plotter`` and ``sim_port`` simulate unless parametrised."""
@@ -81,7 +81,7 @@ class SimPlotter:
         return True
 
     @property
-    def device(self) -> WireDevice:
+    def device(self) -> StreamDevice:
         """The simulated device the application opened (its paper, logs, counters and state)."""
         from pixelpen.sim.base import named_simulator
 

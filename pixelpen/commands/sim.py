@@ -30,7 +30,7 @@ from pathlib import Path
 
 from pixelpen.clock import REAL_CLOCK, SimulatedClock
 from pixelpen.errors import ConfigError, PixelpenError, URLError
-from pixelpen.sim.base import Fault, WireDevice, create_simulator, simulator_models
+from pixelpen.sim.base import Fault, StreamDevice, create_simulator, simulator_models
 from pixelpen.sim.transports.options import TransportOptions, line_baud, split_options
 from pixelpen.sim.transports.port import LinkStats, SimPort
 
@@ -45,9 +45,9 @@ _ERROR_PREFIXES = ("error:", "alarm:", "!")
 
 
 class PacedDevice:
-    """A WireDevice whose handshake line is high only while the device can take another byte (see module doc)."""
+    """A StreamDevice whose handshake line is high only while the device can take another byte (see module doc)."""
 
-    def __init__(self, device: WireDevice) -> None:
+    def __init__(self, device: StreamDevice) -> None:
         self.device = device
         self.model = device.model
         self.clock = device.clock
@@ -111,7 +111,7 @@ def parse_options(items: list[str] | None) -> dict[str, str]:
     return options
 
 
-def open_simulator(model: str, options: dict[str, str], speed: str) -> tuple[WireDevice, TransportOptions]:
+def open_simulator(model: str, options: dict[str, str], speed: str) -> tuple[StreamDevice, TransportOptions]:
     """The simulator of ``model`` on a real or simulated clock, and the line options split from ``options``."""
     known = simulator_models()
     if model.lower() not in known:
@@ -124,7 +124,7 @@ def open_simulator(model: str, options: dict[str, str], speed: str) -> tuple[Wir
     return device, replace(transport, baud=line_baud(device, transport.baud))
 
 
-def device_errors(device: WireDevice, replies: bytes) -> list[str]:
+def device_errors(device: StreamDevice, replies: bytes) -> list[str]:
     """The errors a device reported: its error log, if it keeps one, and error replies on the wire."""
     errors = [f"t={t:.3f}s {kind} error {code}: {what}" for t, kind, code, what in getattr(device, "error_log", [])]
     for line in replies.decode("ascii", "replace").replace("\r", "\n").split("\n"):
@@ -133,7 +133,7 @@ def device_errors(device: WireDevice, replies: bytes) -> list[str]:
     return errors
 
 
-def replay(device: WireDevice, data: bytes, transport: TransportOptions) -> ReplayResult:
+def replay(device: StreamDevice, data: bytes, transport: TransportOptions) -> ReplayResult:
     """Feed ``data`` to ``device`` through a SimPort paced by the device's readiness, then let it finish."""
     port = SimPort(PacedDevice(device), baud=transport.baud, flow="rtscts", faults=transport.faults,
                    tx_buffer=transport.tx_buffer, clock=device.clock)
@@ -162,7 +162,7 @@ def _stop_on_sigterm(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
 
-def run_pty(device: WireDevice, transport: TransportOptions, stop: threading.Event | None = None) -> None:
+def run_pty(device: StreamDevice, transport: TransportOptions, stop: threading.Event | None = None) -> None:
     """Serve ``device`` on a pty (path printed on stdout) until Ctrl-C, SIGTERM or ``stop`` is set."""
     from pixelpen.sim.transports.pty import PtyBridge
 
@@ -185,7 +185,7 @@ def run_pty(device: WireDevice, transport: TransportOptions, stop: threading.Eve
                 signal.signal(signal.SIGTERM, previous)
 
 
-def _counters(device: WireDevice) -> str:
+def _counters(device: StreamDevice) -> str:
     """The device's ``stats`` counters as ``name=value`` text ("none" for a device without them)."""
     stats = getattr(device, "stats", None)
     if not is_dataclass(stats) or isinstance(stats, type):

@@ -23,7 +23,7 @@ DEVICE_FAULTS: Final = {
     "paper_lever_after": Fault.PAPER_LEVER,
     "pause_after": Fault.PAUSE_BUTTON,
 }
-"""URL option -> the fault the device is given (by its name, ``inject("power-loss")``)."""
+"""URL option -> the fault the device is given (``inject(Fault.POWER_LOSS)``)."""
 
 
 @dataclass(frozen=True)
@@ -37,10 +37,10 @@ class Faults:
     paper_lever_after: int | None = None
     pause_after: int | None = None
 
-    def device_faults(self) -> list[tuple[int, str]]:
-        """(byte count, WireDevice fault name) pairs in the order they fire."""
-        pairs = [(getattr(self, key), fault.value) for key, fault in DEVICE_FAULTS.items()]
-        return sorted((n, name) for n, name in pairs if n is not None)
+    def device_faults(self) -> list[tuple[int, Fault]]:
+        """(byte count, fault) pairs in the order they fire (equal counts by the fault's name)."""
+        pairs = [(getattr(self, key), fault) for key, fault in DEVICE_FAULTS.items()]
+        return sorted(((n, f) for n, f in pairs if n is not None), key=lambda pair: (pair[0], pair[1].value))
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,7 @@
 """SimPort: the host-facing end of a simulated device's cable: baud-rate pacing, handshakes, faults, counters.
 
 A :class:`SimPort` plays the host's UART and the cable in front of a
-:class:`~pixelpen.sim.base.WireDevice`.  The pyserial ``sim://`` handler, the pty bridge and the
+:class:`~pixelpen.sim.base.StreamDevice`.  The pyserial ``sim://`` handler, the pty bridge and the
 pyusb printer-class backend all reach their device through one.
 
 Timing.  Every byte takes ``10 / baud`` seconds on the wire (8N1: start + 8 data + stop bits) in
@@ -47,7 +47,7 @@ from typing import Final
 
 from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
 from pixelpen.errors import ConfigError, Disconnected, LinkError, LinkTimeout, URLError
-from pixelpen.sim.base import WireDevice, create_simulator
+from pixelpen.sim.base import Fault, StreamDevice, create_simulator
 from pixelpen.sim.transports.options import (  # re-exported: these lived here before the options had a module
     DEFAULT_BAUD,
     DEVICE_FAULTS,
@@ -98,11 +98,11 @@ class LinkStats:
 
 
 class SimPort:
-    """The host end of a WireDevice's serial line: paced, handshaken, fault-injecting (see module doc)."""
+    """The host end of a StreamDevice's serial line: paced, handshaken, fault-injecting (see module doc)."""
 
     def __init__(
         self,
-        device: WireDevice,
+        device: StreamDevice,
         *,
         baud: int | None = None,
         flow: str = "none",
@@ -342,7 +342,7 @@ class SimPort:
         with self._lock:
             self._run_until(self.clock.now())
             if getattr(self.device, "resets_on_dtr", False):
-                self.device.inject("reset")
+                self.device.inject(Fault.RESET)
                 self._dev_next = self.device.next_event_time()
 
     # -- waiting ----------------------------------------------------------------------------
@@ -515,7 +515,7 @@ def open_sim_port(
     options: Mapping[str, str],
     *,
     clock: Clock | None = None,
-    device: WireDevice | None = None,
+    device: StreamDevice | None = None,
     source: str | None = None,
 ) -> SimPort:
     """Build ``model``'s simulator (or take ``device``) behind a SimPort configured by URL ``options``.

@@ -32,7 +32,7 @@ from types import TracebackType
 
 from pixelpen.clock import Clock, SimulatedClock
 from pixelpen.errors import Disconnected, LinkError, PixelpenError
-from pixelpen.sim.base import WireDevice
+from pixelpen.sim.base import StreamDevice
 from pixelpen.sim.transports.options import Faults
 from pixelpen.sim.transports.port import SimPort
 
@@ -42,11 +42,11 @@ _QUIET = 0.002  # real seconds of silence after which a simulated clock may jump
 
 
 class PtyBridge:
-    """A pty pair whose master end feeds a WireDevice through a SimPort (see the module docstring)."""
+    """A pty pair whose master end feeds a StreamDevice through a SimPort (see the module docstring)."""
 
     def __init__(
         self,
-        device: WireDevice,
+        device: StreamDevice,
         *,
         flow: str = "none",
         baud: int | None = None,

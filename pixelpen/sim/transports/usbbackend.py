@@ -1,4 +1,4 @@
-"""A pyusb backend presenting one USB printer-class device (a USB-parallel adapter) in front of a WireDevice.
+"""A pyusb backend presenting one USB printer-class device (a USB-parallel adapter) in front of a StreamDevice.
 
 ``usb.core.find(backend=PrinterClassBackend(device))`` finds a full-speed device with one
 configuration and one interface of class 7 (printer), subclass 1, protocol 2 (bidirectional: bulk
@@ -33,7 +33,7 @@ import usb.core
 
 from pixelpen.clock import Clock
 from pixelpen.errors import Disconnected, LinkTimeout
-from pixelpen.sim.base import WireDevice
+from pixelpen.sim.base import StreamDevice
 from pixelpen.sim.transports.options import Faults
 from pixelpen.sim.transports.port import SimPort
 
@@ -51,7 +51,7 @@ class PrinterClassBackend(usb.backend.IBackend):
 
     def __init__(
         self,
-        device: WireDevice,
+        device: StreamDevice,
         *,
         vid: int = 0x067B,
         pid: int = 0x2305,

@@ -26,7 +26,9 @@ def test_every_transport_option_is_one_spec_with_help_and_the_documented_default
 
 def test_device_faults_are_fault_members_and_fire_in_count_order():
     assert set(DEVICE_FAULTS.values()) == {Fault.POWER_LOSS, Fault.PAPER_LEVER, Fault.PAUSE_BUTTON}
-    assert Faults(pause_after=5, power_loss_after=2).device_faults() == [(2, "power-loss"), (5, "pause-button")]
+    assert Faults(pause_after=5, power_loss_after=2).device_faults() == [(2, Fault.POWER_LOSS), (5, Fault.PAUSE_BUTTON)]
+    both = Faults(pause_after=3, paper_lever_after=3).device_faults()
+    assert both == [(3, Fault.PAPER_LEVER), (3, Fault.PAUSE_BUTTON)]
 
 
 def test_the_old_import_place_still_works():

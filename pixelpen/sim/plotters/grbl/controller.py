@@ -150,7 +150,7 @@ class GrblSimulator(SystemCommands, RealtimeCommands):
         """The operator pushes the stopped carriage by hand to the machine origin (where ``$H`` would leave it).
 
         A physical act, not a command: GRBL does not see it, its machine position stays what it was (a power-up
-        or ``inject("reset")`` there makes it 0 again).  Refused while the machine moves or the pen is down.
+        or ``inject(Fault.RESET)`` there makes it 0 again).  Refused while the machine moves or the pen is down.
         """
         self._catch_up()
         if self._state_kind() not in ("idle", "alarm", "sleep"):

@@ -9,7 +9,7 @@ The URL describes the simulated line, so its ``baud`` and ``flow`` win over the 
 ``baudrate``/``rtscts``/``xonxoff`` (which are set to match); without them the constructor's values
 are used, and changing ``baudrate``/``rtscts``/``xonxoff`` on the open port reconfigures the line.
 Extra constructor keywords: ``clock=`` (the clock the simulator runs on; wins over ``speed``) and
-``device=`` (a ready-made WireDevice instead of the factory).  ``inter_byte_timeout`` is ignored.
+``device=`` (a ready-made StreamDevice instead of the factory).  ``inter_byte_timeout`` is ignored.
 
 Closing the port stops only a device it built: a ``device=`` passed in, or a named instance
 (``id=NAME``, closed by :func:`pixelpen.sim.base.forget_simulator`), outlives the port, so a
@@ -30,7 +30,7 @@ from serial.serialutil import PortNotOpenError, SerialBase, SerialException, Ser
 
 from pixelpen.clock import Clock
 from pixelpen.errors import Disconnected, LinkError, LinkTimeout, URLError
-from pixelpen.sim.base import WireDevice, simulator_models
+from pixelpen.sim.base import StreamDevice, simulator_models
 from pixelpen.sim.transports.options import split_options
 from pixelpen.sim.transports.port import SimPort, open_sim_port
 from pixelpen.urls import parse_url
@@ -78,7 +78,9 @@ def _as_serial_errors() -> Iterator[None]:
 class Serial(SerialBase):
     """A pyserial port whose far end is a simulated device (see the module docstring)."""
 
-    def __init__(self, *args: Any, clock: Clock | None = None, device: WireDevice | None = None, **kwargs: Any) -> None:
+    def __init__(
+        self, *args: Any, clock: Clock | None = None, device: StreamDevice | None = None, **kwargs: Any
+    ) -> None:
         self._sim_clock = clock
         self._given_device = device
         self._owns_device = False
@@ -133,7 +135,7 @@ class Serial(SerialBase):
                 self.sim_port.close(close_device=self._owns_device)
 
     @property
-    def sim_device(self) -> WireDevice:
+    def sim_device(self) -> StreamDevice:
         """The simulated device behind this port (for tests and previews)."""
         if self.sim_port is None:
             raise PortNotOpenError()

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from pixelpen.clock import SimulatedClock
 from pixelpen.errors import ConfigError, URLError
 from pixelpen.options import describe
-from pixelpen.sim.base import Fault, SimulatedDevice, WireDevice, simulator_factory
+from pixelpen.sim.base import Fault, SimulatedDevice, StreamDevice, simulator_factory
 from pixelpen.sim.plotters.ebb.board import OPTIONS, EbbSimulator, create
 from pixelpen.sim.plotters.ebb.pen import CONTACT_DEFAULT
 from tests.sim.fakes import DeviceRig
@@ -32,7 +32,7 @@ class Rig(DeviceRig):
 
 def test_is_a_wire_device():
     rig = Rig()
-    assert isinstance(rig.dev, WireDevice) and rig.dev.model == "axidraw"
+    assert isinstance(rig.dev, StreamDevice) and rig.dev.model == "axidraw"
     assert rig.dev.take_output() == b""  # the EBB says nothing until asked
 
 

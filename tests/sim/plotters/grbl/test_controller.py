@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from pixelpen.clock import SimulatedClock
 from pixelpen.errors import ConfigError, URLError
-from pixelpen.sim.base import WireDevice, create_simulator
+from pixelpen.sim.base import StreamDevice, create_simulator
 from pixelpen.sim.plotters.grbl.controller import GrblSimulator, fmt_float
 from tests.sim.fakes import DeviceRig
 
@@ -35,7 +35,7 @@ class Rig(DeviceRig):
 def test_is_a_wire_device_with_a_welcome():
     clock = SimulatedClock()
     dev = GrblSimulator(clock)
-    assert isinstance(dev, WireDevice) and dev.model == "grbl" and dev.clock is clock
+    assert isinstance(dev, StreamDevice) and dev.model == "grbl" and dev.clock is clock
     assert dev.take_output() == WELCOME
     assert dev.ready_to_receive
 

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from pixelpen.clock import SimulatedClock
 from pixelpen.errors import ConfigError, URLError
-from pixelpen.sim.base import WireDevice, create_simulator, simulator_models
+from pixelpen.sim.base import StreamDevice, create_simulator, simulator_models
 from pixelpen.sim.plotters.hpgl.plotter import HPGLPlotter
 
 UNIT_MM = 0.02488  # 7475A plotter unit (plotters.md §1.1, 7475A manual p. 22)
@@ -67,7 +67,7 @@ def test_models_are_registered_and_are_wire_devices():
     assert {"hp7475a", "hp7550a", "hp7440a"} <= set(simulator_models())
     for model in ("hp7475a", "hp7550a", "hp7440a"):
         plotter, _ = make(model)
-        assert isinstance(plotter, WireDevice) and plotter.model == model
+        assert isinstance(plotter, StreamDevice) and plotter.model == model
 
 
 def test_unknown_and_bad_options_name_the_problem():
