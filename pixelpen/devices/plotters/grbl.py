@@ -54,6 +54,7 @@ from pixelpen.devices.plotters.grbl_encode import (
     GrblStatus,
     PathTrack,
     PenMotion,
+    SentLeg,
     number,
     stroke_lines,
 )
@@ -169,6 +170,13 @@ class GrblPlotter(GrblStream):
         self._idle_polls = 0
         self._stale = False
         self._stale_seen = 0
+        self.legs: list[SentLeg] = []
+        """The motion lines sent and not yet confirmed, to explain a report off the path by a garbled line."""
+        self._garbled: SentLeg | None = None
+        """The line that ran garbled or was rejected: the resume draws again from its start."""
+        self._fault_hold = False
+        self._unverified: tuple[int, int | None] | None = None
+        """(strokes done, track point) of a confirming ok whose position check is still to come."""
 
     # -- URL hooks -------------------------------------------------------------------------------
     @classmethod
@@ -246,6 +254,9 @@ class GrblPlotter(GrblStream):
         for line in ["G21 G90", *self.pen_motion.up_lines()]:
             self._send_line(line, wait=True)
         self.track.start(self._work_units(self.query_status()))
+        self.legs = []
+        self._fault_hold = False
+        self._unverified = None
         self._tracking = True
 
     def _send_stroke(self, index: int, points: np.ndarray, pen: int) -> None:
@@ -258,8 +269,10 @@ class GrblPlotter(GrblStream):
         joins = self.pen_motion.joins
         lifting, self._lift_pending = self._lift_pending, None
         lines = stroke_lines(pts, self.coordinate_format, self.pen_motion, self.feed, lift_first=lifting is not None)
+        before = self.track.end
         travel = self.track.append(tuple(pts[0].tolist()), False)
         done = lifting[0] if lifting else None
+        self._leg(index, None, lines[0], before, pts[0], False)
         self._send_line(lines[0], Tag(index, None, done, lifting[1] if lifting else None))
         if joins:
             vertices = range(1, len(pts)) if len(pts) > 1 else range(1)
@@ -272,6 +285,7 @@ class GrblPlotter(GrblStream):
         for line, k in zip(lines[first:], vertices, strict=False):
             if k:
                 self.track.append(tuple(pts[k].tolist()), True)
+                self._leg(index, k, line, pts[k - 1], pts[k], True)
             self._send_line(line, Tag(index, k))
         end = self.track.append(tuple(pts[-1].tolist()), False) if len(pts) > 1 else travel
         if joins:
@@ -281,6 +295,11 @@ class GrblPlotter(GrblStream):
         for line in lines[len(lines) - len(up):-1]:
             self._send_line(line, Tag(index, len(pts) - 1))
         self._send_line(lines[-1], Tag(index, len(pts) - 1, index, end))
+
+    def _leg(self, stroke: int, vertex: int | None, line: str, start: Any, end: np.ndarray, down: bool) -> None:
+        """Record a motion line before it goes out (``start`` None: from the end point)."""
+        a = tuple(float(v) for v in (end if start is None else start))
+        self.legs.append(SentLeg(stroke, vertex, line, (a[0], a[1]), (float(end[0]), float(end[1])), down))
 
     def _poll(self) -> None:
         link = self._link()
@@ -297,6 +316,8 @@ class GrblPlotter(GrblStream):
             self._lifted_in_place(index)
             self._send_line(" ".join(self.pen_motion.up_lines()), Tag(index, None, index, end))
         self._wait_acks()
+        if self._unverified is not None:
+            self.query_status()  # the last confirmation's position check
 
     def _select_pen(self, pen: int) -> None:
         raise ConfigError(f"grbl: the plotter holds one pen; cannot select pen {pen}")
@@ -355,6 +376,8 @@ class GrblPlotter(GrblStream):
         link.write(REALTIME_STATUS)
         lost, self._lost = self._lost, None
         reached, self._reached = self._reached, None
+        garbled, self._garbled = self._garbled, None
+        self._unverified = None
         self._stale = True  # acknowledgements of the broken connection's lines may still arrive
         try:
             first = self._first_answer(max(self.timeout, BOOT_WAIT_S))
@@ -381,9 +404,27 @@ class GrblPlotter(GrblStream):
         status = self.query_status()
         steps = min(settings.get(100, math.inf), settings.get(101, math.inf))
         tolerance_mm = 0.0015 + (0.5 * math.sqrt(2.0) / steps if math.isfinite(steps) and steps > 0 else 0.0)
-        return DeviceWhere(self._work_units(status), self._pen_down_of(status),
-                             tolerance=max(0.5, tolerance_mm / self.profile.unit_mm), reached=reached,
-                             detail=f"GRBL {status.state} at {self._work_units(status)} units")
+        tolerance = max(0.5, tolerance_mm / self.profile.unit_mm)
+        at = self._work_units(status)
+        if garbled is not None and not self._ran_before(garbled, at, tolerance):
+            start = garbled.vertex is None or garbled.vertex <= 1  # the stroke's first leg: the whole stroke again
+            point = garbled.end if garbled.vertex is None else garbled.start
+            return DeviceWhere(point, not start, tolerance=tolerance,
+                               detail=f"GRBL {status.state} at {at} units, off the path after the garbled line "
+                               f"{garbled.line!r}: drawn as sent up to {point}")
+        return DeviceWhere(at, self._pen_down_of(status), tolerance=tolerance, reached=reached,
+                           detail=f"GRBL {status.state} at {at} units")
+
+    def _ran_before(self, garbled: SentLeg, at: tuple[float, float], tolerance: float) -> bool:
+        """True when GRBL stopped at ``at`` on the path sent before the ``garbled`` line (it never reached it)."""
+        q = np.asarray(at, dtype=np.float64)
+        for leg in self.legs[: self.legs.index(garbled)] if garbled in self.legs else []:
+            a, b = np.asarray(leg.start), np.asarray(leg.end)
+            d = b - a
+            t = 0.0 if not d.any() else min(1.0, max(0.0, float((q - a) @ d) / float(d @ d)))
+            if float(np.hypot(*(a + t * d - q))) <= tolerance:
+                return True
+        return False
 
     def _pen_position(self) -> tuple[float, float] | None:
         """Where the pen will be once everything sent has run (device units), the start of the next travel."""
@@ -403,6 +444,7 @@ class GrblPlotter(GrblStream):
             return
         self._manual_pen(False)
         x, y = self.coordinate_format.format(np.asarray(self.profile.home, dtype=np.float64))
+        self.track.append(tuple(float(v) for v in self.profile.home[:2]), False)  # type: ignore[arg-type]
         self._send_line(f"G0 X{x} Y{y}", wait=True)
         self._send_line("G4 P0", wait=True)  # acknowledged once the carriage is there
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import re
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 from decimal import Decimal
 
@@ -29,11 +30,15 @@ __all__ = [
     "GrblStatus",
     "PathTrack",
     "PenMotion",
+    "SentLeg",
+    "explain_position",
+    "garbled_variants",
     "number",
     "parse_code",
     "parse_status",
     "parse_welcome",
     "stroke_lines",
+    "words_of",
 ]
 
 REALTIME_STATUS = b"?"
@@ -454,3 +459,94 @@ class PathTrack:
             return (f"the pen is {'down' if pen_down else 'up'} along a leg the host sent with the pen "
                     f"{'up' if pen_down else 'down'}")
         return None
+
+
+@dataclass(frozen=True)
+class SentLeg:
+    """One motion line sent in a plot: it moves from ``start`` to ``end`` (device units) with the pen ``down``.
+
+    ``stroke``/``vertex`` say what it reaches (vertex None: the travel to the stroke's first point); ``pen`` is
+    the S value (servo) the line itself sets, None when it sets none.
+    """
+
+    stroke: int
+    vertex: int | None
+    line: str
+    start: tuple[float, float]
+    end: tuple[float, float]
+    down: bool
+
+
+_WORD = re.compile(r"([A-Z])(-?(?:[0-9]+\.?[0-9]*|\.[0-9]+))")
+
+
+def words_of(line: str) -> dict[str, list[float]] | None:
+    """The words of a G-code line as GRBL reads them (spaces ignored), None when GRBL would reject its syntax."""
+    text = line.replace(" ", "")
+    out: dict[str, list[float]] = {}
+    pos = 0
+    for m in _WORD.finditer(text):
+        if m.start() != pos:
+            return None
+        out.setdefault(m[1], []).append(float(m[2]))
+        pos = m.end()
+    if pos != len(text) or any(len(v) > 1 for k, v in out.items() if k not in "GM"):
+        return None
+    return out
+
+
+def garbled_variants(line: str) -> list[dict[str, list[float]]]:
+    """The valid lines GRBL may have run instead of ``line`` when one of its bytes was dropped on the wire.
+
+    A byte >= 0x80 is taken for an unknown real-time command and discarded (a bit flip of an ASCII byte),
+    so what GRBL parses is ``line`` with one character missing; only the variants that still parse and mean
+    something else are kept.
+    """
+    sent = words_of(line)
+    seen: list[dict[str, list[float]]] = []
+    for i in range(len(line)):
+        words = words_of(line[:i] + line[i + 1:])
+        if (words is not None and words != sent and words not in seen
+                and set(words.get("G", [])) <= {0, 1, 4}
+                and set(words.get("M", [])) <= {3, 4, 5}):
+            seen.append(words)
+    return seen
+
+
+def explain_position(
+    legs: list[SentLeg], position: tuple[float, float], pen_down: bool | None, tolerance: float,
+    unit_mm: float, is_down: Callable[[float], bool],
+) -> int | None:
+    """The first of ``legs`` whose line, with one byte dropped, puts the pen at ``position`` (pen ``pen_down``).
+
+    A changed target moves the pen off the path until the next line's target (tried first, on every leg: the pen
+    may lift or drop at the wrong vertex); a changed S value lifts or lowers the pen along this leg and the legs
+    after it that set none.  None when no single dropped byte explains it.
+    """
+    q = np.asarray(position, dtype=np.float64)
+
+    def on(a: tuple[float, float], b: tuple[float, float]) -> bool:
+        pa, pb = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+        d = pb - pa
+        dd = float(d @ d)
+        t = 0.0 if dd == 0 else min(1.0, max(0.0, float((q - pa) @ d) / dd))
+        return float(np.hypot(*(pa + t * d - q))) <= tolerance
+
+    for i, leg in enumerate(legs):  # a changed target first: it explains a position off the path as it is
+        for words in garbled_variants(leg.line):
+            target = tuple(words[a][0] / unit_mm if a in words else e for a, e in zip("XY", leg.end, strict=True))
+            if target != leg.end and (on(leg.start, target) or (i + 1 < len(legs) and on(target, legs[i + 1].end))):
+                return i
+    for i, leg in enumerate(legs):
+        for words in garbled_variants(leg.line):
+            x, y = (words[a][0] / unit_mm if a in words else e for a, e in zip("XY", leg.end, strict=True))
+            down = is_down(words["S"][0]) if "S" in words else leg.down
+            if "M" in words and 5 in words["M"]:
+                down = False
+            if (x, y) == leg.end and down != leg.down and pen_down == down:
+                for later in legs[i:]:
+                    if later is not leg and "S" in later.line:
+                        break
+                    if on(later.start, later.end) and later.down != down:
+                        return i
+    return None

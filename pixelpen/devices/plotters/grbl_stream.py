@@ -26,6 +26,8 @@ from pixelpen.devices.plotters.grbl_encode import (
     GrblStatus,
     PathTrack,
     PenMotion,
+    SentLeg,
+    explain_position,
     parse_code,
     parse_status,
     parse_welcome,
@@ -37,14 +39,17 @@ log = logging.getLogger("pixelpen.devices.plotters.grbl")  # the family's one lo
 
 STATUS_INTERVAL_S = 0.2
 """Least time between two ``?`` polls for pause detection (interface.md: poll at most 5 Hz)."""
+TRACK_POLL_S = 0.5
+"""Time between two ``?`` while waiting for GRBL during a plot: each report is checked against the path sent."""
 IDLE_POLLS_BEFORE_LOSS = 3
 """Status polls that find GRBL idle with lines unacknowledged before the bytes are declared lost."""
 STOP_WAIT_S = 10.0
 """Longest wait for a feed hold to bring the carriage to rest when stopping safely."""
 SETTLE_LIMIT_S = 120.0
 """Longest wait, after a reconnect, for GRBL to finish the lines it still held from the broken connection."""
-TRACK_TOLERANCE_MM = 0.1
-"""How far a status report's position may lie off the path sent before the driver calls it a corrupted line."""
+TRACK_TOLERANCE_MM = 0.03
+"""How far a status report's position may lie off the path sent before the driver calls it a corrupted line
+(GRBL steps along a straight leg within one step of it: 0.0125 mm at 80 steps/mm)."""
 GARBLE_ERRORS = frozenset({1, 2, 3, 11, *range(20, 39)})
 """``error:N`` codes a line pixelpen wrote can only earn by being garbled on the wire (syntax, words): said so."""
 POSITION_LOSING_ALARMS = frozenset({1, 3, 6, 7, 8, 9, 10})
@@ -82,6 +87,10 @@ class GrblStream(PlotterDisplay):
     _idle_polls: int
     _stale: bool
     _stale_seen: int
+    legs: list[SentLeg]
+    _unverified: tuple[int, int | None] | None
+    _garbled: SentLeg | None
+    _fault_hold: bool
 
     def _wait_acks(self) -> None:
         while len(self.counter):
@@ -147,8 +156,12 @@ class GrblStream(PlotterDisplay):
             self._wait_acks()
 
     def _wait_reply(self) -> None:
-        """Handle one line from GRBL; on silence probe with ``?`` and keep waiting while it works or holds."""
-        line = self._read_line(self.timeout)
+        """Handle one line from GRBL; on silence probe with ``?`` and keep waiting while it works or holds.
+
+        While a plot is tracked, GRBL is asked for its status every TRACK_POLL_S meanwhile: each report is
+        checked against the path sent, so a garbled line is noticed while it runs, not only at the stroke's end.
+        """
+        line = self._read_polling(self.timeout)
         if line is not None:
             self._dispatch(line)
             return
@@ -167,6 +180,26 @@ class GrblStream(PlotterDisplay):
                     f"(oldest {self.counter.oldest()!r}): bytes were lost on the line"
                 )
 
+    def _read_polling(self, timeout: float) -> str | None:
+        """The next line other than a status report (reports are handled), polling ``?`` while tracking a plot."""
+        if not self._tracking:
+            return self._read_line(timeout)
+        deadline = self.clock.now() + timeout
+        while True:
+            now = self.clock.now()
+            if now >= deadline:
+                return None
+            if now - self._status_asked >= TRACK_POLL_S:
+                self._link().write(REALTIME_STATUS)
+                self._status_asked = now
+            line = self._read_line(max(0.001, min(deadline, self._status_asked + TRACK_POLL_S) - now),
+                                   part_ok=True)  # a line still arriving is read on the next turn
+            if line is None:
+                continue
+            if not line.startswith("<"):
+                return line
+            self._dispatch(line)
+
     def _dispatch(self, line: str) -> None:
         """Act on one line GRBL sent: acknowledgements, errors, alarms, status reports, messages, restarts."""
         if self._stale and (line == "ok" or line.startswith(("error:", "ALARM:"))):
@@ -179,15 +212,22 @@ class GrblStream(PlotterDisplay):
                 if tag.vertex is not None:
                     self._reached = (tag.stroke, tag.vertex)
                 if tag.done is not None:
-                    self._confirm(tag.done + 1)
-                    self.track.done_until(tag.track)  # type: ignore[arg-type]
-                    self._link().write(REALTIME_STATUS)  # verify the position at every confirmation point
+                    # confirmed once a report after this ok (GRBL ran the stroke, then the dwell) shows the pen
+                    # where the stroke ended: a garbled last vertex is caught before the stroke counts as drawn
+                    self._unverified = (tag.done + 1, tag.track) if self._tracking else None
+                    if self._unverified is None:
+                        self._confirm(tag.done + 1)
+                    self._link().write(REALTIME_STATUS)
         elif line.startswith("error:"):
             code = parse_code(line)
             sent, tag = self.counter.acknowledged()
             garbled = code in GARBLE_ERRORS and self._tracking
             self._stop_motion()  # the lines behind the rejected one would draw a shortcut
-            if isinstance(tag, Tag):
+            leg = next((g for g in self.legs if isinstance(tag, Tag) and g.line == sent
+                        and (g.stroke, g.vertex) == (tag.stroke, tag.vertex)), None)
+            if leg is not None:
+                self._garbled = leg  # it never ran: the resume draws from its start on
+            elif isinstance(tag, Tag):
                 self._mark_damaged(range(tag.stroke, tag.stroke + 1))  # redrawn whole: part of it never ran
             raise ProtocolError(
                 f"GRBL rejected a line: error:{code} {ERROR_CODES.get(code, 'unknown error code')}"
@@ -215,14 +255,17 @@ class GrblStream(PlotterDisplay):
         else:
             log.warning("grbl: unexpected line %r", line)
 
-    def _read_line(self, timeout: float) -> str | None:
-        """One non-empty line from GRBL without its ending, or None when ``timeout`` passed in silence."""
+    def _read_line(self, timeout: float, *, part_ok: bool = False) -> str | None:
+        """One non-empty line from GRBL without its ending, or None when ``timeout`` passed in silence.
+
+        A line still arriving when ``timeout`` passes raises LinkTimeout, or (``part_ok``) stays buffered: None.
+        """
         link = self._link()
         while True:
             try:
                 raw = link.read_until(b"\n", timeout=timeout, max_size=256)
             except LinkTimeout as exc:
-                if getattr(exc, "partial", b""):
+                if getattr(exc, "partial", b"") and not part_ok:
                     raise
                 return None
             text = raw.decode("ascii", "replace").strip()
@@ -235,24 +278,41 @@ class GrblStream(PlotterDisplay):
         self.last_status = status
         if status.wco is not None:
             self._wco = np.asarray(status.wco[:3] + (0.0,) * (3 - len(status.wco[:3])), dtype=np.float64)
-        stopped = status.held and status.substate in (0, 1, None)
-        if stopped != self._held and (stopped or not status.held):
+        # paused once the carriage rests: Hold:0 (Hold:1 still decelerates, and GRBL ignores a cycle start then),
+        # Door:0/1 (closed ready to resume / stopped, door ajar)
+        stopped = status.held and status.substate in ((0, None) if status.state == "Hold" else (0, 1, None))
+        if stopped != self._held and (stopped or not status.held) and not self._fault_hold:
             self._held = stopped
             self._pause_changed(stopped)
         if self._tracking and status.state in ("Run", "Idle", "Hold", "Jog"):
-            why = self.track.check(self._work_units(status), self._pen_down_of(status),
-                                   TRACK_TOLERANCE_MM / self.profile.unit_mm)
+            where, pen = self._work_units(status), self._pen_down_of(status)
+            tolerance = TRACK_TOLERANCE_MM / self.profile.unit_mm
+            why = self.track.check(where, pen, tolerance)
             if why is not None:
                 self._stop_motion()
-                self._mark_damaged(range(self.confirmed, max(self._sent_end, self.confirmed + 1)))
+                first = explain_position(self.legs, where, pen, tolerance, self.profile.unit_mm, self._s_is_down)
+                if first is not None:
+                    self._garbled = self.legs[first]  # that line ran garbled: drawn right up to its start
+                else:
+                    self._mark_damaged(range(self.confirmed, max(self._sent_end, self.confirmed + 1)))
+                self._unverified = None
                 raise LinkError(
                     f"grbl: position check failed: {why} (GRBL reports {status.state} at {self._work_units(status)} "
                     "units): a line was changed on the wire (a dropped byte), so the plot stops here"
                 )
+            if self._unverified is not None:
+                done, track = self._unverified
+                self._unverified = None
+                self._confirm(done)
+                self.track.done_until(track)  # type: ignore[arg-type]
+                self.legs = [g for g in self.legs if g.stroke >= done]
 
     def _stop_motion(self) -> None:
-        """Feed hold now, so nothing more is drawn after a fault (the reconnect's soft reset clears the rest)."""
+        """Feed hold now, so nothing more is drawn after a fault (the reconnect's soft reset clears the rest).
+
+        The hold is the driver's own: it is not announced as the device's pause (nobody should resume it)."""
         self._tracking = False
+        self._fault_hold = True
         link = self.link
         if link is not None and not link.closed:
             try:
@@ -285,8 +345,13 @@ class GrblStream(PlotterDisplay):
             return z < (motion.up + motion.down) / 2  # type: ignore[operator]
         if status.spindle is None:
             return None
+        return self._s_is_down(status.spindle)
+
+    def _s_is_down(self, s: float) -> bool:
+        """Whether a servo pen is down at spindle value ``s`` (nearer the pen-down S value than the pen-up one)."""
+        motion = self.pen_motion
         up = 0.0 if motion.up is None else motion.up
-        return status.spindle > 0 and abs(status.spindle - motion.down) < abs(status.spindle - up)
+        return s > 0 and abs(s - motion.down) < abs(s - up)
 
     def _settled_status(self) -> GrblStatus:
         """Poll until GRBL has run all it received: a completed hold, or at rest and silent for longer than a dwell.
@@ -302,8 +367,8 @@ class GrblStream(PlotterDisplay):
         while True:
             status = self.query_status()
             now = self.clock.now()
-            if status.held and status.substate in (0, 1):
-                return status  # nothing runs before a resume, and the reconnect's soft reset discards it
+            if status.held and status.substate in ((0,) if status.state == "Hold" else (0, 1)):
+                return status  # at rest; nothing runs before a resume, and the reconnect's soft reset discards it
             if status.busy or self._stale_seen != seen:
                 since, seen = None, self._stale_seen
             elif since is None:
