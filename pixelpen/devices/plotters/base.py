@@ -458,9 +458,13 @@ class PlotterDisplay(VectorDisplay, ManualControl):
         if head is not None:
             short = len(pts[dl.offsets[head[0]] : dl.offsets[head[0] + 1]]) - len(head[1])
             found = [in_full_stroke(r, head[0], short, head[2]) for r in found]
+        length = lambda i: len(dl.stroke(i))
         if self._ceiling is not None:
             top = self._ceiling
-            found = [r for r in found if not_after(r, top, lambda i: len(dl.stroke(i)))]
+            found = [r for r in found if not_after(r, top, length)]
+        if self._ack is not None:  # the device said it got there: no place before it
+            floor = self._ack
+            found = [r for r in found if not_after(floor, r, length)]
         damaged, self._damaged = self._damaged, None
         self._redo = range(0)
         first = max(confirmed, damaged.start) if damaged is not None else confirmed

@@ -345,9 +345,10 @@ class HPGLDisplay(HPGLStream):
         """Let the plotter finish what the old connection left, drop a half instruction, ask OS and OA."""
         link = self._require_link()
         link.reset_input()
+        pending = [p.check for p in self._wire.syncs if p.check is not None and p.check.kind != "SP"]
         self._wire = Wire(progress_at=self.clock.now(), connecting=True)
         self._write(enc.PLOTTER_ON, graphics=False)
-        self._settle(SETTLE_S + self._instruction_time_s())
+        self._settle(SETTLE_S + self._instruction_time_s(), pending)
         link.read(4096, timeout=QUIET_S)  # answers still on their way (late ones of the settle queries)
         link.reset_input()
         self._write(enc.ABORT_GRAPHICS + enc.WHERE_REQUEST, graphics=False)
@@ -365,16 +366,22 @@ class HPGLDisplay(HPGLStream):
             )
         return DeviceWhere((x, y), bool(pen), detail=f"OA {x},{y},{pen}")
 
-    def _settle(self, hold_s: float) -> None:
-        """Ask ESC.B until its answer stays the same for ``hold_s`` s (waiting as long as VIEW or the lever holds)."""
+    def _settle(self, hold_s: float, pending: list[Check]) -> None:
+        """Ask ESC.B until its answer stays the same for ``hold_s`` s (waiting as long as VIEW or the lever holds).
+
+        Late OA answers of the old connection's checkpoints (``pending``, in order) prove how far it drew.
+        """
         last, since = None, self.clock.now()
         after_output = False
         while True:
             self._write(enc.ASK_FREE, graphics=False)
             while True:  # answers of the old connection's buffered requests may come first
                 text = self._answer(None, "ESC.B")
-                if OA_ANSWER.fullmatch(text) or (IDENT_ANSWER.fullmatch(text) and not NUMBER_ANSWER.fullmatch(text)):
-                    after_output = True  # an OA or OI answer: the OE answer follows it
+                if OA_ANSWER.fullmatch(text):
+                    after_output = True  # the OE answer follows it
+                    self._late_checkpoint(pending, text)
+                elif IDENT_ANSWER.fullmatch(text) and not NUMBER_ANSWER.fullmatch(text):
+                    after_output = True  # an OI answer: the OE answer follows it
                 elif after_output and int(text) <= MAX_OE:
                     after_output = False
                 else:
@@ -390,6 +397,17 @@ class HPGLDisplay(HPGLStream):
                 self._pause_changed(True)
                 since = now
             self.clock.sleep(MAX_POLL_S)
+
+    def _late_checkpoint(self, pending: list[Check], text: str) -> None:
+        """An OA answer after a fault: the first pending checkpoint it fits ran (none earlier can be later)."""
+        x, y, pen = (int(v) for v in text.split(","))
+        for i, check in enumerate(pending):
+            pts = check.points
+            if pts is not None and check.stroke is not None and (x, y) == (int(pts[check.hi, 0]), int(
+                    pts[check.hi, 1])) and bool(pen) == (check.kind == "PD"):
+                self._acknowledged(check.stroke, check.hi)
+                del pending[: i + 1]
+                return
 
     def _answer(self, form: re.Pattern[str] | None, what: str) -> str:
         """The next non-empty answer line, which must match ``form`` (None: an OA, OI or number)."""

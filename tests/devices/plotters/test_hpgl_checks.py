@@ -146,3 +146,18 @@ def test_what_an_instruction_missed_is_read_from_where_it_stopped():
     first = Check("PD", 3, pts, lo=1, hi=2, last=False)  # another PD list follows: it joined 2 to 3
     assert HPGLStream._missing_after(first, (100, 0)).tolist() == pts[1:4].tolist()
     assert HPGLStream._missing_after(Check("PU", 3, pts), (7, 7)).tolist() == pts[:2].tolist()
+
+
+def test_a_closed_stroke_before_a_sync_point_is_told_apart_by_its_late_checkpoints():
+    # the plotter stops with the pen up on the square's corner: before it (travelled there) or after it (the sync
+    # point's PU;)?  The sync point's OA never came; the square's own checkpoint did (verify=sync asks here)
+    last = np.array([[5000, 1000], [5500, 1500]], float)
+    dl = DisplayList.from_polylines([ZIGZAG, BOX - 3000, np.vstack([BOX, BOX[:1]]), last], pens=1, unit_mm=UNIT)
+    expected, _ = _reference(dl, "sync_strokes=3")
+    clean = Rig(options="sync_strokes=3")
+    clean.display.plot(dl)
+    clean.display.close()
+    wire = bytes(clean.links[0].sent)
+    at = wire.find(b"PU;OA;OE;", wire.find(b"PU6000,5000;")) + 3  # the plotter takes the sync's PU; but not its OA
+    rig, n, asked = _plot_through_faults(dl, {"stall_after": str(at)}, "sync_strokes=3&stall=5")
+    assert (n, asked) == (1, []) and _segments(rig.device) == expected
