@@ -29,17 +29,14 @@ OptionSection = tuple[str, Sequence[OptionSpec[Any]]]
 
 
 def option_sections() -> list[OptionSection]:
-    """The simulated line's options, then each simulator's (imported here, so other commands load no simulator)."""
-    from pixelpen.sim.plotters.ebb.board import OPTIONS as EBB_OPTIONS
-    from pixelpen.sim.plotters.grbl.controller import OPTIONS as GRBL_OPTIONS
-    from pixelpen.sim.plotters.hpgl.plotter import OPTIONS as HPGL_OPTIONS
+    """The simulated line's options, then every registered simulator's (imported here only, for the listing)."""
+    from pixelpen.sim.base import simulator_models, simulator_options
     from pixelpen.sim.transports.options import TRANSPORT_OPTIONS
 
     return [
         ("options of every sim: and sim:// URL (the simulated line)", TRANSPORT_OPTIONS),
-        *((f"options of the {model} simulator (sim:{model})", specs) for model, specs in HPGL_OPTIONS.items()),
-        ("options of the GRBL simulator (sim:grbl)", GRBL_OPTIONS),
-        ("options of the EBB simulator (sim:axidraw, sim://ebb)", EBB_OPTIONS),
+        *((f"options of the {model} simulator (sim:{model}, sim://{model})", simulator_options(model))
+          for model in simulator_models()),
     ]
 
 

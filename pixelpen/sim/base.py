@@ -18,12 +18,13 @@ import bisect
 import enum
 import importlib
 from abc import ABC, abstractmethod
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from importlib import metadata
-from typing import ClassVar, Protocol, runtime_checkable
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 from pixelpen.clock import REAL_CLOCK, Clock
 from pixelpen.errors import ConfigError, URLError
+from pixelpen.options import OptionSpec
 
 MAX_EVENTS_PER_ADVANCE = 10_000_000
 """A simulator's event loop that has not caught up after this many events has a bug (never a hang)."""
@@ -324,12 +325,20 @@ ENTRY_POINT_GROUP = "pixelpen.simulators"
 """Third-party simulators: ``model = "package.module:factory"`` in this entry-point group."""
 
 _REGISTRY: dict[str, SimulatorFactory] = {}
+_OPTIONS: dict[str, tuple[OptionSpec[Any], ...]] = {}
 _NAMED: dict[str, StreamDevice] = {}
 
 
-def register_simulator(model: str, factory: SimulatorFactory) -> None:
-    """Make ``model`` available to ``create_simulator`` and ``sim:``/``sim://`` URLs."""
+def register_simulator(model: str, factory: SimulatorFactory, options: Sequence[OptionSpec[Any]] = ()) -> None:
+    """Make ``model`` available to ``create_simulator`` and ``sim:``/``sim://`` URLs, with the URL options it reads."""
     _REGISTRY[model.lower()] = factory
+    _OPTIONS[model.lower()] = tuple(options) or tuple(getattr(factory, "OPTIONS", ()))
+
+
+def simulator_options(model: str) -> tuple[OptionSpec[Any], ...]:
+    """The URL options the simulator of ``model`` reads (its module is imported if it was not yet)."""
+    simulator_factory(model)
+    return _OPTIONS.get(model.lower(), ())
 
 
 def create_simulator(model: str, /, *, clock: Clock | None = None, **options: str) -> StreamDevice:

@@ -74,8 +74,9 @@ def test_devices_lists_schemes_with_options(capsys):
     assert data["schemes"]["png"]["options"]["size"] == "image size in pixels, WxH (default 800x600)"
     line = data["options"]["options of every sim: and sim:// URL (the simulated line)"]
     assert {"speed", "baud", "flow"} <= set(line)
-    assert {"options of the hp7475a simulator (sim:hp7475a)", "options of the GRBL simulator (sim:grbl)"} <= set(
-        data["options"])
+    sections = set(data["options"])
+    assert {f"options of the {m} simulator (sim:{m}, sim://{m})" for m in ("hp7475a", "grbl", "axidraw")} <= sections
+    assert data["options"]["options of the grbl simulator (sim:grbl, sim://grbl)"]["rx_buffer"].startswith("serial RX buffer")
 
 
 def test_devices_lists_every_option_section_under_its_title(capsys, monkeypatch):

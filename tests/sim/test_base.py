@@ -154,3 +154,20 @@ def test_every_builtin_model_is_listed_without_importing_it() -> None:
             "print(any(m.startswith('pixelpen.sim.plotters') for m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split("\n")
     assert out[0] == repr(sorted(BUILTIN_SIMULATORS)) and out[1] == "False"
+
+
+def test_a_simulator_registers_the_url_options_it_reads() -> None:
+    from pixelpen.options import OptionSpec, positive
+    from pixelpen.sim.base import register_simulator, simulator_options
+
+    spec = OptionSpec("speed", positive, 1.0, "mm/s")
+    register_simulator("probe-with-options", lambda **kw: Recorder(), (spec,))
+
+    def factory(**kw):
+        return Recorder()
+
+    factory.OPTIONS = (spec,)  # type: ignore[attr-defined]
+    register_simulator("probe-with-attribute", factory)
+    assert simulator_options("probe-with-options") == (spec,) == simulator_options("probe-with-attribute")
+    assert {s.name for s in simulator_options("grbl")} >= {"rx_buffer", "planner", "pen"}
+    assert {s.name for s in simulator_options("hp7550a")} >= {"buffer"}

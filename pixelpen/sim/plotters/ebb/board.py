@@ -187,5 +187,5 @@ def create(sim_model: str, /, clock: Clock | None = None, **options: str) -> Ebb
         raise URLError(f"{where}: {exc}") from None
 
 
-register_simulator("axidraw", functools.partial(create, "axidraw"))
-register_simulator("ebb", functools.partial(create, "ebb"))
+register_simulator("axidraw", functools.partial(create, "axidraw"), OPTIONS)
+register_simulator("ebb", functools.partial(create, "ebb"), OPTIONS)

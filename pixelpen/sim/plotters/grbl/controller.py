@@ -327,8 +327,8 @@ OPTIONS: tuple[OptionSpec[Any], ...] = (
                "servo, servo-inverted (down below pen_threshold) or z (down at work Z <= 0) (default: the profile's)"),
     OptionSpec("pen_threshold", non_negative, None,
                "servo output dividing pen up from down (default: half-way between the profile's up and down S)"),
-    OptionSpec("rx_buffer", integer(1), None, "serial RX buffer in bytes, 16..65536 (default: the profile's, or 128)"),
-    OptionSpec("planner", integer(1), 16, "planner blocks (BLOCK_BUFFER_SIZE), 2..256"),
+    OptionSpec("rx_buffer", integer(16, 65536), None, "serial RX buffer in bytes (default: the profile's, or 128)"),
+    OptionSpec("planner", integer(2, 256), 16, "planner blocks (BLOCK_BUFFER_SIZE)"),
     OptionSpec("pen_colour", colour, None, "ink colour of the rendered paper (default: the profile's first pen)"),
     OptionSpec("pen_width", non_negative, None, "line width in mm of the rendered paper (default: the profile's)"),
 )
@@ -392,4 +392,4 @@ def create(clock: Clock | None = None, **options: str) -> GrblSimulator:
     return device
 
 
-register_simulator("grbl", create)
+register_simulator("grbl", create, OPTIONS)

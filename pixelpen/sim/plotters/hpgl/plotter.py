@@ -587,4 +587,4 @@ def _factory(model: str) -> Callable[..., HPGLPlotter]:
 
 
 for _name in MODELS:
-    register_simulator(_name, _factory(_name))
+    register_simulator(_name, _factory(_name), OPTIONS[_name])
