@@ -76,7 +76,8 @@ def test_devices_lists_schemes_with_options(capsys):
     assert {"speed", "baud", "flow"} <= set(line)
     sections = set(data["options"])
     assert {f"options of the {m} simulator (sim:{m}, sim://{m})" for m in ("hp7475a", "grbl", "axidraw")} <= sections
-    assert data["options"]["options of the grbl simulator (sim:grbl, sim://grbl)"]["rx_buffer"].startswith("serial RX buffer")
+    grbl = data["options"]["options of the grbl simulator (sim:grbl, sim://grbl)"]
+    assert grbl["rx_buffer"].startswith("serial RX buffer")
 
 
 def test_devices_lists_every_option_section_under_its_title(capsys, monkeypatch):
