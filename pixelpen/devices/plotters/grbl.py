@@ -403,7 +403,8 @@ class GrblPlotter(GrblStream):
         settings = self._settings()
         status = self.query_status()
         steps = min(settings.get(100, math.inf), settings.get(101, math.inf))
-        tolerance_mm = 0.0015 + (0.5 * math.sqrt(2.0) / steps if math.isfinite(steps) and steps > 0 else 0.0)
+        # a hold stops mid-leg: GRBL steps each axis within one step of the straight line
+        tolerance_mm = 0.0015 + (math.sqrt(2.0) / steps if math.isfinite(steps) and steps > 0 else 0.0)
         tolerance = max(0.5, tolerance_mm / self.profile.unit_mm)
         at = self._work_units(status)
         if garbled is not None and not self._ran_before(garbled, at, tolerance):

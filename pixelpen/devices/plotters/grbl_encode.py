@@ -519,9 +519,9 @@ def explain_position(
 ) -> int | None:
     """The first of ``legs`` whose line, with one byte dropped, puts the pen at ``position`` (pen ``pen_down``).
 
-    A changed target moves the pen off the path until the next line's target (tried first, on every leg: the pen
-    may lift or drop at the wrong vertex); a changed S value lifts or lowers the pen along this leg and the legs
-    after it that set none.  None when no single dropped byte explains it.
+    A changed target moves the pen off the path until the next line's target (the explanation of a position off
+    the path); a changed S value lifts or lowers the pen along this leg and the legs after it that set none (tried
+    first for a position on the path with the wrong pen).  None when no single dropped byte explains it.
     """
     q = np.asarray(position, dtype=np.float64)
 
@@ -532,21 +532,29 @@ def explain_position(
         t = 0.0 if dd == 0 else min(1.0, max(0.0, float((q - pa) @ d) / dd))
         return float(np.hypot(*(pa + t * d - q))) <= tolerance
 
-    for i, leg in enumerate(legs):  # a changed target first: it explains a position off the path as it is
-        for words in garbled_variants(leg.line):
-            target = tuple(words[a][0] / unit_mm if a in words else e for a, e in zip("XY", leg.end, strict=True))
-            if target != leg.end and (on(leg.start, target) or (i + 1 < len(legs) and on(target, legs[i + 1].end))):
-                return i
-    for i, leg in enumerate(legs):
-        for words in garbled_variants(leg.line):
-            x, y = (words[a][0] / unit_mm if a in words else e for a, e in zip("XY", leg.end, strict=True))
-            down = is_down(words["S"][0]) if "S" in words else leg.down
-            if "M" in words and 5 in words["M"]:
-                down = False
-            if (x, y) == leg.end and down != leg.down and pen_down == down:
-                for later in legs[i:]:
-                    if later is not leg and "S" in later.line:
-                        break
-                    if on(later.start, later.end) and later.down != down:
-                        return i
-    return None
+    def moved() -> int | None:
+        for i, leg in enumerate(legs):
+            for words in garbled_variants(leg.line):
+                x, y = (words[a][0] / unit_mm if a in words else e for a, e in zip("XY", leg.end, strict=True))
+                if math.hypot(x - leg.end[0], y - leg.end[1]) > tolerance and (
+                        on(leg.start, (x, y)) or (i + 1 < len(legs) and on((x, y), legs[i + 1].end))):
+                    return i
+        return None
+
+    def lifted() -> int | None:
+        for i, leg in enumerate(legs):
+            for words in garbled_variants(leg.line):
+                x, y = (words[a][0] / unit_mm if a in words else e for a, e in zip("XY", leg.end, strict=True))
+                down = False if 5 in words.get("M", []) else is_down(words["S"][0]) if "S" in words else leg.down
+                if (x, y) == leg.end and down != leg.down and pen_down == down:
+                    for later in legs[i:]:
+                        if later is not leg and "S" in later.line:
+                            break
+                        if on(later.start, later.end) and later.down != down:
+                            return i
+        return None
+
+    if any(on(leg.start, leg.end) for leg in legs):  # on the path with the wrong pen: an S value, else a target
+        first = lifted()
+        return first if first is not None else moved()
+    return moved()

@@ -207,10 +207,10 @@ class GrblStream(PlotterDisplay):
             log.info("grbl: %s from before this connection ignored", line)
         elif line == "ok":
             self._idle_polls = 0
-            _, tag = self.counter.acknowledged()
+            sent, tag = self.counter.acknowledged()
             if isinstance(tag, Tag):
-                if tag.vertex is not None:
-                    self._reached = (tag.stroke, tag.vertex)
+                if tag.vertex is not None and "G4" in sent:  # parsed after its dwell: the pen reached the leg's start
+                    self._reached = (tag.stroke, max(tag.vertex - 1, 0))
                 if tag.done is not None:
                     # confirmed once a report after this ok (GRBL ran the stroke, then the dwell) shows the pen
                     # where the stroke ended: a garbled last vertex is caught before the stroke counts as drawn

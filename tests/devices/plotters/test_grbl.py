@@ -612,3 +612,56 @@ def test_manual_pen_home_and_motors_off():
     plotter.close()
     with pytest.raises(ProtocolError, match=r"alarm-locked"):  # woken by the reset: it must be homed first
         sim_plotter(dev, clock)
+
+
+def test_the_pause_is_told_once_the_hold_is_complete_and_a_release_then_resumes():
+    """on_pause(True) comes at Hold:0: a cycle start sent then resumes (GRBL ignores one during Hold:1)."""
+    dev, clock = new_sim()
+    states = []
+
+    def operator(paused):
+        if paused:
+            states.append(dev.state)
+            dev.receive(b"~")  # as soon as the driver says it has paused
+
+    plotter = sim_plotter(dev, clock, url_extra="&pause_after=200", on_pause=operator)
+    plotter.plot(squares(4))
+    plotter.close()
+    assert states == ["Hold:0"]
+    assert ink_account(intended(squares(4)), drawn(dev)) == InkAccount(0, 0, 0)
+
+
+def host_bytes(dl: DisplayList) -> bytes:
+    """Every byte the driver sends GRBL in an uninterrupted plot of ``dl`` (the fault offsets count these)."""
+    dev, clock = new_sim()
+    got = bytearray()
+    receive = dev.receive
+    dev.receive = lambda data: (got.extend(data), receive(data))[1]
+    plotter = sim_plotter(dev, clock)
+    plotter.plot(dl)
+    plotter.close()
+    return bytes(got)
+
+
+@pytest.mark.parametrize(("line", "byte", "stray"), [
+    pytest.param(b"G1 X60.000 Y30.000", 4, 1, id="target-digit"),  # X0.000: a wrong leg, caught off the path
+    pytest.param(b"G1 X60.000 Y30.000", 0, 0, id="letter"),  # '1 X60...': error:1, the leg never runs
+    pytest.param(b"G1 X60.000 Y30.000", 18, 0, id="newline"),  # joined with the next line: rejected both
+    pytest.param(b"G1 X60.000 Y30.000", 13, 1, id="y-digit"),  # Y3.000: a wrong leg the other way
+])
+def test_a_dropped_byte_is_located_and_redrawn_from_the_line_it_spoiled(line, byte, stray):
+    """A byte GRBL drops (corrupt_at: inverted, >= 0x80) spoils one line: the resume starts at that line's start.
+
+    Nothing is lost or drawn twice; a wrong target draws its wrong leg until a status report shows it (at most
+    one stray piece, GRBL has no checksum); a rejected line draws nothing wrong.
+    """
+    dl = drawing_mm(OPEN_STROKES[:3])
+    at = host_bytes(dl).index(line) + byte
+    dev, clock = new_sim()
+    plotter = sim_plotter(dev, clock, url_extra=f"&corrupt_at={at}", timeout=0.5)
+    with pytest.raises((PlotInterrupted, ProtocolError)):
+        plotter.plot(dl)
+    plotter.resume_after_fault()  # located: no PositionUnknown
+    plotter.close()
+    account = ink_account(intended(dl), drawn(dev))
+    assert (account.lost, account.doubled) == (0, 0) and account.stray <= stray, account
