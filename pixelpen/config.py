@@ -66,18 +66,18 @@ class UserConfig:
         """
         for name in self.sections:
             if name not in commands:
-                raise self._error(f"[{name}]", "no such command" + _suggest(name, commands, "["))
+                raise self.error(f"[{name}]", "no such command" + _suggest(name, commands, "["))
         for key in self.common:
             if not any(_action(parser, key) for parser in commands.values()):
                 known = sorted({_key(a) for p in commands.values() for a in _options(p)})
-                raise self._error(key, "no command has this option" + _suggest(key, known))
+                raise self.error(key, "no command has this option" + _suggest(key, known))
         appended: dict[str, dict[str, int]] = {}
         for name, parser in commands.items():
             values = {k: v for k, v in self.common.items() if _action(parser, k)}
             section = self.sections.get(name, {})
             for key in section:
                 if _action(parser, key) is None:
-                    raise self._error(f"[{name}] {key}", f"'pixelpen {name}' has no option --{_dashed(key)}"
+                    raise self.error(f"[{name}] {key}", f"'pixelpen {name}' has no option --{_dashed(key)}"
                                       + _suggest(_dashed(key), [_key(a) for a in _options(parser)]))
             values.update(section)
             defaults = {}
@@ -98,31 +98,32 @@ class UserConfig:
                                    argparse.BooleanOptionalAction))
         if flag:
             if not isinstance(value, bool):
-                raise self._error(where, "expected true or false", value)
+                raise self.error(where, "expected true or false", value)
             return not value if isinstance(action, argparse._StoreFalseAction) else value
         if not isinstance(action, (argparse._StoreAction, argparse._AppendAction)):
-            raise self._error(where, "this option cannot be configured")
+            raise self.error(where, "this option cannot be configured")
         many = isinstance(action, argparse._AppendAction) or action.nargs in ("+", "*") or isinstance(action.nargs, int)
         if many:
             items = value if isinstance(value, list) else [value]
             return [self._scalar(action, item, where) for item in items]
         if isinstance(value, list):
-            raise self._error(where, "expected one value, not a list", value)
+            raise self.error(where, "expected one value, not a list", value)
         return self._scalar(action, value, where)
 
     def _scalar(self, action: argparse.Action, value: Any, where: str) -> Any:
         if isinstance(value, bool) or not isinstance(value, (str, int, float)):
-            raise self._error(where, "expected a string or a number", value)
+            raise self.error(where, "expected a string or a number", value)
         text = str(value)
         try:
             result = action.type(text) if callable(action.type) else text
         except (argparse.ArgumentTypeError, ValueError, TypeError, OverflowError) as exc:
-            raise self._error(where, str(exc) or "bad value", value) from None
+            raise self.error(where, str(exc) or "bad value", value) from None
         if action.choices is not None and result not in action.choices:
-            raise self._error(where, "expected one of " + ", ".join(map(str, action.choices)), value)
+            raise self.error(where, "expected one of " + ", ".join(map(str, action.choices)), value)
         return result
 
-    def _error(self, key: str, message: str, value: object = None) -> ParseError:
+    def error(self, key: str, message: str, value: object = None) -> ParseError:
+        """The ParseError for a bad ``key`` of this file, naming the file, the key and the value."""
         return ParseError(f"{key}: {message}", source=self.source, token=value)
 
 
@@ -162,7 +163,7 @@ def load_config(path: Path | None = None, *, required: bool = False) -> UserConf
         if isinstance(value, dict):
             for inner, item in value.items():
                 if isinstance(item, dict):
-                    raise config._error(f"[{key}] {inner}", "a [COMMAND] section holds options, not tables")
+                    raise config.error(f"[{key}] {inner}", "a [COMMAND] section holds options, not tables")
             config.sections[key] = dict(value)
         else:
             config.common[key] = value

@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import NamedTuple, TypeVar
 from urllib.parse import quote, unquote
 
-from pixelpen.errors import ConfigError, URLError, quote_token
+from pixelpen.errors import ConfigError, InvalidArgument, URLError, quote_token
 
 T = TypeVar("T")
 
@@ -209,10 +209,13 @@ def parse_size(text: str, default_unit: str = "px") -> Size:
             break
     w_text, sep, h_text = low.partition("x")
     if not sep:
-        raise ValueError(f"expected WIDTHxHEIGHT[unit] or a paper name ({', '.join(PAPER_MM)}), got {text!r}")
-    w, h = float(w_text), float(h_text)
+        raise InvalidArgument(f"expected WIDTHxHEIGHT[unit] or a paper name ({', '.join(PAPER_MM)}), got {text!r}")
+    try:
+        w, h = float(w_text), float(h_text)
+    except ValueError:
+        raise InvalidArgument(f"expected WIDTHxHEIGHT[unit] with numbers for WIDTH and HEIGHT, got {text!r}") from None
     if not (0 < w <= MAX_SIZE and 0 < h <= MAX_SIZE):
-        raise ValueError(f"size must be positive and at most {MAX_SIZE:g}, got {text!r}")
+        raise InvalidArgument(f"size must be positive and at most {MAX_SIZE:g}, got {text!r}")
     return Size(w, h, unit)
 
 

@@ -44,7 +44,7 @@ from urllib.parse import quote, unquote
 from pixelpen.clock import Clock, SimulatedClock
 from pixelpen.drivers.serial import SerialLines
 from pixelpen.drivers.stream import Link, printable
-from pixelpen.errors import ConfigError, LinkError, ParseError, TraceMismatch
+from pixelpen.errors import ConfigError, InvalidArgument, LinkError, ParseError, TraceMismatch
 from pixelpen.urls import check_path
 
 TRACE_MAGIC: Final = "#pixelpen-trace"
@@ -98,7 +98,7 @@ def format_header(url: str, settings: Mapping[str, object] | None = None) -> str
     parts = [TRACE_MAGIC, str(TRACE_VERSION), f"url={quote(url, safe='')}"]
     for key, value in (settings or {}).items():
         if not key or not key.replace("_", "").replace("-", "").isalnum() or key == "url":
-            raise ValueError(f"trace setting names are letters, digits, '_' and '-' (and not 'url'), got {key!r}")
+            raise InvalidArgument(f"trace setting names are letters, digits, '_' and '-' (and not 'url'), got {key!r}")
         parts.append(f"{key}={quote(str(value), safe='')}")
     return " ".join(parts)
 
@@ -106,7 +106,7 @@ def format_header(url: str, settings: Mapping[str, object] | None = None) -> str
 def format_chunk(time: float, direction: str, data: bytes) -> list[str]:
     """Chunk lines (without newlines) for ``data`` sent in ``direction`` at ``time`` seconds."""
     if direction not in (HOST_TO_DEVICE, DEVICE_TO_HOST):
-        raise ValueError(f"direction must be '>' or '<', got {direction!r}")
+        raise InvalidArgument(f"direction must be '>' or '<', got {direction!r}")
     return [
         f"{max(time, 0.0):.6f} {direction} {data[i : i + MAX_CHUNK].hex(' ')}  # {printable(data[i : i + MAX_CHUNK])}"
         for i in range(0, len(data), MAX_CHUNK)
@@ -444,11 +444,6 @@ class ReplayLink(Link):
     def sent(self) -> int:
         """Host bytes the program sent so far (all matched the trace)."""
         return self._sent
-
-    @property
-    def expected_total(self) -> int:
-        """Host bytes the trace expects in all."""
-        return len(self._expected)
 
     def check_complete(self) -> None:
         """Raise TraceMismatch unless the program sent every host byte the trace holds."""

@@ -102,11 +102,6 @@ class MotionLimits:
         if not isinstance(self.cornering, (int, float)) or not math.isfinite(self.cornering) or self.cornering < 0:
             raise ConfigError(f"MotionLimits.cornering must be a finite number >= 0, got {self.cornering!r}")
 
-    @property
-    def cruise_distance(self) -> float:
-        """Shortest rest-to-rest move (mm) that reaches full speed: v²/a."""
-        return self.speed * self.speed / self.accel
-
     def move_time(self, distance: float) -> float:
         """Seconds for a rest-to-rest straight move of ``distance`` mm (trapezoid, or triangle when short)."""
         v, a = self.speed, self.accel

@@ -97,11 +97,6 @@ class PlotterStats(WireStats):
     hpgl_errors: int = 0
     io_errors: int = 0
 
-    @property
-    def busy_time(self) -> float:
-        """Seconds the mechanism spent moving, lifting, dropping or changing pens (``moving_time``)."""
-        return self.moving_time
-
 
 class HPGLPlotter(SimulatedDevice):
     """A simulated HP-GL pen plotter speaking RS-232 (a :class:`~pixelpen.sim.base.StreamDevice`).

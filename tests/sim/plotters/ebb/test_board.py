@@ -143,6 +143,7 @@ def test_sm_xm_lm_sequence_ends_at_hand_computed_positions():
     assert rig.dev.next_event_time() == pytest.approx(rig.clock.now() + 0.010)
     rig.until_idle()
     assert rig.send("QS\r") == b"16260,-764\n\rOK\r\n"
+    assert rig.dev.step_position == (16260, -764)  # the counters QS reports, read without a command
     assert np.allclose(rig.dev.position_mm, [100 - 258 / 80 + 6 / 80, 100 + 508 / 80 + 4 / 80])
     rig.send("EM,2\r")  # 1/8 stepping clears the counters and halves the resolution
     rig.until_idle()
