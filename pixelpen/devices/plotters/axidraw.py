@@ -44,16 +44,20 @@ from pixelpen.devices.plotters.base import DeviceWhere, PlotterDisplay
 from pixelpen.devices.plotters.ebb_encode import (
     EBB_USB_ID,
     FEATURES,
+    SERVO_RATE_DEFAULT,
     VPLUS_MIN_RAW,
     move_commands,
     parse_qg,
+    servo_move_ms,
     servo_positions,
+    servo_rate_commands,
     slice_polyline,
     strip_name,
     supports,
     vplus_volts,
 )
-from pixelpen.devices.plotters.ebb_stream import QG_POWER_LOST, EBBStream
+from pixelpen.devices.plotters.ebb_stream import QG_POWER_LOST, EBBStream, Progress
+from pixelpen.devices.plotters.resume import ResumePoint
 from pixelpen.display.registry import register_display
 from pixelpen.drivers.discovery import list_serial_ports
 from pixelpen.drivers.stream import Link
@@ -95,6 +99,9 @@ class AxiDrawPlotter(EBBStream):
     profile_name: ClassVar[str] = "axidraw_v3"
     family: ClassVar[str] = "axidraw"
     reports_position: ClassVar[bool] = True
+    restarts_at_home: ClassVar[bool] = True
+    """After a supply failure the carriage is pushed home and ``_rehomed`` clears the counters there: what the
+    supply checks certified (``_acknowledged``) is on paper, and a confirmed resume continues from its end."""
     OPTIONS = (
         *PlotterDisplay.OPTIONS,
         OptionSpec("model", _model, "v3", f"AxiDraw model: {', '.join(MODELS)}"),
@@ -113,6 +120,8 @@ class AxiDrawPlotter(EBBStream):
         moves: str = "sm",
         pen_up_percent: float | None = None,
         pen_down_percent: float | None = None,
+        pen_rate_up: int = SERVO_RATE_DEFAULT,
+        pen_rate_down: int = SERVO_RATE_DEFAULT,
         **kwargs: Any,
     ) -> None:
         super().__init__(port, profile=profile, **kwargs)
@@ -120,6 +129,8 @@ class AxiDrawPlotter(EBBStream):
             raise ConfigError(f"axidraw: moves must be sm, xm or lm, got {moves!r}")
         self.moves = moves
         self.servo_up, self.servo_down = servo_positions(profile.servo, pen_up_percent, pen_down_percent)
+        self.servo_rates = (pen_rate_up, pen_rate_down)
+        servo_rate_commands(pen_rate_up, pen_rate_down)  # refuse bad rates here, not at connect
         self.steps_per_mm = profile.steps_per_mm or 1.0 / profile.unit_mm
         self.version: tuple[int, int, int] | None = None
         """Firmware version from ``V``."""
@@ -140,6 +151,9 @@ class AxiDrawPlotter(EBBStream):
         self._stroke_now: int | None = None
         self._power_good = 0
         """Queued commands (counted like ``_queued_sent``) known to have finished with the motor supply on."""
+        self._progress = deque()
+        self._certified: Progress | None = None
+        self._cut: Progress | None = None
 
     # -- URL hooks -------------------------------------------------------------------------------
     @classmethod
@@ -176,6 +190,7 @@ class AxiDrawPlotter(EBBStream):
         self._command("EM,1,1", queued=self.version is not None and supports(self.version, "queued_EM"))
         self.position = np.zeros(2, dtype=np.int64)
         self._zeroed = True
+        self._cut = None
 
     # -- device core -----------------------------------------------------------------------------
     def _connect(self) -> None:
@@ -211,25 +226,29 @@ class AxiDrawPlotter(EBBStream):
             self._zeroed = True
         self._command(f"SC,4,{self.servo_up}")
         self._command(f"SC,5,{self.servo_down}")
+        if supports(self.version, "SC_rates"):
+            for command in servo_rate_commands(*self.servo_rates):
+                self._command(command)
         if supports(self.version, "queued_EM"):
             self._command(f"CU,60,{VPLUS_MIN_RAW}")  # latch a supply drop in QG bit 6 between checks
+        self._certified = Progress(0, (int(self.position[0]), int(self.position[1])), False, None)
         self._pen(up=True)
         self._flush_replies()
-        self._check_power()  # as pyaxidraw does before plotting: refuse a board without motor power
-        self._power_good = self._queued_sent
+        self._supply(self._query_vplus(), self._queued_sent)  # as pyaxidraw does: refuse a board without motor power
 
     def _send_stroke(self, index: int, points: np.ndarray, pen: int) -> None:
-        """Travel, pen down, the stroke, pen up; then a supply check that certifies what ran before it."""
+        """Travel, a supply check, pen down, the stroke (a supply check behind every slice), pen up, ``QG``."""
         pts = np.asarray(points, dtype=np.int64).reshape(-1, 2)
         self._stroke_now = index
         self._travel(pts[0])
+        self._power_gate()
         self._pen(up=False, reached=(index, 0))
         if len(pts) > 1:
             self._move(pts, self.profile.pen_down, stroke=index)
         self._pen(up=True, reached=(index, len(pts) - 1))
         self._marks.append((self._queued_sent, index))
         self._stroke_now = None
-        self._power_checkpoint()
+        self._status_check()
 
     def _poll(self) -> None:
         link = self._link()
@@ -239,8 +258,8 @@ class AxiDrawPlotter(EBBStream):
     def _drain(self) -> None:
         self._flush_replies()
         self._wait_idle(max(self.timeout, 5.0))
-        self._check_power()
-        self._power_good = self._queued_sent
+        self._supply(self._query_vplus(), self._queued_sent)  # idle: everything sent has run
+        self._cut = None
         while self._marks:
             _, index = self._marks.popleft()
             self._confirm(index + 1)
@@ -315,10 +334,21 @@ class AxiDrawPlotter(EBBStream):
         if supports(self.version, "queued_EM") and self._query_status_byte() & QG_POWER_LOST:
             lost = lost or "the motor supply dropped (QG power-lost flag)"
         if lost:
-            return DeviceWhere(None, None, position_lost=True, detail=lost)
+            return self._lost_where(lost)
         self._adopt = steps
         return DeviceWhere((float(steps[0]), float(steps[1])), not pen_up, tolerance=1.0, reached=reached,
                            detail=f"EBB at {steps.tolist()} steps, pen {'up' if pen_up else 'down'}")
+
+    def _lost_where(self, why: str) -> DeviceWhere:
+        """Position lost; after a supply failure the detail names the last place reached with the motors powered.
+
+        That place is where drawing stopped, to within the one queued command run between the last good supply
+        check and the first bad one; the base has it (``_acknowledged``) for the resume after re-homing.
+        """
+        cut = self._cut
+        if cut is not None:
+            why += f"; the motors last ran powered to {list(cut.position)} steps, pen {_pen_word(cut.pen_down)}"
+        return DeviceWhere(None, None, position_lost=True, detail=why)
 
     def _pen_position(self) -> tuple[float, float] | None:
         """Where the carriage will be once everything sent has run (steps = device units), the next travel's start."""
@@ -365,14 +395,26 @@ class AxiDrawPlotter(EBBStream):
         sliced = slice_polyline(mm, limits, self.steps_per_mm, SLICE_S)
         signed_steps = supports(self.version or (0, 0, 0), "LM_signed_steps")
         commands = move_commands(sliced, self.moves, signed_steps)
-        for cmd, ms, vertex in zip(commands, sliced.ms.tolist(), sliced.vertex.tolist(), strict=False):
-            self._command(cmd, queued=True, duration_s=ms / 1000.0,
-                          reached=None if stroke is None else (stroke, vertex))
-        self.position = self.position + sliced.steps.sum(axis=0)
+        ends = self.position + np.cumsum(sliced.steps, axis=0)
+        at_vertex = (ends == pts[sliced.vertex]).all(axis=1)  # the slice ends on the vertex it has reached
+        for cmd, ms, vertex, end, exact in zip(commands, sliced.ms.tolist(), sliced.vertex.tolist(), ends, at_vertex,
+                                               strict=True):
+            if stroke is None:
+                self._queue(cmd, ms / 1000.0, end, pen_down=False)
+                continue
+            place = ResumePoint(stroke, vertex, None if exact else (float(end[0]), float(end[1])))
+            self._queue(cmd, ms / 1000.0, end, pen_down=True, reached=(stroke, vertex), place=place)
+        if len(ends):
+            self.position = ends[-1]
 
     def _pen(self, up: bool, reached: tuple[int, int] | None = None) -> None:
+        """``SP`` with a delay that covers the profile's pen time and the servo's slew at the SC,11/12 rate."""
         ms = round(1000 * (self.profile.pen_lift_s if up else self.profile.pen_drop_s))
-        self._command(f"SP,{1 if up else 0},{ms}", queued=True, duration_s=ms / 1000.0, reached=reached)
+        if supports(self.version or (0, 0, 0), "SC_rates"):
+            ms = max(ms, servo_move_ms(self.servo_down, self.servo_up, self.servo_rates[0 if up else 1]))
+        place = None if reached is None else ResumePoint(reached[0] + 1) if up else ResumePoint(reached[0])
+        self._queue(f"SP,{1 if up else 0},{ms}", ms / 1000.0, self.position, pen_down=not up, reached=reached,
+                    place=place)
 
     def _motors_off(self) -> None:
         """``EM,0,0``: the carriage moves freely, so the step counters no longer tell where it is."""
@@ -395,3 +437,7 @@ def find_ebb_port() -> str:
             return dev.path
     seen = ", ".join(f"{d.path} ({d.description})" for d in ports) or "none"
     raise LinkError(f"axidraw:auto found no EiBotBoard (USB 04D8:FD92) among the serial ports: {seen}; name the port")
+
+
+def _pen_word(down: bool) -> str:
+    return "down" if down else "up"

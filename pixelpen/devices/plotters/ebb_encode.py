@@ -31,7 +31,9 @@ __all__ = [
     "parse_qs",
     "parse_version_reply",
     "reply_shape",
+    "servo_move_ms",
     "servo_positions",
+    "servo_rate_commands",
     "slice_polyline",
     "step_deltas",
     "strip_name",
@@ -44,7 +46,7 @@ EBB_USB_ID = (0x04D8, 0xFD92)
 
 FEATURES: dict[str, tuple[int, int, int]] = {
     "QB": (1, 9, 2), "ES": (2, 2, 7), "XM": (2, 3, 0), "QS": (2, 4, 3), "QM": (2, 4, 4), "QG": (2, 6, 2),
-    "LM": (2, 7, 0), "QE": (2, 8, 0), "queued_EM": (3, 0, 0), "LM_signed_steps": (3, 0, 0),
+    "LM": (2, 7, 0), "QE": (2, 8, 0), "queued_EM": (3, 0, 0), "LM_signed_steps": (3, 0, 0), "SC_rates": (2, 6, 0),
 }
 """Least firmware version of each command the driver uses (ebb.html "Firmware versions"; plotters.md §2.2)."""
 
@@ -56,6 +58,11 @@ LM_RATE_UNIT = 2**31 / 25000.0
 """LM rate per (step/s): the accumulator adds Rate every 40 µs and steps at 2³¹."""
 SERVO_DEFAULT_UP, SERVO_DEFAULT_DOWN = 12000, 16000
 """SC,4 / SC,5 reset values (ebb.html SC), used when a profile states no servo range."""
+SERVO_RATE_DEFAULT = 400
+"""SC,11 / SC,12 pen raise and lower rate (pulse units per 24 ms servo frame): the firmware's own boot value
+(EggBot ``RCServo2.c`` RCServo2_Init: ``g_servo2_rate_up = g_servo2_rate_down = 400``)."""
+SERVO_FRAME_S = 0.024
+"""The servo output's repetition period: 8 channels of 3 ms (ebb.html: move time = |Δpos| × 0.024 s / rate)."""
 
 VPLUS_MIN_RAW = 250
 """Least ``QC`` V+ reading (10-bit) of a powered board: plotink's queryVoltage ("typical reading is about 300,
@@ -108,6 +115,19 @@ def servo_positions(servo: ServoSettings | None, up_percent: float | None = None
     if not all(1 <= p <= 65535 for p in positions):
         raise ConfigError(f"servo positions {positions} are outside SC's 1..65535")
     return positions  # type: ignore[return-value]
+
+
+def servo_rate_commands(rate_up: int, rate_down: int) -> list[str]:
+    """``SC,11`` (raise) and ``SC,12`` (lower) rates, as pyaxidraw's servo set-up sends them (fw >= 2.6.0)."""
+    for name, rate in (("raise", rate_up), ("lower", rate_down)):
+        if not (isinstance(rate, int) and 1 <= rate <= 65535):
+            raise ConfigError(f"pen {name} rate must be an integer 1..65535 (SC,11/12), got {rate!r}")
+    return [f"SC,11,{rate_up}", f"SC,12,{rate_down}"]
+
+
+def servo_move_ms(start: int, end: int, rate: int) -> int:
+    """Milliseconds the servo pulse takes from ``start`` to ``end`` at ``rate`` (|Δ| × 24 ms / rate, rounded up)."""
+    return math.ceil(abs(end - start) * SERVO_FRAME_S * 1000.0 / rate - 1e-9)
 
 
 @dataclass(frozen=True)

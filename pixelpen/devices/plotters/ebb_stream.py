@@ -11,7 +11,7 @@ from __future__ import annotations
 import logging
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -30,13 +30,19 @@ from pixelpen.devices.plotters.ebb_encode import (
     supports,
     vplus_volts,
 )
+from pixelpen.devices.plotters.resume import ResumePoint
 from pixelpen.drivers.stream import Link
 from pixelpen.errors import Disconnected, LinkError, LinkTimeout, ParseError, ProtocolError
 
 log = logging.getLogger("pixelpen.devices.plotters.axidraw")  # the family's one logger, as users filter on it
 
-WINDOW = 4
-"""Commands written ahead of their replies: the board holds two (FIFO + executing), the rest wait in USB."""
+WINDOW = 1
+"""Commands written ahead of their replies.  One: a command goes out only once the board has answered the one
+before it, so when a garbled command is refused nothing behind it has reached the board yet (a move run after
+a refused one would run shifted) and the same command can simply be sent again; the motion FIFO still holds the
+next move while one executes, so the carriage does not stop between slices."""
+RETRIES = 2
+"""Times a refused command is sent again (a byte garbled on the wire) before the refusal stops the plot."""
 IDLE_POLL_S = 0.01
 FIFO_DEPTH = 1
 """Motion FIFO depth at boot (ebb.html CU,4); the driver does not change it."""
@@ -56,6 +62,21 @@ class Sent:
     """(stroke, vertex) the pen is down at once this queued command has run."""
     stroke: int | None = None
     """The stroke this command belongs to (its travel, pen moves and slices)."""
+    certifies: int | None = None
+    """A ``QC`` supply check: the number of queued commands that have finished by the time the board reads it."""
+    tries: int = 1
+
+
+@dataclass(frozen=True)
+class Progress:
+    """What a queued command leaves behind once it has run: the carriage (steps), the pen, the drawing reached."""
+
+    count: int
+    """Its place among the queued commands of this link (1 = the first)."""
+    position: tuple[int, int]
+    pen_down: bool
+    place: ResumePoint | None
+    """Where the drawing stands once it has run, in the points given to ``_send_stroke`` (None: a travel)."""
 
 
 class EBBStream(PlotterDisplay):
@@ -70,28 +91,61 @@ class EBBStream(PlotterDisplay):
     _queued_sent: int
     _marks: deque[tuple[int, int]]
     """(queued commands sent up to a stroke's pen lift, the stroke): confirmed once the FIFO count passes it."""
+    position: np.ndarray
+    """Carriage position in steps once everything sent has run."""
     _paused: bool
     _lost: str | None
     _reached: tuple[int, int] | None
     _stroke_now: int | None
     _power_good: int
 
+    _progress: deque[Progress]
+    """Queued commands sent and not yet certified, with what each leaves behind once it has run."""
+    _certified: Progress | None
+    """The last queued command known to have finished with the motor supply on (its count 0: the link's start)."""
+    _cut: Progress | None
+    """After a supply failure: the last place known to be reached with the motors powered (where drawing stopped)."""
+
     # -- motor power -----------------------------------------------------------------------------
-    def _power_checkpoint(self) -> None:
-        """Queue a V+ check (``QC``; ``QG`` too on fw >= 3): a good answer certifies the commands finished before it."""
-        certified = self._queued_sent - (FIFO_DEPTH + 1)  # what has run by the time the parser reaches the check
-        self._command("QC", on_reply=lambda data: self._supply(parse_qc(data)[1], certified))
+    def _queue(self, text: str, duration_s: float, position: np.ndarray, pen_down: bool,
+               reached: tuple[int, int] | None = None, place: ResumePoint | None = None) -> None:
+        """Write a motion-queue command and note what it leaves behind once it has run (carriage in steps, pen).
+
+        Inside a stroke (travel, pen moves, slices) a supply check follows every one of them, written together
+        with it: a supply failure is then placed to one queued command.
+        """
+        self._command(text, queued=True, duration_s=duration_s, reached=reached)
+        self._progress.append(Progress(self._queued_sent, (int(position[0]), int(position[1])), pen_down, place))
+        if self._stroke_now is not None:
+            self._supply_check()
+
+    def _supply_check(self) -> None:
+        """``QC`` behind the last queued command: a good reading certifies every queued command finished before it.
+
+        The board reads it once the command before it has entered the FIFO, so all but the FIFO_DEPTH + 1 newest
+        queued commands have finished by then.  It is written together with that command (not waiting for its
+        answer): both reach the board at one moment, so two checks in a row bracket exactly one queued command.
+        """
+        self._command("QC", certifies=self._queued_sent - (FIFO_DEPTH + 1), window=WINDOW + 1)
+
+    def _power_gate(self) -> None:
+        """Before the pen goes down: two 1 ms pauses, whose checks certify the travel before the pen command is sent.
+
+        The pen goes down only where the carriage is known to have arrived with the motors powered (never on a
+        travel the motors stopped part way).
+        """
+        for _ in range(FIFO_DEPTH + 1):
+            self._queue("SM,1,0,0", 0.001, self.position, pen_down=False)
+
+    def _status_check(self) -> None:
+        """``QG`` on fw >= 3: the power-lost latch (a supply dip between two checks) and the PRG button."""
         if supports(self.version or (0, 0, 0), "queued_EM"):
             self._command("QG", on_reply=lambda data: self._status_byte(parse_qg(data)))
-
-    def _check_power(self) -> None:
-        """Ask ``QC`` now and raise when the motor supply is off."""
-        self._supply(self._query_vplus(), self._power_good)
 
     def _supply(self, raw: int, certified: int) -> None:
         """Act on a V+ reading: below VPLUS_MIN_RAW the motors stood still, so the plot stops with the position lost."""
         if raw < VPLUS_MIN_RAW:
-            self._lost = f"the motor supply failed during the plot (QC V+ {vplus_volts(raw):.1f} V)"
+            self._supply_failed(f"the motor supply failed during the plot (QC V+ {vplus_volts(raw):.1f} V)")
             raise Disconnected(
                 f"axidraw: motor power lost: QC reads V+ {vplus_volts(raw):.1f} V (a powered board reads "
                 f"{vplus_volts(VPLUS_MIN_RAW):.1f} V or more); the carriage stopped while the steps were counted, so "
@@ -99,25 +153,54 @@ class EBBStream(PlotterDisplay):
                 "position confirmed"
             )
         self._power_good = max(self._power_good, certified)
+        place = None
+        while self._progress and self._progress[0].count <= certified:
+            self._certified = self._progress.popleft()
+            place = self._certified.place or place
+        if place is not None:
+            self._acknowledge(place)
+
+    def _acknowledge(self, place: ResumePoint) -> None:
+        """Tell the base the drawing is on paper up to ``place``, where a confirmed resume after re-homing goes on.
+
+        The base's ``_acknowledged`` takes a vertex; a place inside a segment gets its point added here (a request
+        to the base's owner: ``_acknowledged(stroke, k, at)``).
+        """
+        if place.stroke < self.confirmed:
+            return
+        self._acknowledged(place.stroke, place.vertex)
+        if place.at is not None and self._ack is not None and self._ack.stroke == place.stroke:
+            self._ack = replace(self._ack, at=place.at)
+
+    def _supply_failed(self, why: str) -> None:
+        """Stop the moves still queued (they would run on once the supply is back); remember the last powered place."""
+        self._abort_motion()
+        self._lost = why
+        if self._cut is None:
+            self._cut = self._certified
 
     def _status_byte(self, bits: int) -> None:
         """A ``QG`` byte: PRG button presses toggle the pause; the power-lost latch stops the plot."""
         if bits & QG_POWER_LOST:
-            self._lost = "the motor supply dropped during the plot (QG power-lost flag)"
+            self._supply_failed("the motor supply dropped during the plot (QG power-lost flag)")
             raise Disconnected("axidraw: motor power dropped (QG power-lost flag): the position is unknown; "
                                "move the carriage home and resume with the position confirmed")
         self._button(bool(bits & QG_BUTTON))
 
     # -- commands and replies --------------------------------------------------------------------
     def _command(self, text: str, *, queued: bool = False, duration_s: float = 0.0,
-                 on_reply: Callable[[str], None] | None = None, reached: tuple[int, int] | None = None) -> None:
-        """Write one command (keeping at most WINDOW unanswered); ``queued`` ones enter the motion FIFO."""
-        while len(self._unanswered) >= WINDOW:
+                 on_reply: Callable[[str], None] | None = None, reached: tuple[int, int] | None = None,
+                 certifies: int | None = None, window: int = WINDOW) -> None:
+        """Write one command (keeping fewer than ``window`` unanswered); ``queued`` ones enter the motion FIFO."""
+        while len(self._unanswered) >= window:
             self._read_reply()
-        self._link().write(text.encode("ascii") + b"\r")
-        self._unanswered.append(Sent(text, queued, duration_s, on_reply, reached, self._stroke_now))
+        self._send(Sent(text, queued, duration_s, on_reply, reached, self._stroke_now, certifies))
         if queued:
             self._queued_sent += 1
+
+    def _send(self, sent: Sent) -> None:
+        self._link().write(sent.text.encode("ascii") + b"\r")
+        self._unanswered.append(sent)
 
     def _flush_replies(self) -> None:
         while self._unanswered:
@@ -148,6 +231,9 @@ class EBBStream(PlotterDisplay):
                     if error is None and ok.upper() != "OK":
                         raise ParseError(f"expected OK after the data of {sent.text!r}", source="ebb", token=ok)
         self._unanswered.popleft()
+        if error is not None and sent.tries <= RETRIES:
+            self._send_again(sent, error)
+            return None
         if error is not None:
             if sent.queued:
                 self._abort_motion()
@@ -163,9 +249,25 @@ class EBBStream(PlotterDisplay):
             while self._marks and self._marks[0][0] <= done:
                 _, index = self._marks.popleft()
                 self._confirm(index + 1)
+        if sent.certifies is not None:
+            self._supply(parse_qc(data or "")[1], sent.certifies)
         if sent.on_reply is not None:
             sent.on_reply(data or "")
         return data
+
+    def _send_again(self, sent: Sent, error: tuple[int, str]) -> None:
+        """A refused command (garbled on the wire: pixelpen sends only valid ones) goes out again, in its place.
+
+        Nothing behind it ran (WINDOW); a supply check written together with it was read by the board one queued
+        command earlier than counted, so it certifies one command less.
+        """
+        log.warning("axidraw: the EBB refused %r (!%d Err: %s); sending it again (%d/%d)",
+                    sent.text, error[0], error[1], sent.tries, RETRIES)
+        if sent.queued:
+            for later in self._unanswered:
+                if later.certifies is not None:
+                    later.certifies -= 1
+        self._send(replace(sent, tries=sent.tries + 1))
 
     def _line(self, timeout: float, command: str) -> str:
         """One non-empty reply line (legacy endings \\r\\n and \\n\\r both handled)."""
@@ -236,6 +338,8 @@ class EBBStream(PlotterDisplay):
         """Forget what the previous link had in flight (a new link starts counting afresh)."""
         self._unanswered.clear()
         self._marks.clear()
+        self._progress.clear()
+        self._certified = None
         self._queued_acked = self._queued_sent = self._power_good = 0
 
     def _button(self, pressed: bool) -> None:

@@ -9,6 +9,7 @@ import pixelpen
 from pixelpen.clock import SimulatedClock
 from pixelpen.devices.plotters.axidraw import AxiDrawPlotter
 from pixelpen.devices.plotters.base import PlotInterrupted, PositionUnknown
+from pixelpen.devices.plotters.ebb_stream import RETRIES
 from pixelpen.drivers.serial import SerialLink
 from pixelpen.drivers.stream import Link
 from pixelpen.errors import ConfigError, LinkError, ProtocolError, URLError
@@ -21,10 +22,15 @@ from tests.devices.plotters.test_grbl import CLOSED_STROKE, OPEN_STROKES, InkAcc
 
 PROFILE = load_profile("axidraw_v3")
 STEPS = 80  # device units (motor steps at 16x) per millimetre
-CONNECT = b"#\rV\rQM\rEM,1,1\rSC,4,20641\rSC,5,15248\rSP,1,120\rQC\r"
+CONNECT = b"#\rV\rQM\rEM,1,1\rSC,4,20641\rSC,5,15248\rSC,11,400\rSC,12,400\rSP,1,324\rQC\r"
 """Connection by hand from ebb.html and the axidraw_v3 profile: flush, version, idle check, 16x stepping,
-servo up = 9855 + 17976 x 60 % = 20641, down = 9855 + 17976 x 30 % = 15248, pen up with its 120 ms lift,
-then the motor supply check pyaxidraw makes before plotting (QC)."""
+servo up = 9855 + 17976 x 60 % = 20641, down = 9855 + 17976 x 30 % = 15248, the raise and lower rates as
+pyaxidraw's servo set-up sends them (SC,11 / SC,12, fw >= 2.6.0) at the firmware's boot value 400, pen up
+with a delay covering the slew (|20641 - 15248| x 24 ms / 400 = 323.6 -> 324 ms, longer than the profile's
+120 ms), then the motor supply check pyaxidraw makes before plotting (QC)."""
+PEN_MS = 324
+GATE = "SM,1,0,0"
+"""The two 1 ms pauses before every pen-down, whose supply checks certify the travel before the pen goes down."""
 VPLUS_9V = 293
 """QC's V+ reading of a 9 V supply: (9 − 0.3) / 9.2 / 3.3 x 1023 (saxi's divider formula, inverted)."""
 
@@ -188,8 +194,8 @@ def test_ten_millimetre_line_is_800_steps_on_both_motors():
     plotter, fake = fake_plotter()
     start = len(fake.commands)
     plotter.plot(DisplayList.from_polylines([np.array([[0, 0], [800, 0]])], unit_mm=PROFILE.unit_mm))
-    sent = [c for c in fake.commands[start:] if not c.startswith("Q")]
-    assert sent[0] == "SP,0,120" and sent[-1] == "SP,1,120"
+    sent = [c for c in fake.commands[start:] if not c.startswith("Q") and c != GATE]
+    assert sent[0] == f"SP,0,{PEN_MS}" and sent[-1] == f"SP,1,{PEN_MS}"
     moves = [tuple(int(v) for v in c.split(",")[1:]) for c in sent[1:-1]]
     assert all(m1 == m2 for _, m1, m2 in moves)             # pure +x: both motors turn alike
     assert sum(m1 for _, m1, _ in moves) == 800              # 10 mm x 80 steps/mm
@@ -202,7 +208,7 @@ def test_unit_square_and_pen_lift_sequence():
     start = len(fake.commands)
     plotter.plot(squares(1, at=(5.0, 3.0)))
     sent = [c for c in fake.commands[start:] if not c.startswith("Q")]
-    down, up = sent.index("SP,0,120"), sent.index("SP,1,120")
+    down, up = sent.index(f"SP,0,{PEN_MS}"), sent.index(f"SP,1,{PEN_MS}")
     travel, stroke = sent[:down], sent[down + 1:up]
     assert motion(travel)[-1].tolist() == [400, 240]          # pen-up travel from home to (5 mm, 3 mm)
     path = motion(stroke) + [400, 240]  # noqa: RUF005  (an array: the offset added to every point)
@@ -225,10 +231,11 @@ def test_xm_sends_the_axes_unmixed():
 
 
 def test_error_reply_names_the_command():
+    """A command the board refuses every time it is sent (1 + RETRIES times) stops the plot, naming it."""
     first_sm = []
 
     def reject(cmd):
-        if cmd.startswith("SM") and not first_sm:
+        if cmd.startswith("SM") and cmd != GATE and (not first_sm or cmd == first_sm[0]):
             first_sm.append(cmd)
             return b"!6 Err: Invalid parameter valueOK\r\n"
         return None
@@ -236,9 +243,35 @@ def test_error_reply_names_the_command():
     plotter, _fake = fake_plotter(override=reject)
     with pytest.raises(ProtocolError) as info:
         plotter.plot(squares(1))
-    assert info.value.code == 6 and info.value.command == first_sm[0]
+    assert info.value.code == 6 and info.value.command == first_sm[0] and len(first_sm) == 1 + RETRIES
     assert first_sm[0] in str(info.value) and "Invalid parameter value" in str(info.value)
     plotter.abort()
+
+
+def test_a_refused_command_is_sent_again_in_its_place_and_nothing_runs_before_it():
+    """One garbled command: nothing behind it was written yet (WINDOW), so the same command goes out again."""
+    clean, clean_fake = fake_plotter()
+    clean.plot(squares(2))
+    clean.close()
+    written: list[str] = []
+    refused: list[int] = []
+
+    def reject_some(cmd):
+        written.append(cmd)
+        if len(written) in (40, 90, 91, 200) and cmd.startswith(("SM", "SP")) and (len(written) - 1) not in refused:
+            refused.append(len(written) - 1)
+            return b"!8 Err: Unknown command 'S\xc2:53C2'OK\r\n"
+        return None
+
+    plotter, fake = fake_plotter(override=reject_some)
+    plotter.plot(squares(2))
+    plotter.close()
+    assert len(refused) >= 2 and plotter.confirmed == 2
+    again = list(fake.commands)
+    for i in reversed(refused):  # sent again right after the supply check written with it; else the clean run's bytes
+        assert again[i + 1 : i + 3] == ["QC", again[i]]
+        del again[i + 2]
+    assert again == clean_fake.commands
 
 
 def test_button_is_read_with_qb_before_firmware_2_6_2():
@@ -441,25 +474,22 @@ def test_resume_after_a_link_fault_draws_every_segment_once(fault, strokes):
     assert interrupted >= 5
 
 
-def test_a_corrupted_byte_is_refused_and_nothing_is_lost_or_stray():
-    """The EBB refuses a garbled command (!8, !5 ...); ES stops the moves behind it, so none runs off the path."""
+def test_a_corrupted_byte_is_refused_sent_again_and_every_segment_is_drawn_once(caplog):
+    """The EBB refuses a garbled command (!8, !5 ...); nothing behind it has been written, so it goes out again."""
     strokes = OPEN_STROKES
     points = fault_points(17, 6, plotted_bytes(strokes))
     refused = 0
     for at in points:
         dev, clock = new_sim()
         plotter = sim_plotter(dev, clock, url_extra=f"&corrupt_at={at}")
+        caplog.clear()
         try:
             plotter.plot(drawing_mm(strokes))
-        except PlotInterrupted:
-            refused += 1
-            try:
-                plotter.resume_after_fault()
-            except PositionUnknown:
-                plotter.resume_after_fault(position_confirmed=True)
+        except PlotInterrupted:  # a garbled terminator joins two commands: no answer, resumed from the counters
+            plotter.resume_after_fault()
+        refused += any("sending it again" in r.getMessage() for r in caplog.records)
         plotter.close()
-        account = ink_account(intended(strokes), inked(dev.paper))
-        assert account.stray == 0, f"corrupt_at={at}: {account}"
+        assert ink_account(intended(strokes), inked(dev.paper)) == InkAccount(0, 0, 0), f"corrupt_at={at}"
     assert refused >= 4
 
 
@@ -520,5 +550,26 @@ def test_after_a_motor_power_loss_a_confirmed_resume_plots_from_the_pushed_home(
     dev.inject("power-restore")
     plotter.resume_after_fault(position_confirmed=True)
     plotter.close()
-    account = ink_account(intended(strokes), inked(dev.paper))
-    assert (account.lost, account.stray) == (0, 0), account
+    assert ink_account(intended(strokes), inked(dev.paper)) == InkAccount(0, 0, 0)
+
+
+def test_a_power_loss_anywhere_is_placed_exactly_and_the_confirmed_resume_draws_only_what_is_missing():
+    """Travel, pen moves or mid-slice: a supply check behind every queued command places the cut, the pen never
+    goes down where a travel stopped short, and after re-homing exactly the rest is drawn (segment sets)."""
+    strokes = [*OPEN_STROKES[:3], CLOSED_STROKE]
+    total = plotted_bytes(strokes)
+    for at in fault_points(23, 5, total, start=total // 8):
+        dev, clock = new_sim()
+        plotter = sim_plotter(dev, clock, url_extra=f"&power_loss_after={at}")
+        with pytest.raises(PlotInterrupted, match="motor power"):
+            plotter.plot(drawing_mm(strokes))
+        assert ink_account(intended(strokes), inked(dev.paper)).stray == 0, f"power_loss_after={at}: a stray dot"
+        dev.inject("power-restore")
+        with pytest.raises(PositionUnknown, match="last ran powered to"):
+            plotter.resume_after_fault()
+        plotter.pen_up()
+        plotter.motors_off()
+        dev.push_carriage_home()
+        plotter.resume_after_fault(position_confirmed=True)
+        plotter.close()
+        assert ink_account(intended(strokes), inked(dev.paper)) == InkAccount(0, 0, 0), f"power_loss_after={at}"
