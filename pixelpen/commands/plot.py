@@ -37,6 +37,7 @@ from typing import IO, TYPE_CHECKING
 import numpy as np
 
 from pixelpen import geometry as geo
+from pixelpen.commands import argtypes
 from pixelpen.commands.keys import KeyControl
 from pixelpen.devices.plotters.layout import CUT_REPORT_MM, Layout, Placement, home_of, sheet_to_device
 from pixelpen.display.registry import display_class, open_display
@@ -401,36 +402,6 @@ def run_plot(args: argparse.Namespace) -> int:
     return 0
 
 
-def _non_negative_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
-    return value
-
-
-def _number(minimum: float, inclusive: bool) -> Callable[[str], float]:
-    """An argparse type: a finite number above ``minimum`` (or equal to it when ``inclusive``)."""
-    bound = f">= {minimum:g}" if inclusive else f"> {minimum:g}"
-
-    def convert(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-        if not (math.isfinite(value) and (value >= minimum if inclusive else value > minimum)):
-            raise argparse.ArgumentTypeError(f"expected a number {bound}, got {text!r}")
-        return value
-
-    return convert
-
-
-def _angle(text: str) -> float:
-    return _number(-math.inf, False)(text)
-
-
 PLOT_DESCRIPTION = """\
 Plot FILE on the plotter at URL.  Keys while plotting (on a terminal): p or space pauses at the
 next pen-up and resumes; Ctrl-C stops with the pen up.  Exit status: 0 done, 2 error, 3 stopped
@@ -463,14 +434,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--to", required=True, metavar="URL", help="plotter URL: hp7475a:/dev/ttyUSB0, grbl:auto, "
                    "sim:axidraw?speed=fast&out=paper.png ... (default: the configuration file's)")
     g = p.add_argument_group("layout")
-    g.add_argument("--rotate", type=_angle, default=0.0, metavar="DEG",
+    g.add_argument("--rotate", type=argtypes.finite, default=0.0, metavar="DEG",
                    help="turn the drawing clockwise by DEG degrees about its centre (first)")
-    g.add_argument("--scale", type=_number(0.0, False), default=1.0, metavar="S",
+    g.add_argument("--scale", type=argtypes.positive, default=1.0, metavar="S",
                    help="scale the drawing by S about its centre (after --rotate)")
     g.add_argument("--fit", action=argparse.BooleanOptionalAction, default=False,
                    help="scale the drawing to fill the box (page less margins, within the limits), centred")
     g.add_argument("--center", "--centre", action="store_true", help="centre the drawing in the box (last)")
-    g.add_argument("--margin", type=_number(0.0, True), default=0.0, metavar="MM",
+    g.add_argument("--margin", type=argtypes.non_negative, default=0.0, metavar="MM",
                    help="keep MM millimetres free on every side of the page (with --center or --fit)")
     g.add_argument("--page", metavar="SIZE", help="page size: a4, a3, letter ... or WxH[mm|cm|in] "
                    "(default the plotter's paper; a name takes the paper's orientation)")
@@ -486,7 +457,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--dedupe", action=argparse.BooleanOptionalAction, default=True,
                    help="drop a stroke that repeats another of its layer and pen (default on; --no-dedupe keeps "
                         "repeats, e.g. a line drawn twice to darken it)")
-    p.add_argument("--optimize-time", type=_number(0.0, True), default=None, metavar="S",
+    p.add_argument("--optimize-time", type=argtypes.non_negative, default=None, metavar="S",
                    help="seconds the optimiser may spend improving the order (default: by the drawing's size)")
     p.add_argument("--layers", nargs="+", metavar="LAYER", help="plot only these layers (numbers or names)")
     p.add_argument("--state", metavar="STATE", help="plot state file for resuming (default FILE.plot-state.json)")
@@ -494,9 +465,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--confirm-position", action="store_true",
                    help="with --resume: the plotter was re-homed or the sheet checked; continue from the last "
                         "confirmed stroke even though the plotter cannot tell where it stopped (may redraw)")
-    p.add_argument("--retries", type=_non_negative_int, default=2, metavar="N",
+    p.add_argument("--retries", type=argtypes.non_negative_int, default=2, metavar="N",
                    help="reconnect and resume up to N times after a link fault (default 2)")
-    p.add_argument("--tolerance", type=_number(0.0, False), default=0.05, metavar="MM",
+    p.add_argument("--tolerance", type=argtypes.positive, default=0.05, metavar="MM",
                    help="SVG curve flattening tolerance in mm (default 0.05)")
     p.set_defaults(func=run_plot)
 

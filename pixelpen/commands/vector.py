@@ -13,18 +13,9 @@ import sys
 
 import numpy as np
 
+from pixelpen.commands import argtypes
 from pixelpen.errors import ConfigError
 from pixelpen.vector.displaylist import DisplayList
-
-
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
-    return value
 
 
 def run_optimize(args: argparse.Namespace) -> int:
@@ -161,7 +152,7 @@ def _device_preview(args: argparse.Namespace) -> list[str]:
 
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("input", metavar="FILE.svg", help="SVG drawing (millimetres; Inkscape layers or stroke colours)")
-    p.add_argument("--tolerance", type=_positive, default=0.05, metavar="MM",
+    p.add_argument("--tolerance", type=argtypes.positive, default=0.05, metavar="MM",
                    help="curve flattening tolerance in mm (default 0.05)")
 
 
@@ -171,11 +162,11 @@ def add_optimize(subparsers: argparse._SubParsersAction) -> argparse.ArgumentPar
     _common(p)
     p.add_argument("-o", "--output", required=True, metavar="OUT.svg", help="optimised SVG to write")
     p.add_argument("--no-reverse", action="store_true", help="never draw a path backwards")
-    p.add_argument("--merge", type=_positive, default=None, metavar="TOL_MM",
+    p.add_argument("--merge", type=argtypes.positive, default=None, metavar="TOL_MM",
                    help="join paths whose ends are within TOL_MM")
-    p.add_argument("--simplify", type=_positive, default=None, metavar="TOL_MM",
+    p.add_argument("--simplify", type=argtypes.positive, default=None, metavar="TOL_MM",
                    help="drop points that deviate less than TOL_MM")
-    p.add_argument("--time-budget", type=_positive, default=None, metavar="S",
+    p.add_argument("--time-budget", type=argtypes.positive, default=None, metavar="S",
                    help="most seconds to spend improving the order (default: adaptive, stopping when the gains stall;"
                         " about 30 us per path)")
     p.add_argument("--no-dedupe", action="store_true",
@@ -203,7 +194,7 @@ def add_preview(subparsers: argparse._SubParsersAction) -> argparse.ArgumentPars
     _common(p)
     p.add_argument("-o", "--output", required=True, metavar="PREVIEW.png", help="preview file (.png or .svg)")
     p.add_argument("--size", type=int, default=None, metavar="PX", help="longest side in pixels (default 1000)")
-    p.add_argument("--pen-width", type=_positive, default=None, metavar="MM", help="draw strokes this wide")
+    p.add_argument("--pen-width", type=argtypes.positive, default=None, metavar="MM", help="draw strokes this wide")
     p.add_argument("--no-travel", action="store_true", help="do not draw pen-up moves")
     p.add_argument("--device", default=None, metavar="PROFILE",
                    help="dry run on this plotter: show the sheet, its hard-clip limits and what will be cut")

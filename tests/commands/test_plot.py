@@ -5,6 +5,7 @@ device profiles' documented paper origins (vpype's ``origin_location``) and the 
 the command's own output.
 """
 
+import argparse
 import io
 import json
 import logging
@@ -17,6 +18,7 @@ import numpy as np
 import pytest
 
 from pixelpen.cli import main
+from pixelpen.commands import argtypes
 from pixelpen.commands import plot as plotcmd
 from pixelpen.devices.plotters.base import PlotProgress
 from pixelpen.devices.plotters.job import plotter_for
@@ -756,11 +758,10 @@ def layout_campaign(cases, seed):
     def target(data):
         page, rotate, scale, margin = [*data.decode("utf-8", "replace").split(" "), "", "", "", ""][:4]
         numbers = []
-        for text, convert in ((rotate, plotcmd._angle), (scale, plotcmd._number(0.0, False)),
-                              (margin, plotcmd._number(0.0, True))):
+        for text, convert in ((rotate, argtypes.finite), (scale, argtypes.positive), (margin, argtypes.non_negative)):
             try:
                 numbers.append(convert(text))
-            except plotcmd.argparse.ArgumentTypeError:  # argparse turns it into a usage error
+            except argparse.ArgumentTypeError:  # argparse turns it into a usage error
                 return
         layout = Layout(rotate_deg=numbers[0], scale=numbers[1], center=True, margin_mm=numbers[2],
                         page=page or None)

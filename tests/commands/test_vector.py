@@ -198,4 +198,4 @@ def test_errors_give_status_2_and_one_line(tmp_path, drawing, capsys, argv_tail,
 
 def test_bad_option_values_are_rejected_by_argparse(drawing, capsys):
     assert run(["optimize", str(drawing), "-o", "x.svg", "--merge", "-1"]) == 2
-    assert "expected a number > 0" in capsys.readouterr().err
+    assert "expected a finite number > 0" in capsys.readouterr().err
