@@ -9,7 +9,6 @@ expected; the reader turns that into a ``URLError`` naming the URL and the optio
 
 from __future__ import annotations
 
-import difflib
 import math
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
@@ -75,6 +74,8 @@ def check_known(known: Iterable[str], options: Iterable[str], where: str) -> Non
     unknown = sorted(set(options) - set(names))
     if not unknown:
         return
+    import difflib  # only an error needs it
+
     hint = ""
     close = difflib.get_close_matches(unknown[0], names, n=1)
     if close:
