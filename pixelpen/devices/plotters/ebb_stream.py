@@ -120,13 +120,16 @@ class EBBStream(PlotterDisplay):
             self._supply_check()
 
     def _supply_check(self) -> None:
-        """``QC`` behind the last queued command: a good reading certifies every queued command finished before it.
+        """A supply check behind the last queued command: a good one certifies every queued command finished before it.
 
-        The board reads it once the command before it has entered the FIFO, so all but the FIFO_DEPTH + 1 newest
-        queued commands have finished by then.  It is written together with that command (not waiting for its
-        answer): both reach the board at one moment, so two checks in a row bracket exactly one queued command.
+        ``QG`` on fw >= 3 (its bit 6 latches any drop below the CU,60 threshold since the last QG, and the answer
+        is 4 bytes), else ``QC``.  The board reads it once the command before it has entered the FIFO, so all but
+        the FIFO_DEPTH + 1 newest queued commands have finished by then.  It is written together with that command
+        (not waiting for its answer): both reach the board at one moment, so two checks in a row bracket exactly
+        one queued command.
         """
-        self._command("QC", certifies=self._queued_sent - (FIFO_DEPTH + 1), window=WINDOW + 1)
+        query = "QG" if supports(self.version or (0, 0, 0), "queued_EM") else "QC"
+        self._command(query, certifies=self._queued_sent - (FIFO_DEPTH + 1), window=WINDOW + 1)
 
     def _power_gate(self) -> None:
         """Before the pen goes down: two 1 ms pauses, whose checks certify the travel before the pen command is sent.
@@ -152,6 +155,10 @@ class EBBStream(PlotterDisplay):
                 "where the pen is is unknown: switch the power on, move the carriage home and resume with the "
                 "position confirmed"
             )
+        self._certify(certified)
+
+    def _certify(self, certified: int) -> None:
+        """The first ``certified`` queued commands finished with the motors powered: acknowledge where they got to."""
         self._power_good = max(self._power_good, certified)
         place = None
         while self._progress and self._progress[0].count <= certified:
@@ -183,8 +190,10 @@ class EBBStream(PlotterDisplay):
         """A ``QG`` byte: PRG button presses toggle the pause; the power-lost latch stops the plot."""
         if bits & QG_POWER_LOST:
             self._supply_failed("the motor supply dropped during the plot (QG power-lost flag)")
-            raise Disconnected("axidraw: motor power dropped (QG power-lost flag): the position is unknown; "
-                               "move the carriage home and resume with the position confirmed")
+            raise Disconnected(f"axidraw: motor power lost: V+ fell below {vplus_volts(VPLUS_MIN_RAW):.1f} V (QG "
+                               "power-lost flag); the carriage stopped while the steps were counted, so where the "
+                               "pen is is unknown: switch the power on, move the carriage home and resume with the "
+                               "position confirmed")
         self._button(bool(bits & QG_BUTTON))
 
     # -- commands and replies --------------------------------------------------------------------
@@ -249,7 +258,10 @@ class EBBStream(PlotterDisplay):
             while self._marks and self._marks[0][0] <= done:
                 _, index = self._marks.popleft()
                 self._confirm(index + 1)
-        if sent.certifies is not None:
+        if sent.certifies is not None and _name(sent.text) == "QG":
+            self._status_byte(parse_qg(data or ""))
+            self._certify(sent.certifies)
+        elif sent.certifies is not None:
             self._supply(parse_qc(data or "")[1], sent.certifies)
         if sent.on_reply is not None:
             sent.on_reply(data or "")

@@ -144,6 +144,20 @@ def test_future_syntax_board_is_understood():
     assert fake.commands[-1] == "EM,0,0"
 
 
+def test_servo_rates_only_from_firmware_2_6_0_and_pen_delays_cover_the_slew():
+    """Before 2.6.0 no SC,11/12 and the profile's 120 ms; a faster rate shortens the delay to the profile's."""
+    plotter, fake = fake_plotter(version="2.5.3")
+    assert not any(c.startswith(("SC,11", "SC,12")) for c in fake.commands) and "SP,1,120" in fake.commands
+    plotter.close()
+    plotter, fake = fake_plotter(pen_rate_up=5393, pen_rate_down=1000)
+    assert fake.commands[6:10] == ["SC,11,5393", "SC,12,1000", "SP,1,120", "QC"]  # 24 ms < 120 ms lift
+    plotter.plot(DisplayList.from_polylines([np.array([[0, 0], [80, 0]])], unit_mm=PROFILE.unit_mm))
+    assert "SP,0,130" in fake.commands  # lowering at 1000: ceil(5393 x 24 / 1000) = 130 ms > 120 ms
+    plotter.close()
+    with pytest.raises(ConfigError, match="SC,11/12"):
+        AxiDrawPlotter("fake", profile=PROFILE, pen_rate_up=0)
+
+
 def test_old_firmware_and_missing_features_are_refused():
     with pytest.raises(ProtocolError, match=r"2\.4\.4"):
         fake_plotter(version="2.4.0")

@@ -19,7 +19,9 @@ from pixelpen.devices.plotters.ebb_encode import (
     parse_qs,
     parse_version_reply,
     reply_shape,
+    servo_move_ms,
     servo_positions,
+    servo_rate_commands,
     slice_polyline,
     step_deltas,
     supports,
@@ -70,6 +72,18 @@ def test_servo_defaults_without_a_profile_range():
 
 
 # -- steps ------------------------------------------------------------------------------------------------
+def test_servo_rates_as_pyaxidraw_sends_them():
+    """SC,11 raise / SC,12 lower (pyaxidraw pen_handling servo_init, fw >= 2.6.0); slew = |Δ| x 24 ms / rate."""
+    assert servo_rate_commands(400, 400) == ["SC,11,400", "SC,12,400"]
+    assert servo_rate_commands(1618, 1079) == ["SC,11,1618", "SC,12,1079"]  # pyaxidraw's 75 % / 50 % defaults
+    assert supports((2, 6, 0), "SC_rates") and not supports((2, 5, 5), "SC_rates")
+    assert servo_move_ms(15248, 20641, 400) == 324  # 5393 x 0.024 / 400 = 0.3236 s
+    assert servo_move_ms(20641, 15248, 5393) == 24
+    for bad in (0, 65536, 1.5):
+        with pytest.raises(ConfigError, match="SC,11/12"):
+            servo_rate_commands(bad, 400)
+
+
 def test_fractional_steps_carry_over_many_tiny_moves():
     """10,000 moves of 0.37 step each: every delta is 0 or 1 and they sum to exactly rint(3700) steps."""
     positions = np.arange(10_001) * 0.37
