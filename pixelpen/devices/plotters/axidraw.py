@@ -4,26 +4,35 @@ URL: ``axidraw:/dev/ttyACM0?model=se_a3&moves=lm`` (PORT is a device path, a pys
 ``auto`` for the first USB serial port with the EBB's ID 04D8:FD92); ``sim:axidraw?speed=fast`` plots on
 the simulator.  ``model=`` picks the profile: ``v3`` (default; also V2 and SE/A4), ``se_a3``, ``minikit``.
 
-Each stroke is a pen-up travel, ``SP,0,<drop ms>``, the stroke, ``SP,1,<lift ms>``.  Travel and stroke are
-planned with the vector engine's motion model (:func:`pixelpen.vector.motion.plan`: trapezoids, junction
-deviation at corners) with the profile's pen-up and pen-down limits and emitted as time slices of at most
-25 ms (``SM``, ``XM`` or ``LM``, option ``moves=``), steps rounded with their fractions carried.
+Each stroke is a pen-up travel, two 1 ms pauses, ``SP,0,<drop ms>``, the stroke, ``SP,1,<lift ms>``.  Travel and
+stroke are planned with the vector engine's motion model (:func:`pixelpen.vector.motion.plan`: trapezoids,
+junction deviation at corners) with the profile's pen-up and pen-down limits and emitted as time slices of at
+most 25 ms (``SM``, ``XM`` or ``LM``, option ``moves=``), steps rounded with their fractions carried.  The servo
+rates are set as pyaxidraw does (``SC,11`` raise / ``SC,12`` lower, fw >= 2.6.0; default 400, the firmware's
+boot value) and each SP delay covers the slew (|SC,4 − SC,5| × 24 ms / rate) or the profile's pen time.
 
 How a stroke is confirmed.  A motion command's ``OK`` comes when it enters the board's motion FIFO, not when
 it runs.  The FIFO holds one command at boot and one more executes, so when the ``OK`` of the n-th queued
 command arrives every queued command up to n − 2 has finished: a stroke is confirmed once the command
 count acknowledged passes its pen lift by two.  At the end of a job (and before a pause) ``QM`` is polled
-until the motion system is idle, which confirms everything sent.
+until the motion system is idle, which confirms everything sent.  One command is in flight at a time
+(``WINDOW``): a command the board refuses (a byte garbled on the wire) is sent again in its place, since
+nothing behind it has reached the board; refused ``RETRIES`` more times, ``ES`` stops the FIFO and the plot
+stops with its stroke marked damaged.
 
 Pause: the PRG button (``QG`` bit 5, or ``QB`` on firmware before 2.6.2), polled at most every 50 ms
 between strokes, pauses the plot with the pen up; a second press resumes it.
 
 Motor power.  Without V+ the motors stand still while the board goes on counting steps, so the carriage is
-no longer where the counters say.  ``QC`` is read at connect (as pyaxidraw does) and after every stroke (plus
-the ``QG`` bit 6 latch, armed with ``CU,60``, on firmware 3.x); a stroke is confirmed only once a good
-reading taken after it ran came back.  A reading below ``VPLUS_MIN_RAW`` (plotink's 250 counts, about 7.7 V)
-stops the plot (Disconnected) with the position lost: the resume asks for the carriage to go home and a
-confirmation.  A refused motion command stops the FIFO at once (``ES``) and marks its stroke damaged.
+no longer where the counters say.  ``QC`` is read at connect (as pyaxidraw does); inside a stroke a supply check
+follows every queued command, written together with it (``QG``, whose bit 6 latches any drop below the
+``CU,60`` threshold, on fw >= 3; ``QC`` before).  Two checks in a row bracket exactly one queued command, so a
+failure is placed to that command: the moves still queued are stopped (``ES``), the last place reached with
+the motors powered is acknowledged to the base (``_acknowledged``), and the plot stops (Disconnected) with the
+position lost; after the carriage is put home and the position confirmed, the resume draws from that place.
+The two pauses before each pen-down let the checks certify the travel first: the pen never goes down where
+the motors stopped short.  A reading below ``VPLUS_MIN_RAW`` (plotink's 250 counts, about 7.7 V) counts as
+no supply.
 
 After a fault (``_where``): the board runs its FIFO out (``QM``), then ``QS`` gives the carriage in steps,
 ``QG``/``QP`` the pen, ``QE`` whether the motors stayed on at 1/16 (off, or a rebooted board: position lost),

@@ -1,9 +1,10 @@
-"""The EiBotBoard's command stream: commands written under a small window, replies read in both syntaxes.
+"""The EiBotBoard's command stream: one command in flight, refused ones sent again, replies in both syntaxes.
 
 :class:`EBBStream` is the layer of :class:`~pixelpen.devices.plotters.axidraw.AxiDrawPlotter` that writes EBB
 commands and reads their replies (``OK``, data, ``!n Err``; the future syntax ``CU,10,1``), confirms strokes by
-the motion FIFO count, and acts on the motor-power checks and the PRG button; the plotter above it connects,
-plans and slices moves, finds where a plot stopped and controls the pen.  See the plotter's module docstring.
+the motion FIFO count, certifies queued commands with supply checks (and acknowledges where they got to), and
+acts on a supply failure and the PRG button; the plotter above it connects, plans and slices moves, finds where
+a plot stopped and controls the pen.  See the plotter's module docstring.
 """
 
 from __future__ import annotations
