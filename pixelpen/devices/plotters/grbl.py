@@ -20,11 +20,14 @@ A line lost on the wire shows as an idle GRBL with acknowledgements missing and 
 
 Trust.  GRBL has no line checksum, and a byte >= 0x80 is taken as an unknown real-time command and dropped,
 so a garbled byte can leave a shorter but valid line (``X12.3`` -> ``X1.3``, ``M3 S500`` -> ``M3 S50``).  Every
-status report during a plot (one at each confirmation, at most 5 Hz between strokes) is checked against the
-path sent (:class:`~pixelpen.devices.plotters.grbl_encode.PathTrack`): off the path, or with the pen up along a drawn
-leg (down along a travel), the driver feeds hold at once, marks the strokes in flight damaged and raises
-LinkError.  An ``error:N`` also holds at once (the lines behind a refused one would draw a shortcut) and marks
-its stroke damaged.  A wrong target inside a stroke draws its wrong leg before any report can show it.
+status report during a plot (``?`` every ``TRACK_POLL_S`` while the driver waits, one after every confirming
+``ok``: a stroke counts as confirmed only once that report is on the path) is checked against the path sent
+(:class:`~pixelpen.devices.plotters.grbl_encode.PathTrack`): off the path, or with the pen up along a drawn leg
+(down along a travel), the driver feeds hold at once and raises LinkError.  The line that lost a byte is then
+found (:func:`~pixelpen.devices.plotters.grbl_encode.explain_position`: the first line sent whose one-byte
+variant puts the pen there) and the resume draws from its start; an ``error:N`` names its line itself (it never
+ran; GRBL stopped before it or took the shortcut past it).  Unexplained: the strokes in flight are redrawn whole.
+A wrong target draws its wrong leg before any report can show it (GRBL has no checksum): that stray is not undone.
 
 After a fault (``_where``, on the fresh link): GRBL is left to run what it received (Idle and silent for
 longer than a pen dwell, or a finished hold), a half line is flushed by the ``$$`` query it spoils, ``$$``
@@ -34,7 +37,8 @@ the Arduino's auto-reset on opening the port), an alarm that loses position, ``$
 during the plot mean the position is lost: the resume asks for ``$H`` (``go_home()`` with $22=1) or a check.
 
 Limits: ``SETTLE_LIMIT_S`` (120 s) for GRBL to finish after a reconnect, ``HOMING_LIMIT_S`` (120 s) for ``$H``,
-``TRACK_TOLERANCE_MM`` (0.1 mm) off the path before a report counts as a garbled line; module constants.
+``TRACK_TOLERANCE_MM`` (0.03 mm, for machines of >= 67 steps/mm) off the path before a report counts as a garbled
+line, ``TRACK_POLL_S`` (0.5 s) between status polls while plotting; module constants.
 """
 
 from __future__ import annotations
