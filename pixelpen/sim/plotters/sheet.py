@@ -242,5 +242,3 @@ class Sheet:
         self._current = None
 
 
-
-Paper = Sheet  # TEMPORARY (removed before the stop): two driver tests still import the old name

@@ -15,7 +15,7 @@ from pixelpen.drivers.stream import Link
 from pixelpen.errors import ConfigError, LinkError, ProtocolError, URLError
 from pixelpen.profiles.model import load_profile
 from pixelpen.sim.base import create_simulator
-from pixelpen.sim.plotters.sheet import Paper
+from pixelpen.sim.plotters.sheet import Sheet
 from pixelpen.urls import parse_url
 from pixelpen.vector.displaylist import DisplayList
 from tests.devices.plotters.test_grbl import CLOSED_STROKE, OPEN_STROKES, InkAccount, ink_account
@@ -326,13 +326,13 @@ def sim_plotter(dev, clock, url_extra="", **kwargs) -> AxiDrawPlotter:
     return plotter
 
 
-def inked(paper: Paper) -> list[np.ndarray]:
+def inked(paper: Sheet) -> list[np.ndarray]:
     """The strokes on the sheet."""
     return [s for _, s in paper.strokes()]
 
 
 def render(strokes, width=300.0, height=218.0, dpi=50) -> np.ndarray:
-    paper = Paper(width, height, y_down=True)
+    paper = Sheet(width, height, y_down=True)
     for pts in strokes:
         paper.pen_down(pts[0])
         paper.line_to(pts)

@@ -18,7 +18,7 @@ from pixelpen.drivers.stream import Link
 from pixelpen.errors import ConfigError, LinkTimeout, ProtocolError, URLError
 from pixelpen.profiles.model import load_profile
 from pixelpen.sim.base import create_simulator
-from pixelpen.sim.plotters.sheet import Paper
+from pixelpen.sim.plotters.sheet import Sheet
 from pixelpen.vector.displaylist import DisplayList
 
 WELCOME = b"\r\nGrbl 1.1h ['$' for help]\r\n"
@@ -156,7 +156,7 @@ def new_sim(clock=None):
 
 def render(strokes_mm, dpi=50) -> np.ndarray:
     """Independent rendering of the expected ink: the strokes drawn on a fresh simulator sheet."""
-    paper = Paper(297.0, 210.0, y_down=False)
+    paper = Sheet(297.0, 210.0, y_down=False)
     for pts in strokes_mm:
         paper.pen_down(pts[0])
         paper.line_to(pts)

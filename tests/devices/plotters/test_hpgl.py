@@ -511,7 +511,7 @@ class Operator(SimulatedClock):
         elif self.now() - self._since >= self.after:
             self.events.append(("resumed", self.now()))
             self._since = None
-            if dev._lever:
+            if dev.lever_raised:
                 dev.release_paper_lever()
             else:
                 dev.press_view()
@@ -545,7 +545,7 @@ def test_a_pause_asked_by_the_host_holds_with_the_pen_up_and_everything_confirme
         if len(calls) == 4:  # before stroke 3: pause for the next ten looks
             return True
         if 4 < len(calls) <= 14:
-            seen.append((rig.display.confirmed, rig.device._pen_down, rig.device.buffered_bytes))
+            seen.append((rig.display.confirmed, rig.device.pen_down, rig.device.buffered_bytes))
             return True
         return False
 
@@ -570,7 +570,7 @@ def test_ctrl_c_aborts_then_stores_the_pen():
     tail = wire[wire.rindex(b"\x1b.K"):]
     assert tail == b"\x1b.KPU;SP0;PU11040,7721;OI;"
     dev = rig.device
-    assert dev.selected_pen == 0 and not dev._pen_down and dev.buffered_bytes == 0
+    assert dev.selected_pen == 0 and not dev.pen_down and dev.buffered_bytes == 0
     assert dev.next_event_time() is None  # idle
     assert rig.display.confirmed == 2
 
@@ -758,7 +758,7 @@ def test_on_pause_reports_a_pause_only_once_the_plotter_is_idle_with_the_pen_up(
 
     def on_pause(paused):
         dev = rig.device
-        seen.append((paused, dev.paused, dev._pen_down))
+        seen.append((paused, dev.paused, dev.pen_down))
         if paused:
             dev.press_view()  # the operator lets it go on
 
@@ -779,7 +779,7 @@ def test_a_host_pause_is_confirmed_after_the_plotter_drained():
         return 3 <= len(asks) <= 5
 
     rig.display.pause_requested = pause_requested
-    rig.display.on_pause = lambda paused: states.append((paused, rig.device.buffered_bytes, rig.device._pen_down))
+    rig.display.on_pause = lambda paused: states.append((paused, rig.device.buffered_bytes, rig.device.pen_down))
     rig.display.plot(drawing(n=6))
     rig.display.close()
     assert states == [(True, 0, False), (False, 0, False)]
@@ -789,14 +789,14 @@ def test_manual_pen_home_and_no_motors_off():
     rig = Rig()
     d = rig.display
     d.pen_down()
-    assert rig.device._pen_down
+    assert rig.device.pen_down
     d.toggle_pen()
-    assert not rig.device._pen_down
+    assert not rig.device.pen_down
     d.toggle_pen()
-    assert rig.device._pen_down
+    assert rig.device.pen_down
     d.pen_up()
     d.go_home()
-    assert not rig.device._pen_down and rig.device.pen_position == tuple(float(v) for v in d.paper.park)
+    assert not rig.device.pen_down and rig.device.pen_position == tuple(float(v) for v in d.paper.park)
     with pytest.raises(ConfigError, match="HP-GL plotters have no motors-off command"):
         d.motors_off()
     d.close()

@@ -344,11 +344,6 @@ class HPGLPlotter(SimulatedDevice):
         """True while the paper lever is up."""
         return self._status.lever
 
-    _pen_down = pen_down
-    """The name ``pen_down`` had before the split (tests/devices/plotters/test_hpgl.py reads it)."""
-    _lever = lever_raised
-    """The name ``lever_raised`` had before the split (tests/devices/plotters/test_hpgl.py reads it)."""
-
     @property
     def paper(self) -> PaperSpec:
         """The paper loaded (PS changes it)."""
