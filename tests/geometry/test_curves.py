@@ -147,7 +147,8 @@ def test_cox_de_boor_matches_the_recursive_reference(kd, fractions):
     degree, knots = kd
     n = len(knots) - degree - 1
     lo, hi = knots[degree], knots[n]
-    t = np.concatenate([np.clip(lo + np.array(fractions) * (hi - lo), lo, hi), [lo, hi]])  # lo + 1.0 * (hi - lo) may round past hi
+    inside = np.clip(lo + np.array(fractions) * (hi - lo), lo, hi)  # lo + 1.0 * (hi - lo) may round past hi
+    t = np.concatenate([inside, [lo, hi]])
     basis = bspline_basis(knots, degree, t)
     assert basis.shape == (len(t), n)
     expected = [[cox_de_boor_reference(knots, i, degree, ti, hi) for i in range(n)] for ti in t]
