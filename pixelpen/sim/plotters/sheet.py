@@ -50,7 +50,7 @@ def clamp_path(p0: np.ndarray, p1: np.ndarray, lo: np.ndarray, hi: np.ndarray) -
         return np.array([p0, p1])  # the box is convex: a move between inside points stays inside
     d = p1 - p0
     ts = [0.0, 1.0]
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # inf/nan crossings are dropped below
         for bound in (lo, hi):
             t = (np.asarray(bound, dtype=np.float64) - p0) / d
             ts.extend(float(v) for v in t[np.isfinite(t)] if 0.0 < v < 1.0)
