@@ -31,7 +31,6 @@ from serial.serialutil import PortNotOpenError, SerialBase, SerialException, Ser
 from pixelpen.clock import Clock
 from pixelpen.errors import Disconnected, LinkError, LinkTimeout, URLError
 from pixelpen.sim.base import StreamDevice, simulator_models
-from pixelpen.sim.transports.options import split_options
 from pixelpen.sim.transports.port import SimPort, open_sim_port
 from pixelpen.urls import parse_url
 
@@ -96,14 +95,13 @@ class Serial(SerialBase):
         if self._port is None:
             raise SerialException("Port must be configured before it can be used.")
         model, options = parse_sim_url(self._port)
-        transport, _ = split_options(options, self._port)
-        if "baud" in options:
-            self._baudrate = transport.baud
-        if "flow" in options:
-            self._rtscts = transport.flow == "rtscts"
-            self._xonxoff = transport.flow == "xonxoff"
-            self._dsrdtr = False
         port = open_sim_port(model, options, clock=self._sim_clock, device=self._given_device, source=self._port)
+        if "baud" in options:  # the URL's line settings win over the constructor's (the port read them already)
+            self._baudrate = port.baud
+        if "flow" in options:
+            self._rtscts = port.flow == "rtscts"
+            self._xonxoff = port.flow == "xonxoff"
+            self._dsrdtr = False
         self.sim_port = port
         self._owns_device = self._given_device is None and "id" not in options
         try:
