@@ -302,6 +302,12 @@ class SimulatedDevice(ABC):
     def _ignore(self, data: bytes) -> None:
         """Bytes that arrived after ``close``; by default dropped."""
 
+    def _catch_up(self) -> None:
+        """Run the device up to the clock's present (before acting on bytes, a fault or a query)."""
+        now = self.clock.now()
+        if now > self._now:
+            self.advance_to(now)
+
     def _emit(self, data: bytes) -> None:
         """Queue bytes for the host."""
         self._out += data

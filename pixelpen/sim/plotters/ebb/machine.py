@@ -183,11 +183,6 @@ class EbbMachine(SimulatedDevice):
         return self._exec.moving if self._exec is not None else (False, False)
 
     # ---- time and engine (the SimulatedDevice hooks) ---------------------------------------------
-    def _catch_up(self) -> None:
-        now = self.clock.now()
-        if now > self._now:
-            self.advance_to(now)
-
     def _next_internal_event(self) -> float | None:
         """When the executing motion command ends (None when the engine is idle)."""
         return None if self._exec is None else self._exec.t0 + self._exec.duration

@@ -153,11 +153,6 @@ class GrblMachine(SimulatedDevice):
         self._pen_update()
 
     # ---- time ------------------------------------------------------------------------------------
-    def _catch_up(self) -> None:
-        now = self.clock.now()
-        if now > self._now:
-            self.advance_to(now)
-
     def _set_time(self, t: float) -> None:
         dt = t - self._now
         if dt > 0:
