@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from pixelpen.errors import InvalidArgument, PixelpenError
@@ -129,6 +129,7 @@ def test_composite_equals_sequential_application(ms, pts):
 @given(ms=st.lists(transforms, min_size=1, max_size=4), pts=st.lists(st.tuples(finite, finite), min_size=1, max_size=8))
 def test_inverse_round_trips(ms, pts):
     m = compose(*ms)
+    assume(abs(np.linalg.det(m)) > 1e-6)  # shear(a, 1/a) is singular: test_singular_matrices_are_rejected_clearly
     back = apply(invert(m), apply(m, pts))
     np.testing.assert_allclose(back, pts, atol=1e-7)
 
