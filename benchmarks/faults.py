@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import itertools
 import re
 import signal
 import sys
@@ -103,7 +104,7 @@ def compare(intended: DisplayList, drawn: DisplayList, tol: float = TOL_MM) -> T
     unit = (rseg[:, 2:] - rseg[:, :2]) / length[:, None]
     pieces: dict[int, list[tuple[float, float]]] = defaultdict(list)
     tally = Tally()
-    for seg, pen in zip(dseg, dpen, strict=True):
+    for seg, pen in zip(*_split_at_vertices(dseg, dpen, rseg, rpen, tol), strict=True):
         off = np.maximum(_distance(seg[:2], rseg, length), _distance(seg[2:], rseg, length))
         hits = np.flatnonzero((off <= tol) & (rpen == pen))
         if not len(hits):
@@ -121,6 +122,32 @@ def compare(intended: DisplayList, drawn: DisplayList, tol: float = TOL_MM) -> T
         tally.lost += gap > tol
         tally.doubled += total - covered > tol
     return tally
+
+
+def _split_at_vertices(dseg: np.ndarray, dpen: np.ndarray, rseg: np.ndarray, rpen: np.ndarray,
+                       tol: float) -> tuple[list[np.ndarray], list[int]]:
+    """Drawn pieces cut where an intended vertex of their pen lies on them (within ``tol``, inside the piece).
+
+    Simplifying the paper may merge two collinear intended segments into one drawn piece (a resume splits a
+    stroke, which moves the simplifier's anchors); cut there, each part is credited to its own segment.
+    """
+    segs: list[np.ndarray] = []
+    pens: list[int] = []
+    for seg, pen in zip(dseg, dpen, strict=True):
+        a, d = seg[:2], seg[2:] - seg[:2]
+        span = float(d @ d)
+        cuts: list[float] = []
+        if span > 0:
+            ends = np.vstack([rseg[rpen == pen, :2], rseg[rpen == pen, 2:]])
+            t = ((ends - a) @ d) / span
+            near = np.hypot(*(a + t[:, None] * d - ends).T) <= tol
+            inside = (t * np.sqrt(span) > tol) & ((1 - t) * np.sqrt(span) > tol)
+            cuts = sorted({round(float(x), 9) for x in t[near & inside]})
+        points = [a + x * d for x in (0.0, *cuts, 1.0)]
+        for p, q in itertools.pairwise(points):
+            segs.append(np.concatenate([p, q]))
+            pens.append(int(pen))
+    return segs, pens
 
 
 def _distance(p: np.ndarray, seg: np.ndarray, length: np.ndarray) -> np.ndarray:
