@@ -1,0 +1,165 @@
+"""The MCP2221A adapter: the reports it sends (written out from the datasheet's layouts), NAKs, timeouts, faults."""
+
+from __future__ import annotations
+
+import errno
+import types
+
+import pytest
+from smbus2 import i2c_msg
+
+from pixelpen.clock import SimulatedClock
+from pixelpen.drivers.mcp2221 import MCP2221
+from pixelpen.errors import ConfigError, LinkError, LinkTimeout
+from pixelpen.sim.transports.mcp2221 import SimMCP2221
+from tests.sim.transports.test_mcp2221 import StubBusDevice
+
+
+def opened(clock_hz: float = 400_000, **device_options) -> tuple[MCP2221, SimMCP2221, StubBusDevice]:
+    clock = SimulatedClock()
+    device = StubBusDevice(clock, **device_options)
+    fake = SimMCP2221(device)
+    fake.open(0x04D8, 0x00DD)
+    return MCP2221(fake, clock_hz=clock_hz, clock=clock), fake, device
+
+
+def head(report: bytes, n: int = 4) -> tuple[int, ...]:
+    return tuple(report[:n])
+
+
+def accepted_writes(fake: SimMCP2221) -> list[bytes]:
+    """The 0x90 reports, with a busy chunk sent again counted once (consecutive chunks differ in these tests)."""
+    out: list[bytes] = []
+    for r in fake.reports:
+        if r[0] in (0x90, 0x94) and (not out or out[-1] != r):
+            out.append(r)
+    return out
+
+
+def test_opening_sets_the_clock_divider():
+    adapter, fake, _ = opened(400_000)
+    assert fake.reports[0] == bytes((0x10, 0x00, 0x00, 0x20, 27)) + bytes(59)  # 12 MHz / 400 kHz - 3
+    assert fake.clock_hz == pytest.approx(400_000) and adapter.clock_hz == pytest.approx(400_000)
+    adapter.set_clock(100_000)
+    assert fake.reports[-1][:5] == bytes((0x10, 0, 0, 0x20, 117))
+    with pytest.raises(ConfigError, match=r"46512\.\.400000 Hz"):
+        adapter.set_clock(1_000_000)
+
+
+def test_a_short_write_is_status_write_status():
+    adapter, fake, device = opened()
+    del fake.reports[:]
+    adapter.i2c_rdwr(i2c_msg.write(0x3C, b"\x00\xae\xd5\x80"))
+    assert [head(r, 1) for r in fake.reports] == [(0x10,), (0x90,), (0x10,)]
+    assert fake.reports[1] == bytes((0x90, 4, 0, 0x78, 0x00, 0xAE, 0xD5, 0x80)) + bytes(56)
+    assert device.writes == [(0x3C, b"\x00\xae\xd5\x80")]
+
+
+def test_a_1025_byte_ssd1306_data_write_is_18_reports_of_60_and_a_frame_19():
+    adapter, fake, device = opened()
+    pixels = bytes((i * 7 + 3) % 256 for i in range(1024))
+    window = b"\x00\x21\x00\x7f\x22\x00\x07"
+    del fake.reports[:]
+    adapter.i2c_rdwr(i2c_msg.write(0x3C, window))
+    adapter.i2c_rdwr(i2c_msg.write(0x3C, b"\x40" + pixels))
+    writes = accepted_writes(fake)
+    assert len(writes) == 19
+    assert writes[0][:4] == bytes((0x90, 7, 0, 0x78))
+    payload = b"\x40" + pixels
+    for k, r in enumerate(writes[1:]):
+        assert r[:4] == bytes((0x90, 0x01, 0x04, 0x78))  # every chunk repeats the whole length, 1025 = 0x0401
+        chunk = payload[60 * k : 60 * k + 60]
+        assert r[4 : 4 + len(chunk)] == chunk
+    assert [len(payload[60 * k : 60 * k + 60]) for k in range(18)] == [60] * 17 + [5]
+    assert device.writes == [(0x3C, window), (0x3C, payload)]
+    # simulated time: USB reports at 1 ms each plus busy retries while 60-byte chunks go out at 400 kHz
+    assert 0.019 <= adapter.clock.now() <= 0.1
+
+
+def test_no_acknowledge_is_a_link_error_with_eremoteio():
+    adapter, fake, _ = opened(acked=())
+    with pytest.raises(LinkError, match="no device acknowledged address 0x3c") as info:
+        adapter.i2c_rdwr(i2c_msg.write(0x3C, b"\x00\xae"))
+    assert info.value.errno == errno.EREMOTEIO
+    assert fake.reports[-1][:3] == bytes((0x10, 0x00, 0x10))  # the transfer was cancelled
+
+
+def test_a_multi_report_write_to_a_missing_device_fails_too():
+    adapter, _, _ = opened(acked=())
+    with pytest.raises(LinkError, match="no device acknowledged"):
+        adapter.write(0x3C, bytes(200))
+
+
+def test_a_stuck_engine_is_cancelled_before_the_next_transfer():
+    adapter, fake, device = opened(acked=(0x3C,))
+    fake.write(b"\x00" + bytes((0x90, 100, 0, 0x78)) + bytes(60))  # someone left a transfer half done
+    fake.read(64)
+    del fake.reports[:]
+    adapter.write(0x3C, b"\x00\xaf")
+    assert head(fake.reports[1], 3) == (0x10, 0x00, 0x10)
+    assert device.writes == [(0x3C, b"\x00\xaf")]
+
+
+def test_write_then_read_uses_no_stop_and_repeated_start():
+    adapter, fake, device = opened()
+    register = i2c_msg.write(0x3C, b"\x00")
+    answer = i2c_msg.read(0x3C, 3)
+    adapter.i2c_rdwr(register, answer)
+    assert list(answer) == [7, 8, 9]
+    kinds = [r[0] for r in fake.reports if r[0] != 0x10]
+    assert kinds[0] == 0x94 and kinds[1] == 0x93 and set(kinds[2:]) == {0x40}
+    assert device.reads == [(0x3C, 3)]
+
+
+def test_a_read_from_a_missing_device_is_a_nak():
+    adapter, _, _ = opened(acked=())
+    with pytest.raises(LinkError, match="no device acknowledged address 0x50"):
+        adapter.read(0x50, 2)
+
+
+class SilentHid:
+    """A HID device that takes reports and never answers (or fails every write)."""
+
+    def __init__(self, fail: bool = False) -> None:
+        self.fail = fail
+        self.timeouts: list[int] = []
+
+    def write(self, buff) -> int:
+        if self.fail:
+            raise OSError(5, "Input/output error")
+        return len(buff)
+
+    def read(self, max_length: int, timeout_ms: int = 0) -> list[int]:
+        self.timeouts.append(timeout_ms)
+        return []
+
+    def close(self) -> None:
+        pass
+
+
+def test_every_read_has_a_timeout_and_none_hangs():
+    hid = SilentHid()
+    with pytest.raises(LinkTimeout, match=r"no answer within 0\.25 s to set the I2C clock"):
+        MCP2221(hid, timeout=0.25)
+    assert hid.timeouts == [250]
+
+
+def test_hid_errors_become_link_errors_naming_the_operation():
+    with pytest.raises(LinkError, match=r"cannot set the I2C clock: .*Input/output error"):
+        MCP2221(SilentHid(fail=True))
+    adapter = opened()[0]
+    adapter.close()
+    adapter.close()
+    with pytest.raises(LinkError, match="closed"):
+        adapter.write(0x3C, b"\x00")
+
+
+def test_open_finds_the_chip_through_hidapi(monkeypatch):
+    device = StubBusDevice()
+    fake = SimMCP2221(device)
+    monkeypatch.setitem(__import__("sys").modules, "hid", types.SimpleNamespace(device=lambda: fake))
+    adapter = MCP2221.open(clock_hz=100_000, clock=device.clock)
+    assert fake.reports[0][:5] == bytes((0x10, 0, 0, 0x20, 117))
+    adapter.close()
+    with pytest.raises(LinkError, match="cannot open USB HID device 04d8:00dd serial nope"):
+        MCP2221.open(serial="nope")
