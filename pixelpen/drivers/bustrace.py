@@ -3,7 +3,7 @@
 A bus trace is a version-1 trace (``docs/trace-format.md``) whose header says ``kind=bus``; its lines are
 bus events instead of byte chunks::
 
-    #pixelpen-trace 1 kind=bus bus=spi clock_hz=62500000 max_transfer=4096 url=st7789%3Aspi%3A0.0
+    #pixelpen-trace 1 url=st7789%3Aspi%3A0.0 kind=bus bus=spi clock_hz=62500000 max_transfer=4096
     0.000000 R
     0.120010 C 01
     0.270020 C 2a
@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from typing import IO, Final
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.drivers.bus import PanelBus
+from pixelpen.drivers.bus import RESET_RECOVERY, PanelBus, command_bytes
 from pixelpen.drivers.trace import (
     DEFAULT_MAX_BYTES,
     MAX_CHUNK,
@@ -37,7 +37,7 @@ from pixelpen.drivers.trace import (
     format_header,
     parse_trace,
 )
-from pixelpen.errors import ConfigError, InvalidArgument, InvalidArgumentType, LinkError, ParseError, TraceMismatch
+from pixelpen.errors import ConfigError, InvalidArgument, LinkError, ParseError, TraceMismatch
 from pixelpen.urls import check_path
 
 COMMAND: Final = "C"
@@ -51,21 +51,6 @@ RESET: Final = "R"
 BUS_KINDS: Final = ("spi", "i2c")
 _SECONDS = re.compile(r"([0-9]+)(\.[0-9]*)?")
 _LEVEL_NAMES: Final = {COMMAND: "command (D/C low)", DATA: "data (D/C high)"}
-
-
-def command_bytes(*cmd: int | bytes) -> bytes:
-    """The bytes of ``PanelBus.command(*cmd)``: ints 0..255 and bytes-like arguments, in order."""
-    out = bytearray()
-    for item in cmd:
-        if isinstance(item, bool) or not isinstance(item, (int, bytes, bytearray, memoryview)):
-            raise InvalidArgumentType(f"command bytes are ints 0..255 or bytes, got {type(item).__name__}")
-        if isinstance(item, int):
-            if not 0 <= item <= 0xFF:
-                raise InvalidArgument(f"command byte {item} is outside 0..255")
-            out.append(item)
-        else:
-            out += item
-    return bytes(out)
 
 
 @dataclass(frozen=True)
@@ -367,10 +352,10 @@ class RecordingBus:
         for i in range(0, len(payload), step):
             self._lines(format_frame(stamp, DATA, payload[i : i + step]))
 
-    def reset(self) -> None:
+    def reset(self, recovery: float = RESET_RECOVERY) -> None:
         """Pulse the wrapped bus's reset line and record ``R``."""
         stamp = self._stamp()
-        self._call("reset", b"", self.inner.reset)
+        self._call("reset", b"", lambda: self.inner.reset(recovery))
         self._lines([f"{stamp:.6f} {RESET}"])
 
     def comment(self, text: str) -> None:
@@ -432,8 +417,8 @@ class ReplayBus:
         """Check data bytes (D/C high) against the trace."""
         self._match(DATA, bytes(data))
 
-    def reset(self) -> None:
-        """Check that the trace has a reset pulse here."""
+    def reset(self, recovery: float = RESET_RECOVERY) -> None:
+        """Check that the trace has a reset pulse here (the recovery time is not checked)."""
         self._check_open()
         self._finish_run()
         run = self._current()
