@@ -66,16 +66,25 @@ def command_bytes(*cmd: int | bytes) -> bytes:
 class PanelBus(Protocol):
     """A panel controller's bus as its driver sees it: command bytes, data bytes, a reset, a transfer limit."""
 
-    max_transfer: int
-    """The most bytes one transfer moves; ``data`` chunks longer payloads itself."""
-    kind: str
-    """``"spi"`` or ``"i2c"``: which wire carries the bytes."""
-    clock_hz: float
-    """The configured bus clock in Hz (SCLK or SCL)."""
-    bytes_sent: int
-    """Bytes the host has put on the wire so far: command, data and I2C control bytes."""
-    transfers: int
-    """Chip-select frames (SPI) or transactions (I2C) sent so far."""
+    @property
+    def max_transfer(self) -> int:
+        """The most bytes one transfer moves; ``data`` chunks longer payloads itself."""
+
+    @property
+    def kind(self) -> str:
+        """``"spi"`` or ``"i2c"``: which wire carries the bytes."""
+
+    @property
+    def clock_hz(self) -> float:
+        """The configured bus clock in Hz (SCLK or SCL)."""
+
+    @property
+    def bytes_sent(self) -> int:
+        """Bytes the host has put on the wire so far: command, data and I2C control bytes."""
+
+    @property
+    def transfers(self) -> int:
+        """Chip-select frames (SPI) or transactions (I2C) sent so far."""
 
     def command(self, *cmd: int | bytes) -> None:
         """Send command bytes, all of them with D/C low (I2C: one transaction after control byte 0x00).
@@ -98,5 +107,6 @@ class PanelBus(Protocol):
 class I2CPanelBus(PanelBus, Protocol):
     """A panel bus over I2C: every call is a write to ``address`` starting with a control byte."""
 
-    address: int
-    """The panel's 7-bit I2C address (SSD1306: 0x3C or 0x3D)."""
+    @property
+    def address(self) -> int:
+        """The panel's 7-bit I2C address (SSD1306: 0x3C or 0x3D)."""

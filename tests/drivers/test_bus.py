@@ -69,10 +69,11 @@ def test_the_methods_and_signatures_are_the_documented_ones():
     assert str(inspect.signature(PanelBus.command)) == "(self, *cmd: 'int | bytes') -> 'None'"
     assert str(inspect.signature(PanelBus.data)) == "(self, data: 'bytes') -> 'None'"
     assert str(inspect.signature(PanelBus.reset)) == "(self, recovery: 'float' = 0.12) -> 'None'"
-    assert PanelBus.__annotations__ == {
-        "max_transfer": "int", "kind": "str", "clock_hz": "float", "bytes_sent": "int", "transfers": "int"
-    }
-    assert I2CPanelBus.__annotations__ == {"address": "int"}
+    fields = {"max_transfer": "int", "kind": "str", "clock_hz": "float", "bytes_sent": "int", "transfers": "int"}
+    for name, kind in fields.items():  # read-only properties: a plain attribute or a property satisfies them
+        assert isinstance(getattr(PanelBus, name), property)
+        assert getattr(PanelBus, name).fget.__annotations__ == {"return": kind}
+    assert I2CPanelBus.address.fget.__annotations__ == {"return": "int"}
     for name in ("command", "data", "reset", "close"):
         assert getattr(PanelBus, name).__doc__
 
