@@ -269,7 +269,9 @@ class SimGpio:
     def setwarnings(self, flag: bool) -> None:
         """Accepted and ignored (there are no warnings to give)."""
 
-    def setup(self, channel: int | Sequence[int], direction: int, pull_up_down: int = PUD_OFF, initial: int = -1) -> None:
+    def setup(
+        self, channel: int | Sequence[int], direction: int, pull_up_down: int = PUD_OFF, initial: int = -1
+    ) -> None:
         """Set pins up as outputs (optionally at ``initial``) or inputs."""
         if direction not in (self.OUT, self.IN):
             raise InvalidArgument(f"setup: direction {direction!r} is neither GPIO.OUT nor GPIO.IN")
