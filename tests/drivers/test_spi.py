@@ -25,7 +25,6 @@ from tests.sim.transports.chips import RecordingChip
 def wired(**kw) -> tuple[RecordingChip, SimSpiWiring, SpiBus]:
     chip = RecordingChip()
     wiring = SimSpiWiring(chip, bufsiz=65535)  # spidev itself would split frames longer than its bufsiz
-    wiring.spidev.open(0, 0)
     bus = SpiBus(wiring.spidev, dc=wiring.dc, reset=kw.pop("reset", wiring.reset), clock=chip.clock,
                  clock_hz=kw.pop("clock_hz", 62.5e6), **kw)
     return chip, wiring, bus
@@ -125,7 +124,6 @@ def test_bad_commands_and_settings_are_refused():
         bus.command(1, 2, 3, 4, 5)
     chip = RecordingChip()
     wiring = SimSpiWiring(chip)
-    wiring.spidev.open(0, 0)
     with pytest.raises(ConfigError, match="mode"):
         SpiBus(wiring.spidev, dc=wiring.dc, clock_hz=1e6, mode=4)
     with pytest.raises(ConfigError, match="clock"):
@@ -152,8 +150,10 @@ def test_os_errors_are_link_errors_naming_bus_and_operation():
     with pytest.raises(LinkError, match=r"spi 0\.0: write of 4096 bytes failed: \[Errno 5\]"):
         bus.data(bytes(10_000))
     assert (bus.bytes_sent, bus.transfers) == (0, 0)
+    closed = SimSpiWiring(chip).spidev
+    closed.close()
     with pytest.raises(LinkError, match="setting mode"):
-        SpiBus(SimSpiWiring(chip).spidev, dc=wiring.dc, clock_hz=1e6)  # an unopened spidev: EBADF
+        SpiBus(closed, dc=wiring.dc, clock_hz=1e6)  # a closed spidev: EBADF
 
 
 def test_a_closed_bus_refuses_and_close_releases_everything_once():

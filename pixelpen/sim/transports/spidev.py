@@ -324,6 +324,7 @@ def _channels(channel: int | Sequence[int]) -> list[int]:
 class SimSpiWiring:
     """A chip on an SPI bus with its GPIO lines: ``spidev``, ``dc``, ``reset``, ``te``, ``gpio_module``.
 
+    ``spidev`` comes open (as /dev/spidev0.0; a client's own ``open`` reconnects it, as luma's does).
     ``clock`` defaults to the device's; ``max_speed_hz`` is what ``spidev.open`` reads back before
     the host sets a speed (the device tree's spi-max-frequency); ``pins`` maps RPi.GPIO pin numbers to
     line names for ``gpio_module`` (default: luma's DC=24, RST=25).
@@ -344,6 +345,7 @@ class SimSpiWiring:
         self.bufsiz = bufsiz
         self._frames = _Frames(device, clock if clock is not None else device.clock)
         self.spidev = SimSpiDev(self._frames, bufsiz=bufsiz, default_speed_hz=max_speed_hz)
+        self.spidev.open(0, 0)
         self.dc = SimOutputLine(self._frames, "dc")
         self.reset = SimOutputLine(self._frames, "reset")
         self.te = SimInputLine(self._frames, "te")

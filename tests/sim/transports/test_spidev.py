@@ -18,9 +18,7 @@ from tests.sim.transports.chips import RecordingChip
 
 def wired(**kw) -> tuple[RecordingChip, SimSpiWiring]:
     chip = RecordingChip(miso=kw.pop("miso", b""), te=kw.pop("te", lambda t: False))
-    wiring = SimSpiWiring(chip, **kw)
-    wiring.spidev.open(0, 0)
-    return chip, wiring
+    return chip, SimSpiWiring(chip, **kw)
 
 
 def test_the_recording_chip_is_a_bus_device():
@@ -82,11 +80,13 @@ def test_xfer_returns_miso_and_readbytes_clamps_like_spidev():
         wiring.spidev.xfer([0] * 4097)
 
 
-def test_a_closed_or_unopened_spidev_fails_with_ebadf_and_settings_are_checked():
+def test_a_closed_spidev_fails_with_ebadf_and_settings_are_checked():
     chip = RecordingChip()
     wiring = SimSpiWiring(chip)
     dev = wiring.spidev
-    assert (dev.max_speed_hz, dev.mode, dev.bits_per_word) == (0, 0, 0)  # as a fresh spidev.SpiDev()
+    assert dev.opened == (0, 0)  # the wiring comes connected
+    dev.close()
+    assert (dev.max_speed_hz, dev.mode, dev.bits_per_word) == (0, 0, 0)  # as a closed spidev.SpiDev
     with pytest.raises(OSError) as caught:
         dev.writebytes2(b"\x00")
     assert caught.value.errno == errno.EBADF
