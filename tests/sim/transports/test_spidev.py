@@ -194,10 +194,41 @@ def test_luma_oled_ssd1306_over_spi_sends_its_init_as_one_command_frame():
     chip = RecordingChip()
     wiring = SimSpiWiring(chip)
     serial = luma_spi(spi=wiring.spidev, gpio=wiring.gpio_module, gpio_DC=24, gpio_RST=25)
-    ssd1306(serial)
+    ssd1306(serial).persist = True  # no blanking at interpreter exit
     dc, first = chip.frames[0]
     # SSD1306 datasheet: AE display off, D5 80 clock divide, A8 3F multiplex 64
     assert not dc and first[:5] == b"\xae\xd5\x80\xa8\x3f"
     # then a whole frame: 21 00 7F column window, 22 00 07 page window, 1024 data bytes of zeros
     assert (False, b"\x21\x00\x7f\x22\x00\x07") in chip.frames
     assert chip.data_bytes() == bytes(1024)
+
+
+def test_luma_gpio_cs_spi_toggles_its_own_chip_select_pin():
+    from luma.core.interface.serial import gpio_cs_spi
+
+    chip = RecordingChip()
+    wiring = SimSpiWiring(chip)
+    serial = gpio_cs_spi(spi=wiring.spidev, gpio=wiring.gpio_module, gpio_DC=24, gpio_RST=25, gpio_CS=8)
+    assert wiring.spidev.no_cs and wiring.gpio_module.levels[8] == wiring.gpio_module.HIGH  # idle: deselected
+    serial.command(0x29)
+    assert chip.frames == [(False, b"\x29")] and wiring.gpio_module.levels[8] == wiring.gpio_module.HIGH
+
+
+def test_luma_lcd_st7789_full_frame_through_the_wiring():
+    from luma.lcd.device import st7789
+    from PIL import Image
+
+    chip = RecordingChip()
+    wiring = SimSpiWiring(chip, pins={24: "dc", 25: "reset", 18: "backlight"})
+    serial = luma_spi(spi=wiring.spidev, gpio=wiring.gpio_module, gpio_DC=24, gpio_RST=25, bus_speed_hz=52_000_000)
+    device = st7789(serial, gpio=wiring.gpio_module, gpio_LIGHT=18)
+    device.persist = True  # no atexit blanking
+    assert ("backlight", True) in [(name, level) for name, level, _ in chip.line_changes]
+    chip.frames.clear()
+    device.display(Image.new("RGB", (240, 240), "red"))
+    # ST7789 CASET/RASET: command byte with D/C low, XS and XE as big-endian 16-bit with D/C high; then RAMWR
+    assert chip.frames[:5] == [(False, b"\x2a"), (True, b"\x00\x00\x00\xef"), (False, b"\x2b"),
+                               (True, b"\x00\x00\x00\xef"), (False, b"\x2c")]
+    pixels = chip.frames[5:]
+    assert all(dc for dc, _ in pixels) and max(len(f) for _, f in pixels) == 4096
+    assert b"".join(f for _, f in pixels) == b"\xff\x00\x00" * 240 * 240  # luma sends 18-bit RGB as 3 bytes
