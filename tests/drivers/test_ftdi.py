@@ -1,0 +1,124 @@
+"""FtdiSpiBus through pyftdi and the simulated FT232H: the frames, D/C levels and MPSSE commands on the wire."""
+
+from __future__ import annotations
+
+import io
+
+import pytest
+
+from pixelpen.clock import SimulatedClock
+from pixelpen.drivers.bus import PanelBus
+from pixelpen.drivers.bustrace import RecordingBus, ReplayBus, read_bus_trace
+from pixelpen.drivers.ftdi import FtdiSpiBus
+from pixelpen.errors import ConfigError, LinkError
+from pixelpen.sim.transports.ftdi import Ft232hBackend, use_for_urls
+from tests.sim.transports.test_mcp2221 import StubBusDevice
+
+
+@pytest.fixture
+def wired():
+    device = StubBusDevice(SimulatedClock())
+    backend = Ft232hBackend(device)
+    bus = FtdiSpiBus.open(backend.find(), dc=4, rst=5, clock_hz=30e6, clock=device.clock)
+    yield bus, backend, device
+    bus.close()
+
+
+def test_the_bytes_and_dc_levels_reach_the_device(wired):
+    bus, _, device = wired
+    assert isinstance(bus, PanelBus) and bus.kind == "spi" and bus.clock_hz == 30e6
+    bus.command(0x2A)
+    bus.data(b"\x00\x00\x00\xef")
+    bus.command(0x2C)
+    pixels = bytes(i % 253 for i in range(100_000))
+    bus.data(pixels)
+    assert device.frames[:3] == [(b"\x2a", False), (b"\x00\x00\x00\xef", True), (b"\x2c", False)]
+    assert [len(f) for f, _ in device.frames[3:]] == [0xFF00, 100_000 - 0xFF00]
+    assert b"".join(f for f, _ in device.frames[3:]) == pixels and all(dc for _, dc in device.frames[3:])
+    assert bus.bytes_sent == 1 + 4 + 1 + 100_000 and bus.transfers == 5
+
+
+def test_pyftdi_sets_the_chip_up_as_an_108_says(wired):
+    _, backend, _ = wired
+    out_requests = [(req, value) for kind, req, value, index in backend.control if kind == 0x40]
+    assert (0x00, 0) in out_requests  # reset the port
+    assert (0x0B, 0x0200 | 0x0B) in out_requests  # bit mode MPSSE with SCK, MOSI and CS0 as outputs
+    assert (0x09, 16) in out_requests or (0x09, 1) in out_requests  # latency timer
+    assert {(0x06, 0), (0x07, 0)} <= set(out_requests)  # event and error characters off
+    assert all(index == 1 for _, _, _, index in backend.control)  # port A
+    ops = backend.commands
+    assert 0x8A in ops and 0x86 in ops and 0x85 in ops  # 60 MHz base, divisor, loopback off
+    assert backend.divisor == 0 and not backend.divide_by_5  # 60 MHz / 2 = 30 MHz
+    assert backend.direction & 0x3B == 0x3B  # GPIO 4 (D/C) and 5 (reset) became outputs
+
+
+def test_a_spi_write_is_cs_low_0x11_cs_high(wired):
+    bus, backend, _ = wired
+    del backend.commands[:]
+    bus.data(b"\x01\x02\x03")
+    # D/C change: read-modify-write of the GPIO (0x81, 0x87 then 0x80), then the framed write
+    assert backend.commands[:3] == [0x81, 0x87, 0x80]
+    write_at = backend.commands.index(0x11)
+    assert 0x80 in backend.commands[3:write_at] and backend.commands[write_at + 1] == 0x80
+    del backend.commands[:]
+    bus.data(b"\x04")
+    assert 0x81 not in backend.commands  # D/C already high: no GPIO traffic
+
+
+def test_reset_pulses_the_reset_pin(wired):
+    bus, _, device = wired
+    t0 = device.clock.now()
+    bus.reset()
+    assert device.lines[-2:] == [("reset", False), ("reset", True)]
+    assert device.clock.now() - t0 >= 0.120 + 10e-6
+
+
+def test_options_are_checked():
+    with pytest.raises(ConfigError, match="30 MHz"):
+        FtdiSpiBus.open("ftdi://ftdi:232h/1", clock_hz=40e6)
+    with pytest.raises(ConfigError, match=r"1\.\.65280"):
+        FtdiSpiBus.open("ftdi://ftdi:232h/1", max_transfer=70_000)
+    with pytest.raises(ConfigError, match="dc=3 is not a GPIO pin"):
+        FtdiSpiBus.open("ftdi://ftdi:232h/1", dc=3)
+    with pytest.raises(ConfigError, match="both GPIO 6"):
+        FtdiSpiBus.open("ftdi://ftdi:232h/1", dc=6, rst=6)
+
+
+def test_faults_become_link_errors(wired):
+    bus, backend, _ = wired
+    backend.close()  # unplugged
+    with pytest.raises(LinkError, match="SPI write of 2 bytes failed"):
+        bus.command(0x01, 0x02)
+    bus.close()
+    bus.close()
+    with pytest.raises(LinkError, match="closed"):
+        bus.data(b"\x00")
+
+
+def test_a_url_finds_the_simulated_chip():
+    device = StubBusDevice(SimulatedClock())
+    backend = Ft232hBackend(device)
+    with use_for_urls(backend):
+        bus = FtdiSpiBus.open("ftdi://ftdi:232h/1", dc=8, rst=None, clock_hz=10e6, clock=device.clock)
+        bus.command(0x11)
+        bus.reset()  # no reset pin: nothing
+        bus.close()
+    assert device.frames == [(b"\x11", False)]
+    assert device.lines == []
+    with pytest.raises(LinkError, match="cannot open the FTDI device"):
+        FtdiSpiBus.open("ftdi://ftdi:232h/9")
+
+
+def test_a_recorded_ftdi_session_replays(wired):
+    bus, _, _ = wired
+    out = io.StringIO()
+    recording = RecordingBus(bus, out, url="ili9341:ftdi://ftdi:232h/1?dc=4&rst=5")
+    recording.command(0x36, b"\x48")
+    recording.data(bytes(70_000))
+    recording.close()
+    trace = read_bus_trace(io.StringIO(out.getvalue()))
+    assert (trace.bus, trace.clock_hz, trace.max_transfer) == ("spi", 30e6, 0xFF00)
+    replay = ReplayBus(trace)
+    replay.command(0x36, 0x48)
+    replay.data(bytes(70_000))
+    replay.check_complete()
