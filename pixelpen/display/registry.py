@@ -34,6 +34,13 @@ BUILTIN_DISPLAYS: dict[str, str] = {
     "hp7440a": "pixelpen.devices.plotters.hpgl:HP7440A",
     "grbl": "pixelpen.devices.plotters.grbl:GrblPlotter",
     "axidraw": "pixelpen.devices.plotters.axidraw:AxiDrawPlotter",
+    "ssd1306": "pixelpen.devices.panels.ssd1306:SSD1306Display",
+    "sh1106": "pixelpen.devices.panels.ssd1306:SH1106Display",
+    "ssd1309": "pixelpen.devices.panels.ssd1306:SSD1309Display",
+    "st7789": "pixelpen.devices.panels.mipidcs:ST7789Display",
+    "ili9341": "pixelpen.devices.panels.mipidcs:ILI9341Display",
+    "st7735": "pixelpen.devices.panels.mipidcs:ST7735Display",
+    "fbdev": "pixelpen.devices.panels.fbdev:FramebufferDisplay",
 }
 """Scheme -> ``"module:Class"`` of its display (only that module is imported, on the scheme's first use)."""
 

@@ -1,0 +1,550 @@
+"""PanelDisplay: a raster display on a panel controller behind a bus: init, partial refresh, pacing, safe close.
+
+A frame is the canvas's damage trimmed to the pixels that differ from what the panel last received (a
+shadow copy of the sent frame, compared with ``raster.damage.tile_damage``), planned into controller windows
+(``windows.plan_windows``: the controller's alignment, several windows or fewer merged ones by bytes plus
+window commands), each sent as the controller's window commands and its pixels packed natively with
+``raster.formats.pack``.  The next frame is full after open, ``reset()``, a rotation change, a bus fault
+or an interruption (Ctrl-C) in the middle of a frame.  ``fps=`` (or ``refresh(target_fps)``) paces frames
+with a FramePacer: drawing between due frames only accumulates damage, so frames coalesce, never queue.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from abc import abstractmethod
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
+from pixelpen.devices.panels.windows import WindowCost, window_cost
+from pixelpen.devices.panels.wiring import Interface, Pins, Wiring, open_wiring, parse_target, sim_wiring
+from pixelpen.display.capabilities import Capabilities, ColourModel
+from pixelpen.display.kinds import RasterDisplay
+from pixelpen.drivers.bus import PanelBus
+from pixelpen.errors import ConfigError, InvalidArgument, URLError
+from pixelpen.options import OptionSpec, OptionValues, boolean, choice, integer, positive, text
+from pixelpen.profiles.panel import InitStep, PanelProfile, load_panel_profile, panel_profile_for
+from pixelpen.raster.canvas import Canvas
+from pixelpen.raster.damage import Rect, tile_damage
+from pixelpen.sim.base import BusDevice, create_simulator
+from pixelpen.urls import DeviceURL, parse_size
+
+if TYPE_CHECKING:
+    from pixelpen.devices.panels.pacing import FramePacer
+
+log = logging.getLogger(__name__)
+
+TRIM_FRACTION = 0.25
+"""Damage covering more than this share of the panel is sent as it is, without the per-pixel trim (a video
+frame changes nearly everything; comparing it would only cost host time)."""
+TE_TIMEOUT = 0.05
+"""Seconds to wait for the tearing-effect pulse before sending anyway (three frames at 60 Hz)."""
+PIXEL_PITCH_MM = 0.2
+"""Millimetres per pixel when a profile says nothing (the world window of ``Display`` is in millimetres)."""
+
+
+def panel_size(value: str) -> tuple[int, int]:
+    """``WxH`` in whole pixels (``240x240``)."""
+    size = parse_size(value, "px")
+    if size.unit != "px" or size.width != int(size.width) or size.height != int(size.height):
+        raise ValueError("a panel size is whole pixels, WxH (e.g. 240x240)")
+    return int(size.width), int(size.height)
+
+
+def rotation_degrees(value: str) -> int:
+    """0, 90, 180 or 270."""
+    return int(choice("0", "90", "180", "270")(value))
+
+
+@dataclasses.dataclass
+class FrameStats:
+    """One frame sent: bytes handed to the bus, windows, host and bus seconds, and whether it was full."""
+
+    bytes: int = 0
+    windows: int = 0
+    host_seconds: float = 0.0
+    bus_seconds: float = 0.0
+    full: bool = False
+
+
+@dataclasses.dataclass
+class PanelStats:
+    """Totals since open: frames (full ones too), windows, bytes, host seconds and bus seconds.
+
+    ``bytes`` counts the command, parameter and pixel bytes the driver handed to the bus (I2C control and
+    address bytes are the bus's: ``display.bus.bytes_sent``).  ``host_seconds`` is processor time spent
+    outside bus calls (planning, trimming, packing), ``bus_seconds`` clock time spent inside them: on a
+    SimulatedClock that is the simulated wire time.
+    """
+
+    frames: int = 0
+    full_frames: int = 0
+    windows: int = 0
+    bytes: int = 0
+    host_seconds: float = 0.0
+    bus_seconds: float = 0.0
+    last: FrameStats = dataclasses.field(default_factory=FrameStats)
+
+    @property
+    def host_seconds_per_frame(self) -> float:
+        """Average host seconds of one frame (0 before the first)."""
+        return self.host_seconds / self.frames if self.frames else 0.0
+
+    def add(self, frame: FrameStats) -> None:
+        """Count one finished frame."""
+        self.frames += 1
+        self.full_frames += frame.full
+        self.windows += frame.windows
+        self.bytes += frame.bytes
+        self.host_seconds += frame.host_seconds
+        self.bus_seconds += frame.bus_seconds
+        self.last = frame
+
+
+class PanelDisplay(RasterDisplay):
+    """A panel module (profile) on a bus: a subclass gives the controller's init, window and scan-out commands."""
+
+    simulated: ClassVar[bool] = True
+    controller: ClassVar[str] = ""
+    """The profile controller (and simulator model) of the class."""
+    default_size: ClassVar[tuple[int, int]] = (0, 0)
+    """The module a URL without ``size`` or ``profile`` gets."""
+    interfaces: ClassVar[tuple[Interface, ...]] = ("spi",)
+    """Buses the controller is driven over (the first is a ``sim:`` URL's unless it sets ``dc``)."""
+    canvas_mode: ClassVar[str] = "RGB"
+    display_on: ClassVar[int] = 0x29
+    """The init table's display-on command: sent after the first full frame, so nothing stale flashes."""
+    OPTIONS: ClassVar[tuple[OptionSpec[Any], ...]] = (
+        OptionSpec("size", panel_size, None, "module size WxH at rotation 0 (picks the built-in profile)"),
+        OptionSpec("profile", text, None, "a built-in panel profile name or a panel profile TOML file"),
+        OptionSpec("rotation", rotation_degrees, 0, "0, 90, 180 or 270 degrees clockwise on the glass"),
+        OptionSpec("hz", positive, None, "bus clock in Hz; default the profile's for the bus"),
+        OptionSpec("dc", integer(0), None, "D/C line: GPIO offset on gpiochip (FT232H: ADBUS pin)"),
+        OptionSpec("rst", integer(0), None, "reset line (active low): GPIO offset; none: software reset"),
+        OptionSpec("bl", integer(0), None, "backlight line: GPIO offset (on while open)"),
+        OptionSpec("te", integer(0), None, "tearing-effect input line: GPIO offset; frames start at its pulse"),
+        OptionSpec("gpiochip", text, "/dev/gpiochip0", "GPIO character device of dc, rst, bl and te"),
+        OptionSpec("fps", positive, None, "target frames per second: frames coalesce; refused above the bus limit"),
+        OptionSpec("invert", boolean, None, "invert the colours; default the profile's"),
+        OptionSpec("persist", boolean, True, "leave the picture on the glass at close (false: display off)"),
+        OptionSpec("refresh", choice("partial", "full"), "partial", "send only what changed, or every frame whole"),
+    )
+    SIM_SHARED: ClassVar[frozenset[str]] = frozenset({"size"})
+
+    def __init__(
+        self,
+        wiring: Wiring | Callable[[], Wiring],
+        *,
+        profile: PanelProfile,
+        rotation: int = 0,
+        fps: float | None = None,
+        invert: bool | None = None,
+        persist: bool = True,
+        refresh: str = "partial",
+        clock: Clock = REAL_CLOCK,
+        background: object = "black",
+        deferral: str = "asap",
+    ) -> None:
+        if profile.controller not in self.compatible_controllers():
+            raise ConfigError(f"{type(self).__name__} drives {', '.join(self.compatible_controllers())}, "
+                              f"not the {profile.controller} of profile {profile.name}")
+        if refresh not in ("partial", "full"):
+            raise ConfigError(f"refresh must be 'partial' or 'full', got {refresh!r}")
+        self.profile = profile
+        self.rotation = self._check_rotation(rotation)
+        self.persist = persist
+        self.refresh_mode = refresh
+        self.invert = profile.invert if invert is None else invert
+        self.clock = clock
+        self.target_fps = fps
+        self.stats = PanelStats()
+        self._wiring_source = wiring
+        self._wiring: Wiring | None = wiring if isinstance(wiring, Wiring) else None
+        self._shadow: np.ndarray | None = None
+        self._full = True
+        self._pacer: FramePacer | None = None
+        self._force = False
+        self._bus_perf = 0.0
+        self._frame = FrameStats()
+        self._cost: WindowCost | None = None
+        super().__init__(self._capabilities(), mode=self.canvas_mode, background=background,
+                         deferral=deferral)  # type: ignore[arg-type]
+
+    # -- construction from URLs -------------------------------------------------------------------
+    @classmethod
+    def compatible_controllers(cls) -> tuple[str, ...]:
+        """Profile controllers this class drives."""
+        return (cls.controller,)
+
+    @classmethod
+    def from_url(cls, url: DeviceURL, **kwargs: Any) -> PanelDisplay:
+        """``MODEL:TARGET?options`` on hardware, ``sim:MODEL?options`` on the simulated chip (see docs/panels.md)."""
+        where = str(url)
+        sim_options: dict[str, str] | None = None
+        if url.scheme == "sim":
+            url, sim_options = cls.split_sim_url(url)
+        opts = cls.read_url_options(url)
+        model = url.scheme
+        try:
+            profile = cls._profile(opts)
+            keywords = cls.controller_options(opts, profile)
+        except URLError:
+            raise
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+        clock: Clock = kwargs.pop("clock", None) or (SimulatedClock() if sim_options is not None else REAL_CLOCK)
+        if sim_options is not None:
+            interface: Interface = "spi" if opts["dc"] is not None and "spi" in cls.interfaces else cls.interfaces[0]
+            pins = cls._pins(opts, profile, interface)
+            device = create_simulator(model, clock=clock, **cls.simulator_options(sim_options, opts, profile, pins))
+            wiring: Wiring | Callable[[], Wiring] = sim_wiring(_bus_device(device, where), interface, pins,
+                                                                clock=clock)
+        else:
+            target = parse_target(url.target, where)
+            if target.interface not in cls.interfaces:
+                raise URLError(f"{where}: a {cls.controller} is not driven over {target.interface}")
+            pins = cls._pins(opts, profile, target.interface)
+            wiring = lambda: open_wiring(target, pins, clock=clock, where=where)  # opened by open()
+        return cls(wiring, profile=profile, rotation=opts["rotation"], fps=opts["fps"], invert=opts["invert"],
+                   persist=opts["persist"], refresh=opts["refresh"], clock=clock, **keywords, **kwargs)
+
+    @classmethod
+    def _profile(cls, opts: OptionValues) -> PanelProfile:
+        """The profile named by ``profile=``, else the built-in one of ``size=`` (else the class's default size)."""
+        if opts["profile"] is not None:
+            profile = load_panel_profile(opts["profile"])
+            if opts["size"] is not None and opts["size"] not in (profile.size, profile.size[::-1]):
+                raise ConfigError(f"size={opts['size'][0]}x{opts['size'][1]} disagrees with profile {profile.name} "
+                                  f"({profile.size[0]}x{profile.size[1]})")
+            return profile
+        return panel_profile_for(cls.controller, opts["size"] or cls.default_size)
+
+    @classmethod
+    def _pins(cls, opts: OptionValues, profile: PanelProfile, interface: Interface) -> Pins:
+        hz = opts["hz"] if opts["hz"] is not None else profile.bus_clock(interface)
+        profile.check_clock(interface, hz)
+        return Pins(dc=opts["dc"], rst=opts["rst"], bl=opts["bl"], te=opts["te"], gpiochip=opts["gpiochip"], hz=hz,
+                    addr=opts.get("addr") or profile.i2c_address or 0x3C)
+
+    @classmethod
+    def controller_options(cls, opts: OptionValues, profile: PanelProfile) -> dict[str, Any]:
+        """Constructor keywords from the controller's own URL options (the base has none)."""
+        return {}
+
+    @classmethod
+    def simulator_options(cls, sim_options: dict[str, str], opts: OptionValues, profile: PanelProfile,
+                          pins: Pins) -> dict[str, str]:
+        """Options for the simulator of a ``sim:`` URL: as given, with the module's size."""
+        out = dict(sim_options)
+        out.setdefault("size", f"{profile.size[0]}x{profile.size[1]}")
+        return out
+
+    # -- what a controller implements --------------------------------------------------------------
+    @property
+    @abstractmethod
+    def pixel_format(self) -> str:
+        """The ``raster.formats`` name of the pixels on the wire."""
+
+    @abstractmethod
+    def _window_size(self) -> tuple[int, int]:
+        """(width, height) of the controller window space at the current rotation (the native frame)."""
+
+    @abstractmethod
+    def _setup(self) -> None:
+        """Send the settings of the options after the init table: scan direction, inversion, colour depth..."""
+
+    @abstractmethod
+    def _write_window(self, window: Rect, pixels: bytes) -> None:
+        """Send one window: the controller's window commands, then ``pixels`` (already packed)."""
+
+    @abstractmethod
+    def _power(self, on: bool) -> None:
+        """Display on or off (the RAM keeps its picture)."""
+
+    def _soft_turn(self) -> int:
+        """Degrees of the rotation done by turning the picture in software (the controller does the rest)."""
+        return 0
+
+    # -- life cycle ---------------------------------------------------------------------------------
+    @property
+    def wiring(self) -> Wiring:
+        """The open bus and lines (LinkError-free access only while open)."""
+        if self._wiring is None:
+            raise ConfigError(f"{type(self).__name__} is not open")
+        return self._wiring
+
+    @property
+    def bus(self) -> PanelBus | None:
+        """The panel bus (None until the display is opened on hardware)."""
+        return None if self._wiring is None else self._wiring.bus
+
+    @property
+    def simulator(self) -> BusDevice | None:
+        """The simulated chip of a ``sim:`` display (None on hardware)."""
+        return None if self._wiring is None else self._wiring.simulator
+
+    def _open_device(self) -> None:
+        if self._wiring is None:
+            source = self._wiring_source
+            self._wiring = source if isinstance(source, Wiring) else source()
+        self.stats = PanelStats()
+        self._full = True
+        bus = self._wiring.bus
+        self._cost = window_cost(self.profile.controller, pixel_format=self.pixel_format,
+                                 bus_kind=getattr(bus, "kind", "spi"), max_transfer=bus.max_transfer)
+        self._start_pacer()
+        try:
+            self._initialise()
+        except BaseException:
+            self._wiring.close(backlight_on=False)
+            self._wiring = None
+            raise
+
+    def _initialise(self) -> None:
+        """Reset, the init table up to display-on, the option settings, a full frame, then display-on."""
+        self.wiring.bus.reset()
+        steps = list(self.profile.init)
+        on_at = max((i for i, s in enumerate(steps) if s.command == self.display_on), default=None)
+        before, after = (steps, []) if on_at is None else (steps[:on_at], steps[on_at:])
+        self._run_steps(before)
+        self._setup()
+        self._full = True
+        self._show(self.canvas)
+        self.canvas.clear_damage()
+        self._run_steps(after)
+
+    def _run_steps(self, steps: list[InitStep]) -> None:
+        for step in steps:
+            self._send_step(step)
+            if step.delay_ms:
+                self.clock.sleep(step.delay_ms / 1000.0)
+
+    def _send_step(self, step: InitStep) -> None:
+        """One init-table step: MIPI sends the command byte, then its parameters as data."""
+        self._command(step.command)
+        if step.params:
+            self._data(step.params)
+
+    def close(self) -> None:
+        """Send the frame still held back by pacing, leave the picture (``persist``) or turn it off, release."""
+        self._force = True
+        try:
+            super().close()
+        finally:
+            self._force = False
+
+    def _close_device(self) -> None:
+        wiring, self._wiring = self._wiring, None
+        self._pacer = None
+        if wiring is None:
+            return
+        try:
+            if not self.persist:
+                self._wiring = wiring
+                try:
+                    self._power(False)
+                finally:
+                    self._wiring = None
+        finally:
+            wiring.close(backlight_on=self.persist)
+
+    def reset(self) -> None:
+        """Reset the controller and initialise it again; the canvas is sent whole."""
+        self._require_open()
+        self._initialise()
+
+    def rotate(self, degrees: int) -> None:
+        """Turn the picture to ``degrees`` (0/90/180/270 clockwise): the canvas is kept when its size stays,
+        otherwise a new one of the turned size is started; the next frame is full."""
+        degrees = self._check_rotation(degrees)
+        self.rotation = degrees
+        caps = self._capabilities()
+        if caps.size != self.capabilities.size:
+            self.capabilities = caps
+            self.canvas = Canvas(int(caps.size[0]), int(caps.size[1]), self.canvas_mode)
+            self.canvas.fill(self.background)
+            self.window(0.0, 0.0, *caps.size_mm)
+        self._shadow = None
+        self._full = True
+        if self.is_open:
+            self._setup()
+            self.flush()
+
+    def _check_rotation(self, degrees: int) -> int:
+        if degrees not in (0, 90, 180, 270):
+            raise InvalidArgument(f"rotation must be 0, 90, 180 or 270 degrees, got {degrees!r}")
+        return int(degrees)
+
+    def _capabilities(self) -> Capabilities:
+        """Size and model at the current rotation."""
+        w, h = self.profile.size
+        if self.rotation % 180:
+            w, h = h, w
+        colour: ColourModel = "mono" if self.canvas_mode == "1" else "rgb565"
+        if self.pixel_format == "rgb666":
+            colour = "rgb666"
+        return Capabilities(model=self.profile.name, category="output", kind="raster", size=(float(w), float(h)),
+                            unit_mm=PIXEL_PITCH_MM, colour_model=colour, y_down=True, can_erase=True,
+                            limits={"controller": self.profile.controller, "rotation": self.rotation})
+
+    # -- pacing ------------------------------------------------------------------------------------------
+    def _start_pacer(self) -> None:
+        self._pacer = None
+        if self.target_fps is not None:
+            from pixelpen.devices.panels.pacing import FramePacer
+
+            self.check_fps(self.target_fps)
+            self._pacer = FramePacer(self.clock, self.target_fps)
+
+    def check_fps(self, fps: float) -> None:
+        """ConfigError when ``fps`` full frames a second cannot pass the configured bus at its clock."""
+        from pixelpen.devices.panels.pacing import check_fps
+
+        w, h = self._window_size()
+        frame = self.cost.window(Rect(0, 0, w, h))
+        bus = self.wiring.bus
+        check_fps(fps, kind=getattr(bus, "kind", "spi"), clock_hz=getattr(bus, "clock_hz", 0.0),
+                  frame_bytes=frame.bytes, transfers=frame.transfers, what=self._describe())
+
+    @property
+    def cost(self) -> WindowCost:
+        """The controller's window cost model on the open bus (``windows.window_cost``)."""
+        if self._cost is None:
+            raise ConfigError(f"{type(self).__name__} is not open")
+        return self._cost
+
+    def _describe(self) -> str:
+        w, h = self.profile.size
+        return f"{self.profile.controller.upper()} {w}x{h} {self.pixel_format.upper()}"
+
+    def _present(self) -> None:
+        if self._pacer is not None and not self._force and not self._pacer.frame_due():
+            return  # frames coalesce: the damage stays until a frame is due
+        super()._present()
+
+    def refresh(self, target_fps: float | None = None) -> bool:
+        """Render what is pending and send it as one frame, first waiting for the next frame time of
+        ``target_fps`` (default: the ``fps`` option; neither: at once).  True when anything was sent."""
+        self._require_open()
+        if target_fps is not None and target_fps != self.target_fps:
+            self.target_fps = target_fps
+            self._start_pacer()
+        if self._pacer is not None:
+            self._pacer.wait()
+        before = self.stats.frames
+        self._force = True
+        try:
+            self.flush()
+        finally:
+            self._force = False
+        return self.stats.frames > before
+
+    # -- frames ------------------------------------------------------------------------------------
+    def _native(self, array: np.ndarray) -> np.ndarray:
+        """The canvas array as the controller's window space sees it (a view turned by the software rotation)."""
+        return np.rot90(array, -(self._soft_turn() // 90))
+
+    def _native_rect(self, r: Rect, width: int, height: int) -> Rect:
+        """A canvas rectangle in window space (``width`` x ``height`` is the canvas size)."""
+        turn = self._soft_turn()
+        if turn == 90:
+            return Rect(height - r.y1, r.x0, height - r.y0, r.x1)
+        if turn == 180:
+            return Rect(width - r.x1, height - r.y1, width - r.x0, height - r.y0)
+        if turn == 270:
+            return Rect(r.y0, width - r.x1, r.y1, width - r.x0)
+        return r
+
+    def _show(self, canvas: Canvas) -> None:
+        """Send the damaged (or, when due, every) pixel of ``canvas``; a fault or interruption makes the next full."""
+        started = time.perf_counter()
+        self._bus_perf = 0.0
+        self._frame = FrameStats(full=self._full or self.refresh_mode == "full")
+        native = self._native(canvas.array)
+        height, width = native.shape[:2]
+        if self._frame.full or self._shadow is None or self._shadow.shape != native.shape:
+            rects = [Rect(0, 0, width, height)]
+            self._frame.full = True
+        else:
+            rects = self._trim([self._native_rect(r, canvas.width, canvas.height) for r in canvas.damage()], native)
+        if not rects:
+            return
+        windows = self.cost.plan(rects, width=width, height=height)
+        self._full = True  # until the last window is out
+        if self._frame.full:
+            self._shadow = np.empty_like(native)
+        assert self._shadow is not None
+        self._wait_te()
+        for window in windows:
+            rows, cols = window.slices
+            self._write_window(window, self._pack(native, window))
+            self._shadow[rows, cols] = native[rows, cols]
+        self._full = False
+        if self._pacer is not None:
+            self._pacer.sent()
+        self._frame.windows = len(windows)
+        self._frame.host_seconds = max(time.perf_counter() - started - self._bus_perf, 0.0)
+        self.stats.add(self._frame)
+
+    def _pack(self, native: np.ndarray, window: Rect) -> bytes:
+        """The window's pixels in the wire format (one vectorised conversion of a view)."""
+        from pixelpen.raster.formats import pack
+
+        view = native[window.slices]
+        if self.canvas_mode == "1":
+            view = view.view(np.bool_)
+        return pack(view, self.pixel_format)
+
+    def _trim(self, rects: list[Rect], native: np.ndarray) -> list[Rect]:
+        """The damage shrunk to the pixels that differ from the shadow (rectangles of changed runs)."""
+        assert self._shadow is not None
+        height, width = native.shape[:2]
+        if sum(r.area for r in rects) > TRIM_FRACTION * width * height:
+            return rects
+        cost = self.cost
+        ax, ay = cost.align
+        out: list[Rect] = []
+        for r in rects:
+            a = r.aligned(ax, ay, width, height)
+            rows, cols = a.slices
+            found = tile_damage(np.ascontiguousarray(native[rows, cols]), self._shadow[rows, cols], (ax, ay),
+                                cost.window_bytes, cost.bytes_per_pixel)
+            out.extend(Rect(a.x0 + f.x0, a.y0 + f.y0, a.x0 + f.x1, a.y0 + f.y1) for f in found)
+        return out
+
+    def _wait_te(self) -> None:
+        """Start at the tearing-effect pulse when a TE line is wired (a missing pulse is logged, not fatal)."""
+        te = self.wiring.te
+        if te is not None and not self._timed(te.wait_edge, True, TE_TIMEOUT):
+            log.debug("%s: no TE pulse within %g s; sending anyway", self.profile.name, TE_TIMEOUT)
+
+    # -- the bus, counted -------------------------------------------------------------------------
+    def _command(self, *cmd: int | bytes) -> None:
+        """``bus.command`` with the bytes and time counted in the frame's statistics."""
+        self._frame.bytes += sum(1 if isinstance(c, int) else len(c) for c in cmd)
+        self._timed(self.wiring.bus.command, *cmd)
+
+    def _data(self, data: bytes) -> None:
+        """``bus.data`` with the bytes and time counted."""
+        self._frame.bytes += len(data)
+        self._timed(self.wiring.bus.data, data)
+
+    def _timed(self, call: Callable[..., Any], *args: Any) -> Any:
+        perf, now = time.perf_counter(), self.clock.now()
+        try:
+            return call(*args)
+        finally:
+            self._bus_perf += time.perf_counter() - perf
+            self._frame.bus_seconds += self.clock.now() - now
+
+
+def _bus_device(device: object, where: str) -> BusDevice:
+    """The simulator as a BusDevice (a stream simulator behind a panel scheme is a URLError)."""
+    if not isinstance(device, BusDevice):
+        raise URLError(f"{where}: the simulator {type(device).__name__} is not a panel (bus) device")
+    return device

@@ -1,0 +1,130 @@
+"""MIPI-DCS TFT panels (ST7789, ILI9341, ST7735) on one class; each module's facts come from its profile.
+
+Rotation is MADCTL (MY/MX/MV) with the module's CASET/RASET offsets for that rotation (profile
+``rotation.N``); colour order (BGR) and inversion (INVON) come from the profile unless the URL says
+``bgr=``/``invert=``.  Pixels are RGB565 big-endian (COLMOD 0x55) by default, RGB666 in three bytes
+(COLMOD 0x66) with ``colour=rgb666``.  A window is ``2A xs xe``, ``2B ys ye``, ``2C`` + pixels: 11
+command and parameter bytes.  With a ``te`` line wired TEON (35h 00h) is sent and every frame starts at
+the V-blank pulse.
+"""
+
+from __future__ import annotations
+
+import struct
+from typing import Any, ClassVar
+
+from pixelpen.devices.panels.base import PanelDisplay
+from pixelpen.errors import ConfigError
+from pixelpen.options import OptionSpec, OptionValues, boolean, choice
+from pixelpen.profiles.panel import COLMOD, MADCTL_BGR, PanelGeometry, PanelProfile
+from pixelpen.raster.damage import Rect
+
+CASET, RASET, RAMWR = 0x2A, 0x2B, 0x2C
+INVOFF, INVON, DISPOFF, DISPON = 0x20, 0x21, 0x28, 0x29
+TEON, MADCTL, COLMOD_CMD = 0x35, 0x36, 0x3A
+_FORMATS = {"rgb565": "rgb565be", "rgb666": "rgb666"}
+
+
+class MipiDcsDisplay(PanelDisplay):
+    """A MIPI-DCS TFT (``st7789:spi:0.0?dc=25&rst=27&size=240x240&rotation=90``); the model is its profile's."""
+
+    controller: ClassVar[str] = "st7789"
+    OPTIONS: ClassVar[tuple[OptionSpec[Any], ...]] = (
+        *PanelDisplay.OPTIONS,
+        OptionSpec("bgr", boolean, None, "panel colour filter is B-G-R (MADCTL bit 3); default the profile's"),
+        OptionSpec("colour", choice("rgb565", "rgb666"), None,
+                   "pixels on the wire: rgb565 (COLMOD 0x55, 2 bytes) or rgb666 (0x66, 3 bytes); "
+                   "default the profile's"),
+    )
+
+    def __init__(self, *args: Any, bgr: bool | None = None, colour: str | None = None, **kwargs: Any) -> None:
+        profile: PanelProfile = kwargs["profile"]
+        if colour is not None and colour not in _FORMATS:
+            raise ConfigError(f"colour must be rgb565 or rgb666, got {colour!r}")
+        self._format = _FORMATS[colour] if colour else profile.pixel_format
+        self.bgr = profile.bgr if bgr is None else bgr
+        super().__init__(*args, **kwargs)
+
+    @classmethod
+    def compatible_controllers(cls) -> tuple[str, ...]:
+        """Any MIPI-DCS controller: a profile for another one may be given with ``profile=``."""
+        return ("st7789", "ili9341", "st7735")
+
+    @classmethod
+    def controller_options(cls, opts: OptionValues, profile: PanelProfile) -> dict[str, Any]:
+        """``bgr`` and ``colour``."""
+        return {"bgr": opts["bgr"], "colour": opts["colour"]}
+
+    @property
+    def pixel_format(self) -> str:
+        """``rgb565be`` or ``rgb666``."""
+        return self._format
+
+    @property
+    def geometry(self) -> PanelGeometry:
+        """Window size, offsets and MADCTL at the current rotation."""
+        return self.profile.geometry(self.rotation)
+
+    @property
+    def madctl(self) -> int:
+        """The MADCTL byte sent: the rotation's bits with the BGR bit as configured."""
+        return (self.geometry.madctl & ~MADCTL_BGR) | (MADCTL_BGR if self.bgr else 0)
+
+    def _window_size(self) -> tuple[int, int]:
+        g = self.geometry
+        return g.width, g.height
+
+    def _setup(self) -> None:
+        """COLMOD, MADCTL, INVON/INVOFF and (with a TE line) TEON."""
+        self._command(COLMOD_CMD)
+        self._data(bytes([COLMOD[self._format]]))
+        self._command(MADCTL)
+        self._data(bytes([self.madctl]))
+        self._command(INVON if self.invert else INVOFF)
+        if self.wiring.te is not None:
+            self._command(TEON)
+            self._data(b"\x00")
+
+    def _write_window(self, window: Rect, pixels: bytes) -> None:
+        g = self.geometry
+        self._command(CASET)
+        self._data(struct.pack(">HH", window.x0 + g.x_offset, window.x1 - 1 + g.x_offset))
+        self._command(RASET)
+        self._data(struct.pack(">HH", window.y0 + g.y_offset, window.y1 - 1 + g.y_offset))
+        self._command(RAMWR)
+        self._data(pixels)
+
+    def _power(self, on: bool) -> None:
+        self._command(DISPON if on else DISPOFF)
+
+    def set_invert(self, invert: bool) -> None:
+        """Inversion on or off now (INVON/INVOFF)."""
+        self._require_open()
+        self.invert = bool(invert)
+        self._command(INVON if self.invert else INVOFF)
+
+    def power(self, on: bool) -> None:
+        """Display on (DISPON) or off (DISPOFF); the RAM keeps the picture."""
+        self._require_open()
+        self._power(on)
+
+
+class ST7789Display(MipiDcsDisplay):
+    """Sitronix ST7789 modules (240x240, 240x320, 135x240, 240x280, 170x320)."""
+
+    controller: ClassVar[str] = "st7789"
+    default_size: ClassVar[tuple[int, int]] = (240, 240)
+
+
+class ILI9341Display(MipiDcsDisplay):
+    """ILITEK ILI9341 modules (240x320, often used as 320x240)."""
+
+    controller: ClassVar[str] = "ili9341"
+    default_size: ClassVar[tuple[int, int]] = (240, 320)
+
+
+class ST7735Display(MipiDcsDisplay):
+    """Sitronix ST7735 modules (128x160, 80x160)."""
+
+    controller: ClassVar[str] = "st7735"
+    default_size: ClassVar[tuple[int, int]] = (128, 160)

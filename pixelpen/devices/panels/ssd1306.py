@@ -1,0 +1,143 @@
+"""Monochrome OLEDs of the SSD1306 family: SSD1306, SSD1309 (horizontal-mode windows) and SH1106 (page mode).
+
+The canvas is mode "1" (1 = lit).  Rotation 0 and 180 are done by the controller (segment remap A0h/A1h and
+COM scan direction C0h/C8h, as the profile orients rotation 0); 90 and 270 turn the picture in software
+(the canvas is then height x width) on top of the controller's 0 or 180.  Windows cover whole pages of 8 rows:
+SSD1306/SSD1309 ``21 cs ce 22 ps pe`` + page bytes (6 command bytes, column start added for modules narrower
+than the RAM); SH1106 has no window, so per page ``B0+p, 0x(c & 15), 0x1(c >> 4)`` + that page's bytes, with
+its column offset (usually 2).  Parameters are command bytes (D/C low; I2C control byte 0x00).
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+from pixelpen.devices.panels.base import PanelDisplay
+from pixelpen.devices.panels.wiring import Interface, Pins
+from pixelpen.errors import ConfigError
+from pixelpen.options import OptionSpec, OptionValues, integer
+from pixelpen.profiles.panel import InitStep, PanelGeometry, PanelProfile
+from pixelpen.raster.damage import Rect
+
+SET_CONTRAST, NORMAL, INVERSE, DISPLAY_OFF, DISPLAY_ON = 0x81, 0xA6, 0xA7, 0xAE, 0xAF
+SEGMENT_NORMAL, SEGMENT_REMAP, COM_NORMAL, COM_REVERSE = 0xA0, 0xA1, 0xC0, 0xC8
+COLUMN_ADDRESS, PAGE_ADDRESS, PAGE_START = 0x21, 0x22, 0xB0
+
+
+def i2c_address(value: str) -> int:
+    """A 7-bit I2C address, decimal or 0x hex (0x3c)."""
+    try:
+        number = int(value.strip(), 0)
+    except ValueError:
+        raise ValueError("expected an I2C address such as 0x3c") from None
+    if not 0x08 <= number <= 0x77:
+        raise ValueError("expected a 7-bit I2C address 0x08..0x77")
+    return number
+
+
+class SSD1306Display(PanelDisplay):
+    """An SSD1306 OLED (``ssd1306:i2c:1?addr=0x3c``, ``ssd1306:spi:0.0?dc=24&rst=25``, ``sim:ssd1306?size=128x32``)."""
+
+    controller: ClassVar[str] = "ssd1306"
+    default_size: ClassVar[tuple[int, int]] = (128, 64)
+    interfaces: ClassVar[tuple[Interface, ...]] = ("i2c", "spi")
+    canvas_mode: ClassVar[str] = "1"
+    display_on: ClassVar[int] = DISPLAY_ON
+    OPTIONS: ClassVar[tuple[OptionSpec[Any], ...]] = (
+        *PanelDisplay.OPTIONS,
+        OptionSpec("addr", i2c_address, None, "I2C address (0x3c or 0x3d); default the profile's"),
+        OptionSpec("contrast", integer(0, 255), None, "contrast 0..255 (81h); default the profile's"),
+    )
+
+    def __init__(self, *args: Any, contrast: int | None = None, **kwargs: Any) -> None:
+        if contrast is not None and not 0 <= contrast <= 255:
+            raise ConfigError(f"contrast must be 0..255, got {contrast!r}")
+        self.contrast = contrast
+        super().__init__(*args, **kwargs)
+
+    @classmethod
+    def controller_options(cls, opts: OptionValues, profile: PanelProfile) -> dict[str, Any]:
+        """``contrast``."""
+        return {"contrast": opts["contrast"]}
+
+    @classmethod
+    def simulator_options(cls, sim_options: dict[str, str], opts: OptionValues, profile: PanelProfile,
+                          pins: Pins) -> dict[str, str]:
+        """The module's size and the I2C address the display talks to."""
+        out = super().simulator_options(sim_options, opts, profile, pins)
+        out.setdefault("address", hex(pins.addr))
+        return out
+
+    @property
+    def pixel_format(self) -> str:
+        """``mono-pages``."""
+        return "mono-pages"
+
+    @property
+    def geometry(self) -> PanelGeometry:
+        """The controller's part of the rotation (0 or 180) with its scan settings."""
+        return self.profile.geometry(self.rotation // 180 * 180)
+
+    def _soft_turn(self) -> int:
+        return 90 if self.rotation in (90, 270) else 0
+
+    def _window_size(self) -> tuple[int, int]:
+        return self.profile.size
+
+    def _send_step(self, step: InitStep) -> None:
+        self._command(step.command, step.params)
+
+    def _setup(self) -> None:
+        """Segment remap and COM direction of the rotation, normal/inverse, the contrast when set."""
+        g = self.geometry
+        self._command(SEGMENT_REMAP if g.segment_remap else SEGMENT_NORMAL,
+                      COM_REVERSE if g.com_reverse else COM_NORMAL, INVERSE if self.invert else NORMAL)
+        if self.contrast is not None:
+            self._command(SET_CONTRAST, self.contrast)
+
+    def _write_window(self, window: Rect, pixels: bytes) -> None:
+        x = self.geometry.x_offset
+        self._command(COLUMN_ADDRESS, window.x0 + x, window.x1 - 1 + x, PAGE_ADDRESS, window.y0 // 8,
+                      (window.y1 - 1) // 8)
+        self._data(pixels)
+
+    def _power(self, on: bool) -> None:
+        self._command(DISPLAY_ON if on else DISPLAY_OFF)
+
+    def set_contrast(self, contrast: int) -> None:
+        """Contrast 0..255 now (81h)."""
+        self._require_open()
+        if not (isinstance(contrast, int) and 0 <= contrast <= 255):
+            raise ConfigError(f"contrast must be 0..255, got {contrast!r}")
+        self.contrast = contrast
+        self._command(SET_CONTRAST, contrast)
+
+    def set_invert(self, invert: bool) -> None:
+        """Inverse display (A7h) or normal (A6h) now."""
+        self._require_open()
+        self.invert = bool(invert)
+        self._command(INVERSE if self.invert else NORMAL)
+
+    def power(self, on: bool) -> None:
+        """Display on (AFh) or sleep (AEh); the RAM keeps the picture."""
+        self._require_open()
+        self._power(on)
+
+
+class SSD1309Display(SSD1306Display):
+    """An SSD1309 OLED (the SSD1306 command set, external VCC: no charge pump)."""
+
+    controller: ClassVar[str] = "ssd1309"
+
+
+class SH1106Display(SSD1306Display):
+    """An SH1106 OLED: 132-column RAM, page addressing only (``B0+p``, column low/high nibbles per page)."""
+
+    controller: ClassVar[str] = "sh1106"
+
+    def _write_window(self, window: Rect, pixels: bytes) -> None:
+        column = window.x0 + self.geometry.x_offset
+        width = window.width
+        for i, page in enumerate(range(window.y0 // 8, -(-window.y1 // 8))):
+            self._command(PAGE_START | page, column & 0x0F, 0x10 | column >> 4)
+            self._data(pixels[i * width:(i + 1) * width])
