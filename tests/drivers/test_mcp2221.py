@@ -9,6 +9,7 @@ import pytest
 from smbus2 import i2c_msg
 
 from pixelpen.clock import SimulatedClock
+from pixelpen.drivers.i2c import I2CBus
 from pixelpen.drivers.mcp2221 import MCP2221
 from pixelpen.errors import ConfigError, LinkError, LinkTimeout
 from pixelpen.sim.transports.mcp2221 import SimMCP2221
@@ -163,3 +164,20 @@ def test_open_finds_the_chip_through_hidapi(monkeypatch):
     adapter.close()
     with pytest.raises(LinkError, match="cannot open USB HID device 04d8:00dd serial nope"):
         MCP2221.open(serial="nope")
+
+
+def test_the_i2c_panel_bus_runs_over_the_adapter():
+    adapter, fake, device = opened()
+    bus = I2CBus(adapter, 0x3C, clock_hz=adapter.clock_hz, max_transfer=4096)
+    del fake.reports[:]
+    bus.command(0x21, 0x00, 0x7F, 0x22, 0x00, 0x07)
+    pixels = bytes((i * 7 + 3) % 256 for i in range(1024))
+    bus.data(pixels)
+    assert len(accepted_writes(fake)) == 19  # panels.md section 8: an SSD1306 frame is 19 reports
+    assert device.writes == [(0x3C, b"\x00\x21\x00\x7f\x22\x00\x07"), (0x3C, b"\x40" + pixels)]
+    missing = I2CBus(adapter, 0x3D)
+    with pytest.raises(LinkError, match="i2c: no device acknowledged address 0x3d"):
+        missing.command(0xAE)
+    bus.close()
+    with pytest.raises(ValueError, match="not open"):  # closing the bus closed the adapter and its HID device
+        fake.read(64)
