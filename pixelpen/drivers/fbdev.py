@@ -204,8 +204,16 @@ class Framebuffer:
     """A mapped framebuffer: pack and write rectangles of RGB pixels, flip pages, wait for vsync, blank."""
 
     def __init__(self, device: FramebufferDevice, *, double_buffer: bool = True) -> None:
+        """Take over an open node (closed again if it is not a usable framebuffer)."""
         self.device = device
         self.name = device.name
+        try:
+            self._set_up(double_buffer)
+        except BaseException:
+            device.close()
+            raise
+
+    def _set_up(self, double_buffer: bool) -> None:
         self.var = self._get(FBIOGET_VSCREENINFO, FbVarScreeninfo, "FBIOGET_VSCREENINFO")
         self.fix = self._get(FBIOGET_FSCREENINFO, FbFixScreeninfo, "FBIOGET_FSCREENINFO")
         self.layout = self._check_layout()
@@ -225,12 +233,7 @@ class Framebuffer:
     @classmethod
     def open(cls, path: str = "/dev/fb0", *, double_buffer: bool = True) -> Framebuffer:
         """Open the framebuffer node at ``path`` (LinkError naming the node and the group on failure)."""
-        node = DeviceNode(path)
-        try:
-            return cls(node, double_buffer=double_buffer)
-        except BaseException:
-            node.close()
-            raise
+        return cls(DeviceNode(path), double_buffer=double_buffer)
 
     # -- set-up -------------------------------------------------------------------------------------
     def _get(self, request: int, struct: type[ctypes.Structure], name: str) -> ctypes.Structure:
@@ -323,6 +326,13 @@ class Framebuffer:
         except OSError as exc:
             return False, f"single buffering: FBIOPAN_DISPLAY failed ({exc})"
         return True, "double buffering by FBIOPAN_DISPLAY"
+
+    @property
+    def size_mm(self) -> tuple[float, float] | None:
+        """The visible area in millimetres as the driver reports it (var.width, var.height), None if unknown."""
+        if self.var.width and self.var.height:
+            return float(self.var.width), float(self.var.height)
+        return None
 
     # -- drawing ------------------------------------------------------------------------------------
     @property
