@@ -96,7 +96,7 @@ def bus_settings(bus: PanelBus) -> dict[str, object]:
     settings: dict[str, object] = {"kind": "bus", "bus": kind}
     clock_hz = getattr(bus, "clock_hz", None)
     if clock_hz is not None:
-        settings["clock_hz"] = f"{float(clock_hz):g}" if float(clock_hz) % 1 else int(clock_hz)
+        settings["clock_hz"] = f"{float(clock_hz):.6f}".rstrip("0").rstrip(".")
     settings["max_transfer"] = int(bus.max_transfer)
     address = getattr(bus, "address", None)
     if isinstance(address, int):

@@ -99,6 +99,15 @@ def test_i2c_settings_are_recorded():
     assert "address=0x3c" in text.splitlines()[0]
 
 
+def test_a_fractional_clock_is_written_in_full():
+    stub = StubBus()
+    stub.clock_hz = 1_234_567.5
+    out = io.StringIO()
+    RecordingBus(stub, out).close()
+    assert "clock_hz=1234567.5 " in out.getvalue()
+    assert read_bus_trace(io.StringIO(out.getvalue())).clock_hz == 1_234_567.5
+
+
 def test_a_failed_call_is_a_comment_and_not_a_frame():
     def session(bus):
         bus.command(0x11)
