@@ -66,7 +66,7 @@ class FtdiSpiBus:
         clock: Clock = REAL_CLOCK,
         name: str = "ftdi",
     ) -> None:
-        _check_options(name, dc, rst, clock_hz, mode, max_transfer)
+        _check_options(name, dc, rst, clock_hz, mode, max_transfer, cs)
         self.name = name
         self.max_transfer = max_transfer
         self.bytes_sent = 0
@@ -97,7 +97,7 @@ class FtdiSpiBus:
     ) -> FtdiSpiBus:
         """Open an FT232H by pyftdi URL (``ftdi://ftdi:232h/1``) or ``usb.core.Device`` and configure MPSSE SPI."""
         name = target if isinstance(target, str) else "ftdi"
-        _check_options(name, dc, rst, clock_hz, mode, max_transfer)
+        _check_options(name, dc, rst, clock_hz, mode, max_transfer, cs)
         try:
             from pyftdi.spi import SpiController  # type: ignore[import-untyped]
             from pyftdi.usbtools import UsbToolsError  # type: ignore[import-untyped]
@@ -174,7 +174,9 @@ class FtdiSpiBus:
         self.transfers += 1
 
 
-def _check_options(name: str, dc: int, rst: int | None, clock_hz: float, mode: int, max_transfer: int) -> None:
+def _check_options(
+    name: str, dc: int, rst: int | None, clock_hz: float, mode: int, max_transfer: int, cs: int
+) -> None:
     if not 0 < clock_hz <= MAX_CLOCK_HZ:
         raise ConfigError(f"{name}: SPI clock {clock_hz:g} Hz is outside 0..30 MHz (the FT232H's limit, "
                           "60 MHz / 2)")
@@ -182,9 +184,12 @@ def _check_options(name: str, dc: int, rst: int | None, clock_hz: float, mode: i
         raise ConfigError(f"{name}: SPI mode must be 0, 1, 2 or 3, got {mode!r}")
     if not 1 <= max_transfer <= MAX_TRANSFER:
         raise ConfigError(f"{name}: max_transfer must be 1..{MAX_TRANSFER} (pyftdi's limit), got {max_transfer}")
+    if not 0 <= cs <= 4:
+        raise ConfigError(f"{name}: cs must be 0..4 (CS0-CS4 on ADBUS3-7), got {cs!r}")
+    first = FIRST_GPIO + cs  # CS1.. take ADBUS4.. when used
     for option, pin in (("dc", dc), ("rst", rst)):
-        if pin is not None and not FIRST_GPIO <= pin <= LAST_GPIO:
-            raise ConfigError(f"{name}: {option}={pin} is not a GPIO pin: use {FIRST_GPIO}..{LAST_GPIO} "
-                              "(ADBUS4-7, ACBUS0-7; ADBUS0-3 carry SPI)")
+        if pin is not None and not first <= pin <= LAST_GPIO:
+            raise ConfigError(f"{name}: {option}={pin} is not a free GPIO pin: use {first}..{LAST_GPIO} "
+                              f"(ADBUS0-{first - 1} carry SPI and chip selects; 8-15 are ACBUS0-7)")
     if rst is not None and rst == dc:
         raise ConfigError(f"{name}: dc and rst are both GPIO {dc}")

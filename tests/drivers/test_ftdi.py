@@ -78,8 +78,10 @@ def test_options_are_checked():
         FtdiSpiBus.open("ftdi://ftdi:232h/1", clock_hz=40e6)
     with pytest.raises(ConfigError, match=r"1\.\.65280"):
         FtdiSpiBus.open("ftdi://ftdi:232h/1", max_transfer=70_000)
-    with pytest.raises(ConfigError, match="dc=3 is not a GPIO pin"):
+    with pytest.raises(ConfigError, match="dc=3 is not a free GPIO pin"):
         FtdiSpiBus.open("ftdi://ftdi:232h/1", dc=3)
+    with pytest.raises(ConfigError, match=r"rst=4 is not a free GPIO pin: use 5\.\.15"):
+        FtdiSpiBus.open("ftdi://ftdi:232h/1", cs=1, dc=6, rst=4)  # CS1 is ADBUS4
     with pytest.raises(ConfigError, match="both GPIO 6"):
         FtdiSpiBus.open("ftdi://ftdi:232h/1", dc=6, rst=6)
 
