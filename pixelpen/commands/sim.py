@@ -14,6 +14,13 @@ A replayed file carries no flow control of its own, so the port is paced by the 
 its handshake line (``ready_to_receive``, the EBB's USB flow control) is high.  The device is therefore
 never overrun, whatever the file holds.
 
+``--view`` also serves a live web page (:mod:`pixelpen.sim.view`) of the paper as it is drawn, with the device's
+counters, on 127.0.0.1 (``--host``/``--port``; another host only when given explicitly) and prints its URL
+on stdout (after the pty path with ``--pty``); with ``--replay`` the page stays up after the replay until
+Ctrl-C.  A panel simulator (``pixelpen sim st7789 --view``) has no byte stream: the page shows its glass, and
+the glass is written at the end (``glass.png``).  The pty bridge, the replay and the page share one lock
+around the device (:class:`GuardedDevice`).
+
 ``--option KEY=VALUE`` passes simulator options (``paper=a3``, ``pens=black,red``, ``model=se_a3``) and
 line options (``baud``, ``flow`` for ``--pty``, ``tx_buffer`` and the faults of ``sim://`` URLs).
 """
@@ -21,18 +28,23 @@ line options (``baud``, ``flow`` for ``--pty``, ``tx_buffer`` and the faults of 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
 import signal
 import sys
 import threading
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field, is_dataclass, replace
 from pathlib import Path
 
 from pixelpen.clock import REAL_CLOCK, SimulatedClock
+from pixelpen.commands import argtypes
 from pixelpen.errors import ConfigError, PixelpenError, URLError
+from pixelpen.options import integer
 from pixelpen.sim.base import Fault, StreamDevice, create_simulator, simulator_models
 from pixelpen.sim.transports.options import TransportOptions, line_baud, split_options
 from pixelpen.sim.transports.port import LinkStats, SimPort
+from pixelpen.sim.view import MAX_FPS, ViewServer, source_for
 
 log = logging.getLogger(__name__)
 
@@ -44,46 +56,71 @@ _ERROR_PREFIXES = ("error:", "alarm:", "!")
 """Reply lines that report errors: GRBL ``error:N`` / ``ALARM:N``, EBB ``!N Err: ...``."""
 
 
-class PacedDevice:
-    """A StreamDevice whose handshake line is high only while the device can take another byte (see module doc)."""
+class GuardedDevice:
+    """A StreamDevice whose every call holds ``lock``, so the live view can look at it from another thread."""
 
-    def __init__(self, device: StreamDevice) -> None:
+    def __init__(self, device: StreamDevice, lock: threading.Lock | threading.RLock | None = None) -> None:
         self.device = device
         self.model = device.model
         self.clock = device.clock
+        self.lock = lock if lock is not None else threading.Lock()
+        self.resets_on_dtr = bool(getattr(device, "resets_on_dtr", False))
+        """An Arduino's board reboots when a program opens the port (the pty bridge reads this)."""
+
+    @property
+    def ready_to_receive(self) -> bool:
+        """The device's handshake line."""
+        with self.lock:
+            return self.device.ready_to_receive
+
+    def receive(self, data: bytes) -> None:
+        """Hand host bytes to the device."""
+        with self.lock:
+            self.device.receive(data)
+
+    def take_output(self) -> bytes:
+        """The device's answers."""
+        with self.lock:
+            return self.device.take_output()
+
+    def advance_to(self, t: float) -> None:
+        """Run the device up to ``t``."""
+        with self.lock:
+            self.device.advance_to(t)
+
+    def next_event_time(self) -> float | None:
+        """The device's next event."""
+        with self.lock:
+            return self.device.next_event_time()
+
+    def inject(self, fault: Fault | str, at: int | None = None) -> None:
+        """Pass a fault on to the device."""
+        with self.lock:
+            self.device.inject(fault, at=at)
+
+    def close(self) -> None:
+        """Close the device."""
+        with self.lock:
+            self.device.close()
+
+    def save_paper(self, path: str | Path) -> None:
+        """Write the device's paper (``out=`` of the line)."""
+        with self.lock:
+            self.device.save_paper(path)  # type: ignore[attr-defined]
+
+
+class PacedDevice(GuardedDevice):
+    """A guarded device whose handshake line is high only while it can take another byte (see module doc)."""
 
     @property
     def ready_to_receive(self) -> bool:
         """True while the device's buffer has room beyond READY_MARGIN and its own handshake allows."""
-        device = self.device
-        for room in ("free_bytes", "rx_free"):
-            if hasattr(device, room):
-                return getattr(device, room) > READY_MARGIN and device.ready_to_receive
-        return device.ready_to_receive
-
-    def receive(self, data: bytes) -> None:
-        """Hand host bytes to the device."""
-        self.device.receive(data)
-
-    def take_output(self) -> bytes:
-        """The device's answers."""
-        return self.device.take_output()
-
-    def advance_to(self, t: float) -> None:
-        """Run the device up to ``t``."""
-        self.device.advance_to(t)
-
-    def next_event_time(self) -> float | None:
-        """The device's next event."""
-        return self.device.next_event_time()
-
-    def inject(self, fault: Fault | str, at: int | None = None) -> None:
-        """Pass a fault on to the device."""
-        self.device.inject(fault, at=at)
-
-    def close(self) -> None:
-        """Close the device."""
-        self.device.close()
+        with self.lock:
+            device = self.device
+            for room in ("free_bytes", "rx_free"):
+                if hasattr(device, room):
+                    return getattr(device, room) > READY_MARGIN and device.ready_to_receive
+            return device.ready_to_receive
 
 
 @dataclass
@@ -133,9 +170,13 @@ def device_errors(device: StreamDevice, replies: bytes) -> list[str]:
     return errors
 
 
-def replay(device: StreamDevice, data: bytes, transport: TransportOptions) -> ReplayResult:
-    """Feed ``data`` to ``device`` through a SimPort paced by the device's readiness, then let it finish."""
-    port = SimPort(PacedDevice(device), baud=transport.baud, flow="rtscts", faults=transport.faults,
+def replay(device: StreamDevice, data: bytes, transport: TransportOptions,
+           lock: threading.Lock | None = None) -> ReplayResult:
+    """Feed ``data`` to ``device`` through a SimPort paced by the device's readiness, then let it finish.
+
+    ``lock`` is held around every call into the device (a live view looks at it meanwhile).
+    """
+    port = SimPort(PacedDevice(device, lock), baud=transport.baud, flow="rtscts", faults=transport.faults,
                    tx_buffer=transport.tx_buffer, clock=device.clock)
     clock = port.clock
     start = clock.now()
@@ -162,27 +203,59 @@ def _stop_on_sigterm(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
 
-def run_pty(device: StreamDevice, transport: TransportOptions, stop: threading.Event | None = None) -> None:
-    """Serve ``device`` on a pty (path printed on stdout) until Ctrl-C, SIGTERM or ``stop`` is set."""
-    from pixelpen.sim.transports.pty import PtyBridge
+@contextlib.contextmanager
+def _sigterm_stops() -> Iterator[None]:
+    """SIGTERM raises KeyboardInterrupt meanwhile (in the main thread), so a service manager stops it like Ctrl-C."""
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _stop_on_sigterm) if main else None
+    try:
+        yield
+    finally:
+        if main:
+            signal.signal(signal.SIGTERM, previous)
 
-    with PtyBridge(device, flow=transport.flow, baud=transport.baud, faults=transport.faults,
-                   tx_buffer=transport.tx_buffer, clock=device.clock, out=transport.out) as bridge:
-        print(bridge.path, flush=True)
-        print(f"pixelpen sim: {device.model} on {bridge.path} ({bridge.port.baud} baud, flow {transport.flow}); "
-              "press Ctrl-C to stop", file=sys.stderr, flush=True)
-        waiter = stop if stop is not None else threading.Event()
-        main = threading.current_thread() is threading.main_thread()
-        previous = signal.signal(signal.SIGTERM, _stop_on_sigterm) if main else None
+
+def wait_for_stop(stop: threading.Event | None = None, check: Callable[[], None] | None = None) -> None:
+    """Block until Ctrl-C, SIGTERM or ``stop`` is set; ``check`` runs every 0.2 s (it raises to end early)."""
+    waiter = stop if stop is not None else threading.Event()
+    with _sigterm_stops():
         try:
             while not waiter.wait(0.2):
-                if not bridge.running:
-                    raise PixelpenError(f"the pty bridge stopped: {bridge.error}")
+                if check is not None:
+                    check()
         except KeyboardInterrupt:
             print("pixelpen sim: stopped", file=sys.stderr)
-        finally:
-            if main:
-                signal.signal(signal.SIGTERM, previous)
+
+
+def run_pty(device: StreamDevice, transport: TransportOptions, stop: threading.Event | None = None,
+            lock: threading.Lock | None = None, view: ViewServer | None = None) -> None:
+    """Serve ``device`` on a pty (path printed on stdout, then the live view's URL) until Ctrl-C, SIGTERM or ``stop``.
+
+    ``lock`` is held around every call the pty bridge makes into the device (the live view's lock).
+    """
+    from pixelpen.sim.transports.pty import PtyBridge
+
+    with PtyBridge(GuardedDevice(device, lock), flow=transport.flow, baud=transport.baud, faults=transport.faults,
+                   tx_buffer=transport.tx_buffer, clock=device.clock, out=transport.out) as bridge:
+        print(bridge.path, flush=True)
+        if view is not None:
+            print(view.url, flush=True)
+        print(f"pixelpen sim: {device.model} on {bridge.path} ({bridge.port.baud} baud, flow {transport.flow})"
+              + (f", live view on {view.url}" if view is not None else "") + "; press Ctrl-C to stop",
+              file=sys.stderr, flush=True)
+
+        def check() -> None:
+            if not bridge.running:
+                raise PixelpenError(f"the pty bridge stopped: {bridge.error}")
+
+        wait_for_stop(stop, check)
+
+
+def start_view(device: object, args: argparse.Namespace, lock: threading.Lock) -> ViewServer:
+    """The live view of ``device`` on ``--host``/``--port`` (a remote host only when given explicitly), serving."""
+    host = args.host if args.host is not None else "127.0.0.1"
+    return ViewServer(source_for(device, lock=lock), host=host, port=args.port, allow_remote=args.host is not None,
+                      max_fps=args.fps).start()
 
 
 def _counters(device: StreamDevice) -> str:
@@ -193,33 +266,74 @@ def _counters(device: StreamDevice) -> str:
     return ", ".join(f"{k}={v:.3f}" if isinstance(v, float) else f"{k}={v}" for k, v in asdict(stats).items())
 
 
+def _report_replay(result: ReplayResult, device: StreamDevice, name: str, baud: int | None, speed: str) -> None:
+    """Print what a replay did: bytes and time, the line's counters, the device's counters and errors."""
+    link = result.link
+    print(f"replayed {result.bytes_fed} bytes of {name} into {device.model} in "
+          f"{result.seconds:.2f} s {'simulated' if speed == 'fast' else 'real'} time "
+          f"({baud} baud, paced by the device's readiness)")
+    print(f"line: {link.bytes_sent} bytes sent, {link.bytes_received} received, "
+          f"busy {100 * link.utilisation:.1f} %, held off {link.held_off:.2f} s")
+    print(f"device counters: {_counters(device)}")
+    print(f"errors: {len(result.errors)}" + "".join(f"\n  {e}" for e in result.errors))
+
+
+def _is_panel(device: object) -> bool:
+    """True for a panel simulator (it shows a glass and is reached through a bus, not a byte stream)."""
+    return callable(getattr(device, "glass", None))
+
+
 def run_sim(args: argparse.Namespace) -> int:
     """The ``sim`` command's work (see the module docstring)."""
-    if args.pty == (args.replay is not None):
+    if args.pty and args.replay is not None:
         raise ConfigError("give either --pty or --replay FILE")
+    if not (args.pty or args.replay is not None or args.view):
+        raise ConfigError("give --pty, --replay FILE or --view")
     speed = args.speed or ("fast" if args.replay is not None else "real")
     device, transport = open_simulator(args.model, parse_options(args.option), speed)
-    try:
-        if args.pty:
-            run_pty(device, transport)
-        else:
-            try:
-                data = Path(args.replay).read_bytes()
-            except OSError as exc:
-                raise ConfigError(f"cannot read {args.replay}: {exc.strerror or exc}") from None
-            result = replay(device, data, transport)
-            link = result.link
-            print(f"replayed {result.bytes_fed} bytes of {args.replay} into {device.model} in "
-                  f"{result.seconds:.2f} s {'simulated' if speed == 'fast' else 'real'} time "
-                  f"({transport.baud} baud, paced by the device's readiness)")
-            print(f"line: {link.bytes_sent} bytes sent, {link.bytes_received} received, "
-                  f"busy {100 * link.utilisation:.1f} %, held off {link.held_off:.2f} s")
-            print(f"device counters: {_counters(device)}")
-            print(f"errors: {len(result.errors)}" + "".join(f"\n  {e}" for e in result.errors))
-    finally:
+    panel = _is_panel(device)
+    if panel and (args.pty or args.replay is not None):
         device.close()
-    device.save_paper(args.output)  # type: ignore[attr-defined]
-    print(f"paper: {args.output}")
+        raise ConfigError(f"{device.model} is a panel: it is reached through a bus, not a byte stream; "
+                          "watch it with --view")
+    data = None
+    if args.replay is not None:
+        try:
+            data = Path(args.replay).read_bytes()
+        except OSError as exc:
+            device.close()
+            raise ConfigError(f"cannot read {args.replay}: {exc.strerror or exc}") from None
+    lock = threading.Lock()
+    view = None
+    try:
+        if args.view:
+            view = start_view(device, args, lock)
+            if not args.pty:
+                print(view.url, flush=True)
+                print(f"pixelpen sim: live view of {device.model} on {view.url}; press Ctrl-C to stop",
+                      file=sys.stderr, flush=True)
+        if args.pty:
+            run_pty(device, transport, lock=lock, view=view)
+        elif data is not None:
+            with _sigterm_stops():
+                result = replay(device, data, transport, lock)
+            _report_replay(result, device, args.replay, transport.baud, speed)
+            if view is not None:
+                sys.stdout.flush()
+                wait_for_stop()
+        else:
+            wait_for_stop()
+    finally:
+        if view is not None:
+            view.close()
+        device.close()
+    output = args.output or ("glass.png" if panel else "paper.png")
+    if panel:
+        device.glass().save(output)  # type: ignore[attr-defined]
+        print(f"glass: {output}")
+    else:
+        device.save_paper(output)  # type: ignore[attr-defined]
+        print(f"paper: {output}")
     return 0
 
 
@@ -229,11 +343,21 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "sim", help="run a simulated device on a pty, or replay a byte file into it, and save its paper",
         description="Run the simulator of MODEL on a pseudo-terminal (--pty) for any program to open, or feed "
                     "it a raw byte file (--replay), then write the paper as an image.")
-    p.add_argument("model", metavar="MODEL", help="simulator model (hp7475a, hp7550a, hp7440a, grbl, axidraw, ebb)")
+    p.add_argument("model", metavar="MODEL",
+                   help="simulator model (hp7475a, hp7550a, hp7440a, grbl, axidraw, ebb; panels: ssd1306, st7789, ...)")
     p.add_argument("--pty", action="store_true", help="serve the device on a pty until Ctrl-C; prints the path")
     p.add_argument("--replay", metavar="FILE", help="feed this raw byte file (HP-GL, G-code, EBB commands)")
-    p.add_argument("-o", "--output", default="paper.png", metavar="PAPER.png",
-                   help="paper to write at the end: PNG, or SVG by the extension (default paper.png)")
+    p.add_argument("--view", action="store_true",
+                   help="also serve a live web page of the paper (a panel: its glass) and counters; prints its URL")
+    p.add_argument("--host", default=None, metavar="ADDRESS",
+                   help="address the live view listens on (default 127.0.0.1; another one opens it to the network)")
+    p.add_argument("--port", type=argtypes.argtype(integer(0, 65535)), default=0, metavar="N",
+                   help="port of the live view (default: any free port)")
+    p.add_argument("--fps", type=argtypes.positive, default=MAX_FPS, metavar="N",
+                   help=f"frames the live view encodes a second at most (default {MAX_FPS:g})")
+    p.add_argument("-o", "--output", default=None, metavar="PAPER.png",
+                   help="paper (or glass) to write at the end: PNG, or SVG by the extension for paper "
+                        "(default paper.png; glass.png for a panel)")
     p.add_argument("--speed", choices=("real", "fast"), default=None,
                    help="real time, or simulated time (default: fast for --replay, real for --pty)")
     p.add_argument("--option", action="append", metavar="KEY=VALUE",

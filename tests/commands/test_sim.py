@@ -88,7 +88,8 @@ def test_cli_replay_writes_the_paper_and_reports(tmp_path, capsys):
 @pytest.mark.parametrize("argv, needle", [
     (["sim", "hp9999", "--replay", "x"], "known: "),
     (["sim", "grbl", "--replay", "/nonexistent/file.nc"], "cannot read /nonexistent/file.nc"),
-    (["sim", "grbl"], "either --pty or --replay"),
+    (["sim", "grbl"], "give --pty, --replay FILE or --view"),
+    (["sim", "grbl", "--view", "--host", "nonsense.invalid"], "cannot listen on nonsense.invalid"),
     (["sim", "grbl", "--pty", "--replay", "x"], "either --pty or --replay"),
 ])
 def test_cli_errors_are_one_line(argv, needle, capsys):
