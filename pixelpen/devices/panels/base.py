@@ -297,8 +297,8 @@ class PanelDisplay(RasterDisplay):
         bus = self._wiring.bus
         self._cost = window_cost(self.profile.controller, pixel_format=self.pixel_format,
                                  bus_kind=getattr(bus, "kind", "spi"), max_transfer=bus.max_transfer)
-        self._start_pacer()
         try:
+            self._start_pacer()
             self._initialise()
         except BaseException:
             self._wiring.close(backlight_on=False)
@@ -420,7 +420,7 @@ class PanelDisplay(RasterDisplay):
 
     def _describe(self) -> str:
         w, h = self.profile.size
-        return f"{self.profile.controller.upper()} {w}x{h} {self.pixel_format.upper()}"
+        return f"{self.profile.controller.upper()} {w}x{h} {self.pixel_format.removesuffix('be').upper()}"
 
     def _present(self) -> None:
         if self._pacer is not None and not self._force and not self._pacer.frame_due():

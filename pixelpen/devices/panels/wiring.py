@@ -113,20 +113,25 @@ def open_wiring(target: Target, pins: Pins, *, clock: Clock, where: str) -> Wiri
     if target.kind == "i2c":
         from pixelpen.drivers.i2c import I2CBus
 
-        return _with_lines(I2CBus.open(target.bus, pins.addr, clock_hz=pins.hz), pins, clock)
+        return _with_lines(I2CBus.open(target.bus, pins.addr, clock_hz=pins.hz, rst=pins.rst, gpiochip=pins.gpiochip,
+                                       clock=clock), pins, clock)
     if target.kind == "mcp2221":
         from pixelpen.drivers.i2c import I2CBus
         from pixelpen.drivers.mcp2221 import MCP2221
 
         adapter = MCP2221.open(serial=target.where or None, clock_hz=pins.hz, clock=clock)
         try:
-            return Wiring(I2CBus(adapter, pins.addr, clock_hz=pins.hz, name=f"mcp2221 {target.where}".rstrip()))
+            return Wiring(I2CBus(adapter, pins.addr, clock_hz=pins.hz, clock=clock,
+                                 name=f"mcp2221 {target.where}".rstrip()))
         except BaseException:
             adapter.close()
             raise
-    from pixelpen.drivers.ftdi import FtdiSpiBus
+    from pixelpen.drivers.ftdi import MAX_CLOCK_HZ, FtdiSpiBus
 
-    return Wiring(FtdiSpiBus.open(target.where, dc=pins.dc or 0, rst=pins.rst, clock_hz=pins.hz, clock=clock))
+    hz = min(pins.hz, MAX_CLOCK_HZ)
+    if hz < pins.hz:
+        log.info("%s: the FT232H clocks SPI at %g MHz at most, not %g", where, hz / 1e6, pins.hz / 1e6)
+    return Wiring(FtdiSpiBus.open(target.where, dc=pins.dc or 0, rst=pins.rst, clock_hz=hz, clock=clock))
 
 
 def _with_lines(bus: PanelBus, pins: Pins, clock: Clock) -> Wiring:
@@ -163,5 +168,6 @@ def sim_wiring(device: BusDevice, interface: Interface, pins: Pins, *, clock: Cl
     from pixelpen.sim.transports.i2cdev import SimSMBus
 
     adapter = SimSMBus(device, clock=clock, clock_hz=pins.hz)
-    return Wiring(I2CBus(adapter, pins.addr, clock_hz=pins.hz, name=f"sim {device.model}"), simulator=device)
+    return Wiring(I2CBus(adapter, pins.addr, clock_hz=pins.hz, clock=clock, name=f"sim {device.model}"),
+                  simulator=device)
 
