@@ -34,9 +34,13 @@ pin (``rst``, default bit 5) drives ``device.set_line("reset", level)``.  LSB-fi
 bit-reversed so the device always sees what it would clock in MSB first; bit-mode shifts deliver
 their partial byte as one byte.
 
-Time (advanced on a SimulatedClock): every bulk transfer costs a 125 us high-speed microframe plus
-its bytes at 40 MB/s, and shifting costs 8 clock periods a byte (x 1.5 with 3-phase clocking) at
-the MPSSE clock, 60 MHz (or 12 MHz with divide-by-5) / ((1 + divisor) * 2).
+Time (advanced on a SimulatedClock): every bulk transfer costs the host a 125 us high-speed
+microframe plus its bytes at 40 MB/s.  Shifting costs 8 clock periods a byte (x 1.5 with 3-phase
+clocking) at the MPSSE clock, 60 MHz (or 12 MHz with divide-by-5) / ((1 + divisor) * 2); every byte
+of the MPSSE stream is counted so as it arrives (a command's own few bytes too: a small
+overestimate), plus the clocks of reads and of 0x8E/0x8F.  The engine shifts while USB brings the
+next bytes: a bulk OUT waits only while the 1 KiB FIFO is full, a bulk IN with answers waits until
+the engine has produced them.  A long SPI write is therefore shift-bound, as on the chip.
 """
 
 from __future__ import annotations
@@ -65,6 +69,8 @@ MAX_PACKET: Final = 512
 MODEM_STATUS: Final = b"\x32\x60"
 """Modem status bytes heading every bulk IN packet (CTS/DSR set; transmitter holding and shift registers empty)."""
 MICROFRAME: Final = 125e-6
+FIFO_SIZE: Final = 1024
+"""The FT232H's TX FIFO (host to chip)."""
 USB_BYTES_PER_S: Final = 40e6
 CS_BIT: Final = 0x08
 BAD_COMMAND: Final = 0xFA
@@ -103,6 +109,7 @@ class Ft232hBackend(usb.backend.IBackend):
         self.pins = 0  # ADBUS | ACBUS << 8 output levels
         self.direction = 0
         self._pending = bytearray()
+        self._engine_until = 0.0
         self._in = bytearray()
         self._frame = bytearray()
         self._frame_dc = False
@@ -293,7 +300,10 @@ class Ft232hBackend(usb.backend.IBackend):
         self._check_endpoint(ep, EP_OUT, intf)
         payload = bytes(data)
         self._spend(MICROFRAME + len(payload) / USB_BYTES_PER_S)
+        backlog = self._engine_until - self.clock.now() - FIFO_SIZE * 8 / self.mpsse_clock_hz
+        self._spend(backlog)  # the 1 KiB FIFO is full until the engine has shifted enough out
         if self.bitmode == MPSSE_MODE:
+            self._shift_for(self._byte_seconds * len(payload))  # counted as it arrives: see the module docstring
             self._pending += payload
             self._run()
         return len(payload)
@@ -305,6 +315,8 @@ class Ft232hBackend(usb.backend.IBackend):
             raise usb.core.USBError("Overflow: buffer smaller than the modem status", -8, errno.EOVERFLOW)
         if not self._in:
             self._spend(self.latency_ms / 1000.0)
+        else:
+            self._spend(self._engine_until - self.clock.now())  # answers exist once the engine got there
         out = bytearray()
         while len(out) + 2 <= len(buff):
             take = min(MAX_PACKET - 2, len(buff) - len(out) - 2, len(self._in))
@@ -370,7 +382,7 @@ class Ft232hBackend(usb.backend.IBackend):
             self.adaptive = op == 0x96
         elif op in (0x8E, 0x8F):
             count = args[0] + 1 if op == 0x8E else 8 * ((args[0] | args[1] << 8) + 1)
-            self._spend(count / self.mpsse_clock_hz)
+            self._shift_for(count / self.mpsse_clock_hz)
         elif op in _NO_PARAM or op == 0x9E:
             pass  # send immediate, wait-on-I/O, drive-zero: nothing to simulate
         else:
@@ -387,7 +399,8 @@ class Ft232hBackend(usb.backend.IBackend):
             out = args[2:] if writes else bytes(count)
         if lsb:
             out = out.translate(_REVERSED)
-        self._spend(8 * count * (1.5 if self.three_phase else 1.0) / self.mpsse_clock_hz)
+        if not writes:
+            self._shift_for(self._byte_seconds * count)  # a read-only shift's clocks are not in the stream
         miso = bytes(len(out))
         if self.pins & CS_BIT:
             self.unselected_bytes += len(out)
@@ -423,6 +436,14 @@ class Ft232hBackend(usb.backend.IBackend):
         return bytes(self.device.spi_transfer(frame, dc=self._frame_dc))
 
     # -- helpers ------------------------------------------------------------------------------
+
+    @property
+    def _byte_seconds(self) -> float:
+        return 8 * (1.5 if self.three_phase else 1.0) / self.mpsse_clock_hz
+
+    def _shift_for(self, seconds: float) -> None:
+        """Queue ``seconds`` of clocking on the MPSSE engine (it runs while USB brings the next bytes)."""
+        self._engine_until = max(self._engine_until, self.clock.now()) + seconds
 
     def _spend(self, seconds: float) -> None:
         if isinstance(self.clock, SimulatedClock):

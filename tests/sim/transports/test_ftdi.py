@@ -140,10 +140,13 @@ def test_time_passes_on_a_simulated_clock(chip):
     _, dev, device = chip
     send(dev, b"\x8a\x86\x00\x00")
     t0 = device.clock.now()
-    send(dev, frame_bytes(True, bytes(30_000)))
+    for start in range(0, 30_000, 1024):  # as pyftdi sends it: bulk transfers of the 1 KiB FIFO's size
+        send(dev, frame_bytes(True, bytes(30_000))[start : start + 1024])
+    send(dev, b"\x81\x87")
+    assert len(receive(dev)) == 3  # the answer comes once the engine has shifted everything before it
     spent = device.clock.now() - t0
-    assert spent >= 30_000 * 8 / 30e6  # the bytes' wire time at 30 MHz at least
-    assert spent < 0.01
+    wire = 30_000 * 8 / 30e6
+    assert wire <= spent <= wire * 1.1  # shift-bound: USB overlaps the shifting
 
 
 def test_an_unplugged_chip_answers_no_such_device(chip):
