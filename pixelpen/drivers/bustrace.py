@@ -34,7 +34,7 @@ from pixelpen.drivers.trace import (
     TRACE_MAGIC,
     TRACE_VERSION,
     PathOrFile,
-    format_header,
+    TraceWriter,
     parse_trace,
 )
 from pixelpen.errors import ConfigError, InvalidArgument, LinkError, ParseError, TraceMismatch
@@ -267,36 +267,12 @@ def read_bus_trace(source: PathOrFile, max_bytes: int = DEFAULT_MAX_BYTES) -> Bu
 # -- recording ----------------------------------------------------------------------------------------
 
 
-class _LineWriter:
-    """Writes trace lines, flushing after each one so a crash keeps what happened."""
-
-    def __init__(self, dest: PathOrFile, header: str) -> None:
-        if isinstance(dest, (str, os.PathLike)):
-            self._file: IO[str] = open(check_path(dest, "trace file"), "w", encoding="utf-8", newline="\n")  # noqa: SIM115 - owned until close()
-            self._owns = True
-        else:
-            self._file, self._owns = dest, False
-        self._closed = False
-        self.line(header)
+class _BusTraceWriter(TraceWriter):
+    """The stream trace writer (header, comments, flush per line, ownership) with a line method for bus events."""
 
     def line(self, text: str) -> None:
-        """Append one line."""
-        if self._closed:
-            raise LinkError("trace writer is closed")
-        self._file.write(text + "\n")
-        self._file.flush()
-
-    def comment(self, text: str) -> None:
-        """Append a comment line (newlines become spaces)."""
-        self.line("# " + " ".join(text.splitlines()))
-
-    def close(self) -> None:
-        """Flush, and close the file if this writer opened it; idempotent."""
-        if not self._closed:
-            self._closed = True
-            self._file.flush()
-            if self._owns:
-                self._file.close()
+        """Append one event line."""
+        self._emit(text)
 
 
 class RecordingBus:
@@ -307,7 +283,7 @@ class RecordingBus:
         inner_clock = getattr(bus, "clock", None)
         self.clock = clock if clock is not None else inner_clock if isinstance(inner_clock, Clock) else REAL_CLOCK
         self._start = self.clock.now()
-        self._writer = _LineWriter(dest, format_header(url, bus_settings(bus)))
+        self._writer = _BusTraceWriter(dest, url, bus_settings(bus))
         self._closed = False
 
     @property
