@@ -13,6 +13,7 @@ from pixelpen.drivers.i2c import I2CBus
 from pixelpen.drivers.mcp2221 import MCP2221
 from pixelpen.errors import ConfigError, LinkError, LinkTimeout
 from pixelpen.sim.transports.mcp2221 import SimMCP2221
+from tests.fuzzing import QUICK_CASES, campaign
 from tests.sim.transports.test_mcp2221 import StubBusDevice
 
 
@@ -181,3 +182,39 @@ def test_the_i2c_panel_bus_runs_over_the_adapter():
     bus.close()
     with pytest.raises(ValueError, match="not open"):  # closing the bus closed the adapter and its HID device
         fake.read(64)
+
+
+class ScriptedHid:
+    """A HID device answering every report with the next 64 bytes of a script (then nothing)."""
+
+    def __init__(self, script: bytes) -> None:
+        self.script = script
+        self.at = 0
+
+    def write(self, buff) -> int:
+        return len(buff)
+
+    def read(self, max_length: int, timeout_ms: int = 0) -> list[int]:
+        reply = self.script[self.at : self.at + 64]
+        self.at += 64
+        return list(reply)
+
+    def close(self) -> None:
+        pass
+
+
+def drive_with_replies(script: bytes) -> None:
+    """The fuzz target: whatever the chip answers, the adapter succeeds or raises a LinkError, never hangs."""
+    adapter = MCP2221(ScriptedHid(script), clock=SimulatedClock())
+    adapter.write(0x3C, bytes(130))
+    adapter.read(0x3C, 70)
+
+
+def test_garbled_answers_never_hang_the_adapter():
+    ok = bytearray()
+    for command in (0x10, 0x10, 0x90, 0x90, 0x90, 0x10, 0x10, 0x91):
+        ok += bytes((command, 0)) + bytes(62)
+    ok += bytes((0x40, 0, 0x54, 60)) + bytes(60) + bytes((0x40, 0, 0x55, 10)) + bytes(60)
+    drive_with_replies(bytes(ok))
+    campaign("mcp2221 answers", drive_with_replies, [bytes(ok)], QUICK_CASES, seed=8,
+             allowed=(LinkError,)).check()
