@@ -32,7 +32,7 @@ SSD1306_WINDOW_BYTES = 6
 """``21 s e 22 s e``: column and page window (horizontal addressing mode)."""
 SH1106_PAGE_BYTES = 3
 """``B0+page``, column low nibble ``0x0L``, column high nibble ``0x1H``: one page of a page-mode window."""
-MAX_RECTS = 128
+MAX_RECTS = 64
 """Rectangles planned one by one; more are sent as their bounding window (merging is quadratic per step)."""
 _BAND_GAP = 1 << 24
 """Rows put between bands while merging, so that no merge across bands is ever the cheaper one."""
