@@ -92,13 +92,13 @@ class BusTrace:
 
 def bus_settings(bus: PanelBus) -> dict[str, object]:
     """The header settings recorded for ``bus``: kind, clock_hz, max_transfer and (I2C) address."""
-    kind = str(getattr(bus, "kind", "spi"))
-    settings: dict[str, object] = {"kind": "bus", "bus": kind}
-    clock_hz = getattr(bus, "clock_hz", None)
-    if clock_hz is not None:
-        settings["clock_hz"] = f"{float(clock_hz):.6f}".rstrip("0").rstrip(".")
-    settings["max_transfer"] = int(bus.max_transfer)
-    address = getattr(bus, "address", None)
+    settings: dict[str, object] = {
+        "kind": "bus",
+        "bus": bus.kind,
+        "clock_hz": f"{float(bus.clock_hz):.6f}".rstrip("0").rstrip("."),
+        "max_transfer": bus.max_transfer,
+    }
+    address = getattr(bus, "address", None)  # I2C buses only
     if isinstance(address, int):
         settings["address"] = f"0x{address:02x}"
     return settings
@@ -289,27 +289,27 @@ class RecordingBus:
     @property
     def max_transfer(self) -> int:
         """The wrapped bus's transfer limit."""
-        return int(self.inner.max_transfer)
+        return self.inner.max_transfer
 
     @property
     def kind(self) -> str:
         """``"spi"`` or ``"i2c"``, from the wrapped bus."""
-        return str(getattr(self.inner, "kind", "spi"))
+        return self.inner.kind
 
     @property
     def clock_hz(self) -> float:
         """The wrapped bus's clock."""
-        return float(getattr(self.inner, "clock_hz", 0.0))
+        return float(self.inner.clock_hz)
 
     @property
     def bytes_sent(self) -> int:
         """The wrapped bus's byte counter."""
-        return int(getattr(self.inner, "bytes_sent", 0))
+        return self.inner.bytes_sent
 
     @property
     def transfers(self) -> int:
         """The wrapped bus's transfer counter."""
-        return int(getattr(self.inner, "transfers", 0))
+        return self.inner.transfers
 
     def command(self, *cmd: int | bytes) -> None:
         """Send command bytes through the wrapped bus and record them as one ``C`` frame."""

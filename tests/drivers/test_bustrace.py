@@ -24,6 +24,8 @@ class StubBus:
         if address is not None:
             self.address = address
         self.clock = SimulatedClock()
+        self.bytes_sent = 0
+        self.transfers = 0
         self.calls: list[tuple[str, bytes]] = []
         self.closed = False
         self.fail_next = False
@@ -46,6 +48,8 @@ class StubBus:
             self.fail_next = False
             raise LinkError("stub: write failed")
         self.calls.append((what, payload))
+        self.bytes_sent += len(payload)
+        self.transfers += bool(payload)
         self.clock.advance(1e-6 * len(payload))
 
 
@@ -97,6 +101,15 @@ def test_i2c_settings_are_recorded():
     trace = read_bus_trace(io.StringIO(text))
     assert (trace.bus, trace.address, trace.clock_hz, trace.max_transfer) == ("i2c", 0x3C, 400_000, 4096)
     assert "address=0x3c" in text.splitlines()[0]
+
+
+def test_the_recorder_shows_the_wrapped_bus_settings_and_counters():
+    stub = StubBus(max_transfer=32)
+    bus = RecordingBus(stub, io.StringIO())
+    bus.command(0x2A, b"\x00\x01")
+    bus.data(bytes(40))
+    assert (bus.kind, bus.clock_hz, bus.max_transfer) == ("spi", 62_500_000, 32)
+    assert (bus.bytes_sent, bus.transfers) == (43, 2)
 
 
 def test_a_fractional_clock_is_written_in_full():
