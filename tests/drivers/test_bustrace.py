@@ -230,6 +230,7 @@ def test_a_hand_written_trace_replays(tmp_path):
     path.write_text("#pixelpen-trace 1 kind=bus bus=i2c address=0x3d url=ssd1306%3Ai2c%3A1\n"
                     "# init\n\n0.0 C ae d5 80\n0.001 C a8\n0.001 + 3f  # multiplex\n0.002 D FF\n")
     replay = ReplayBus(path)
+    assert isinstance(replay, PanelBus)
     assert replay.address == 0x3D and replay.kind == "i2c"
     replay.command(0xAE, 0xD5, 0x80, 0xA8, 0x3F)
     replay.data(b"\xff")
