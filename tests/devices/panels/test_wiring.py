@@ -1,0 +1,132 @@
+"""Panel URL targets and wiring: the target grammar, refused targets, hardware that is absent, sim wiring."""
+
+from __future__ import annotations
+
+import pytest
+
+from pixelpen.clock import SimulatedClock
+from pixelpen.devices.panels.wiring import Pins, Target, Wiring, open_wiring, parse_target, sim_wiring
+from pixelpen.errors import ConfigError, LinkError, URLError
+from tests.devices.panels.test_base import StubBus
+
+
+@pytest.mark.parametrize(("text", "target"), [
+    ("spi:0.0", Target("spi", 0, 0)),
+    ("spi:1.2", Target("spi", 1, 2)),
+    ("i2c:1", Target("i2c", 1)),
+    ("I2C:10", Target("i2c", 10)),
+    ("ftdi://ftdi:232h/1", Target("ftdi", where="ftdi://ftdi:232h/1")),
+    ("mcp2221:", Target("mcp2221", where="")),
+    ("mcp2221:0001234", Target("mcp2221", where="0001234")),
+])
+def test_targets(text: str, target: Target) -> None:
+    assert parse_target(text, "url") == target
+
+
+@pytest.mark.parametrize("text", ["", "spi:0", "spi:a.b", "spi:0.0.0", "i2c:", "i2c:x", "ftdi:232h", "usb:1",
+                                  "/dev/fb0", "spi:-1.0", "i2c:１"])
+def test_bad_targets_name_the_grammar(text: str) -> None:
+    with pytest.raises(URLError, match=r"url: panel target .* spi:BUS\.DEVICE"):
+        parse_target(text, "url")
+
+
+def test_interfaces() -> None:
+    assert parse_target("ftdi://ftdi:232h/1", "u").interface == "spi"
+    assert parse_target("mcp2221:", "u").interface == "i2c"
+
+
+def test_spi_without_dc_is_refused_before_anything_opens() -> None:
+    with pytest.raises(ConfigError, match="needs its D/C line: add dc=N"):
+        open_wiring(Target("spi", 0, 0), Pins(), clock=SimulatedClock(), where="st7789:spi:0.0")
+
+
+def test_absent_spidev_is_a_link_error_naming_the_node() -> None:
+    with pytest.raises((LinkError, ConfigError), match=r"spidev9\.9|spidev"):
+        open_wiring(Target("spi", 9, 9), Pins(dc=25), clock=SimulatedClock(), where="u")
+
+
+def test_absent_i2c_adapter_is_a_link_error_naming_the_node() -> None:
+    with pytest.raises((LinkError, ConfigError), match=r"i2c-99"):
+        open_wiring(Target("i2c", 99), Pins(), clock=SimulatedClock(), where="u")
+
+
+def test_wiring_close_releases_everything_once_and_sets_the_backlight() -> None:
+    class Line:
+        def __init__(self) -> None:
+            self.levels: list[bool] = []
+            self.closed = 0
+
+        def set(self, level: bool) -> None:
+            self.levels.append(level)
+
+        def close(self) -> None:
+            self.closed += 1
+
+    bus, backlight = StubBus(), Line()
+    wiring = Wiring(bus, backlight=backlight)
+    wiring.close(backlight_on=False)
+    wiring.close()
+    assert backlight.levels == [False] and backlight.closed == 1 and bus.log == [("X", b"")]
+
+
+class RecordingChip:
+    """A BusDevice that records what reaches it."""
+
+    model = "recorder"
+
+    def __init__(self) -> None:
+        self.clock = SimulatedClock()
+        self.spi: list[tuple[bool, bytes]] = []
+        self.i2c: list[tuple[int, bytes]] = []
+        self.lines: list[tuple[str, bool]] = []
+
+    def spi_transfer(self, data: bytes, *, dc: bool) -> bytes:
+        self.spi.append((dc, bytes(data)))
+        return bytes(len(data))
+
+    def i2c_write(self, address: int, data: bytes) -> bool:
+        self.i2c.append((address, bytes(data)))
+        return address == 0x3C
+
+    def i2c_read(self, address: int, length: int) -> bytes | None:
+        return None
+
+    def set_line(self, name: str, level: bool) -> None:
+        self.lines.append((name, level))
+
+    def line(self, name: str) -> bool:
+        return False
+
+    def advance_to(self, t: float) -> None:
+        pass
+
+    def next_event_time(self) -> float | None:
+        return None
+
+    def inject(self, fault: object, at: int | None = None) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+def test_sim_spi_wiring_runs_the_real_spi_bus() -> None:
+    chip = RecordingChip()
+    wiring = sim_wiring(chip, "spi", Pins(dc=25, rst=27, hz=10e6), clock=chip.clock)
+    wiring.bus.command(0x2A)
+    wiring.bus.data(b"\x00\x00\x00\xef")
+    wiring.bus.reset()
+    assert chip.spi == [(False, b"\x2a"), (True, b"\x00\x00\x00\xef")]
+    assert ("reset", False) in chip.lines and chip.lines[-1] == ("reset", True)
+    assert wiring.simulator is chip and wiring.te is None
+
+
+def test_sim_i2c_wiring_sends_control_bytes_and_naks_become_link_errors() -> None:
+    chip = RecordingChip()
+    wiring = sim_wiring(chip, "i2c", Pins(addr=0x3C, hz=400e3), clock=chip.clock)
+    wiring.bus.command(0xAE, 0xAF)
+    wiring.bus.data(b"\xff")
+    assert chip.i2c == [(0x3C, b"\x00\xae\xaf"), (0x3C, b"\x40\xff")]
+    wrong = sim_wiring(chip, "i2c", Pins(addr=0x3D, hz=400e3), clock=chip.clock)
+    with pytest.raises(LinkError):
+        wrong.bus.command(0xAE)
