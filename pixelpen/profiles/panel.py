@@ -66,7 +66,8 @@ MADCTL_MY, MADCTL_MX, MADCTL_MV, MADCTL_ML, MADCTL_BGR, MADCTL_MH = 0x80, 0x40, 
 _ROTATION_BITS = MADCTL_MY | MADCTL_MX | MADCTL_MV | MADCTL_ML | MADCTL_MH
 
 __all__ = [
-    "BYTES_PER_PIXEL", "COLMOD", "CONTROLLERS", "OLED_CONTROLLERS", "PIXEL_FORMATS", "ROTATIONS", "InitStep",
+    "BUS_KINDS", "BYTES_PER_PIXEL", "COLMOD", "CONTROLLERS", "MADCTL_BGR", "MADCTL_MH", "MADCTL_ML", "MADCTL_MV",
+    "MADCTL_MX", "MADCTL_MY", "OLED_CONTROLLERS", "PIXEL_FORMATS", "ROTATIONS", "InitStep",
     "PanelGeometry", "PanelProfile", "RotationSetup", "builtin_panel_profiles", "load_panel_profile",
     "panel_profile_for", "read_panel_profile",
 ]
@@ -204,8 +205,12 @@ class PanelProfile:
         if set(self.rotations) != set(ROTATIONS):
             raise ConfigError(f"{where}: a {self.controller} profile needs rotations 0, 90, 180 and 270, "
                               f"got {sorted(self.rotations)}")
-        if self.multiplex is not None or self.com_pins is not None or self.charge_pump is not None:
-            raise ConfigError(f"{where}: multiplex, com_pins and charge_pump are SSD1306-family settings")
+        oled_fields = {"multiplex": self.multiplex, "com_pins": self.com_pins, "charge_pump": self.charge_pump,
+                       "contrast": self.contrast, "i2c_address": self.i2c_address,
+                       "column_offset": self.column_offset or None}
+        given = [k for k, v in oled_fields.items() if v is not None]
+        if given:
+            raise ConfigError(f"{where}: {', '.join(given)}: SSD1306-family settings, not for a {self.controller}")
         for rotation in ROTATIONS:
             setup = self.rotations[rotation]
             if not _is_int(setup.madctl, 0, 255) or setup.madctl & ~_ROTATION_BITS:

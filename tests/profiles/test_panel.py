@@ -216,7 +216,8 @@ def test_user_file(tmp_path):
     (("init = [", "pixel_format = \"mono-pages\"\ninit = ["), "pixel_format must be rgb565be or rgb666"),
     (("{ command = 0x29 }", "{ command = 0x3A, params = [0x66] }"), "COLMOD 0x66, which is not rgb565be"),
     (("{ command = 0x29 }", "{ command = 0x21 }"), "INVON but invert is false"),
-    (("[rotation.0]", "[oled]\nmultiplex = 64\n[rotation.0]"), "SSD1306-family settings"),
+    (("[rotation.0]", "[oled]\nmultiplex = 64\n[rotation.0]"), "multiplex: SSD1306-family settings"),
+    (("clock_hz", "i2c_address = 0x3C\nclock_hz"), "i2c_address: SSD1306-family settings, not for a st7789"),
 ])
 def test_strict_reading_names_key_and_file(tmp_path, change, message):
     old, new = change
