@@ -128,7 +128,7 @@ class MCP2221:
     def set_clock(self, clock_hz: float) -> None:
         """Set the I2C clock (46.5 kHz .. 400 kHz), cancelling a stuck transfer first if the chip refuses."""
         if not MIN_CLOCK_HZ <= clock_hz <= MAX_CLOCK_HZ:
-            raise ConfigError(f"mcp2221: I2C clock {clock_hz:g} Hz is outside {MIN_CLOCK_HZ}..{MAX_CLOCK_HZ} Hz")
+            raise ConfigError(f"{self.name}: I2C clock {clock_hz:g} Hz is outside {MIN_CLOCK_HZ}..{MAX_CLOCK_HZ} Hz")
         divider = int(BASE_CLOCK // clock_hz) - 3
         for _ in range(2):
             reply = self._transfer(bytes((CMD_STATUS, 0, 0, SET_SPEED, divider)), "set the I2C clock")
@@ -152,8 +152,6 @@ class MCP2221:
         """Run smbus2 ``i2c_msg`` messages in order: writes, and reads filled in place (repeated START between)."""
         for i, msg in enumerate(msgs):
             address, flags, length = int(msg.addr), int(msg.flags), int(msg.len)
-            if not 0 <= address <= 0x7F:
-                raise InvalidArgument(f"{self.name}: I2C address {address:#x} is not a 7-bit address")
             follows_write = i > 0 and not int(msgs[i - 1].flags) & I2C_M_RD
             if flags & I2C_M_RD:
                 data = self.read(address, length, repeated_start=follows_write)
@@ -164,7 +162,7 @@ class MCP2221:
 
     def write(self, address: int, payload: bytes, *, stop: bool = True) -> None:
         """One I2C write transaction of up to 65,535 bytes, in reports of 60; LinkError (EREMOTEIO) on a NAK."""
-        self._check_length(len(payload))
+        self._check(address, len(payload))
         command = CMD_WRITE if stop else CMD_WRITE_NO_STOP
         self._make_idle()
         header = bytes((command, len(payload) & 0xFF, len(payload) >> 8, address << 1))
@@ -183,7 +181,7 @@ class MCP2221:
 
     def read(self, address: int, length: int, *, repeated_start: bool = False) -> bytes:
         """One I2C read transaction of ``length`` bytes; LinkError (EREMOTEIO) on a NAK."""
-        self._check_length(length)
+        self._check(address, length)
         if not repeated_start:
             self._make_idle()
         command = CMD_READ_REPEATED_START if repeated_start else CMD_READ
@@ -221,7 +219,9 @@ class MCP2221:
 
     # -- helpers ---------------------------------------------------------------------------------
 
-    def _check_length(self, length: int) -> None:
+    def _check(self, address: int, length: int) -> None:
+        if not 0 <= address <= 0x7F:
+            raise InvalidArgument(f"{self.name}: I2C address {address:#x} is not a 7-bit address")
         if not 0 <= length <= MAX_LENGTH:
             raise InvalidArgument(f"{self.name}: an I2C transfer moves 0..{MAX_LENGTH} bytes, got {length}")
 

@@ -11,7 +11,7 @@ from smbus2 import i2c_msg
 from pixelpen.clock import SimulatedClock
 from pixelpen.drivers.i2c import I2CBus
 from pixelpen.drivers.mcp2221 import MCP2221
-from pixelpen.errors import ConfigError, LinkError, LinkTimeout
+from pixelpen.errors import ConfigError, InvalidArgument, LinkError, LinkTimeout
 from pixelpen.sim.transports.mcp2221 import SimMCP2221
 from tests.fuzzing import QUICK_CASES, campaign
 from tests.sim.transports.test_mcp2221 import StubBusDevice
@@ -111,6 +111,16 @@ def test_write_then_read_uses_no_stop_and_repeated_start():
     kinds = [r[0] for r in fake.reports if r[0] != 0x10]
     assert kinds[0] == 0x94 and kinds[1] == 0x93 and set(kinds[2:]) == {0x40}
     assert device.reads == [(0x3C, 3)]
+
+
+def test_bad_addresses_and_lengths_are_refused_before_anything_is_sent():
+    adapter, fake, _ = opened()
+    sent = len(fake.reports)
+    with pytest.raises(InvalidArgument, match="0x80 is not a 7-bit address"):
+        adapter.i2c_rdwr(i2c_msg.write(0x80, b"\x00"))
+    with pytest.raises(InvalidArgument, match=r"0\.\.65535 bytes"):
+        adapter.write(0x3C, bytes(65536))
+    assert len(fake.reports) == sent
 
 
 def test_a_read_from_a_missing_device_is_a_nak():
