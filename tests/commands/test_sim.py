@@ -1,10 +1,13 @@
 """Tests of ``pixelpen sim``: replaying byte files paced so the device never overflows, the pty mode, errors."""
 
+import io
+import json
 import os
 import signal
 import subprocess
 import sys
 import threading
+import urllib.request
 
 import numpy as np
 import pytest
@@ -218,3 +221,132 @@ def test_grbl_simulator_defaults_are_the_machine_the_driver_plots_for():
 def test_the_line_runs_at_the_devices_own_speed(model, options, baud):
     _, transport = simcmd.open_simulator(model, options, "fast")
     assert transport.baud == baud
+
+
+def _wait_for(url_of: str, predicate, what: str) -> object:
+    """GET ``url_of`` until ``predicate(body)`` holds (a simulator in real time needs a moment); the last body."""
+    for _ in range(200):
+        with urllib.request.urlopen(url_of, timeout=10) as reply:
+            body = reply.read()
+        if predicate(body):
+            return body
+        threading.Event().wait(0.05)
+    raise AssertionError(f"{what}: never seen at {url_of}; last {body[:200]!r}")
+
+
+def _has_ink(png: bytes) -> bool:
+    return bool((np.asarray(Image.open(io.BytesIO(png)).convert("L")) < 128).any())
+
+
+def test_pty_with_view_serves_the_paper_as_it_is_drawn(tmp_path):
+    out = tmp_path / "paper.png"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _SIM_MAIN, "sim", "grbl", "--pty", "--view", "--speed", "fast", "-o", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    try:
+        path = proc.stdout.readline().strip()
+        url = proc.stdout.readline().strip()
+        assert path.startswith("/dev/pts/") and url.startswith("http://127.0.0.1:")
+        assert not _has_ink(_wait_for(url + "frame.png", lambda b: True, "a blank sheet"))
+        program = b"G21\nG90\nG0 X10 Y10\nM3 S50\nG1 X60 Y10 F3000\nM3 S500\nG4 P0.1\n"
+        with serial.Serial(path, timeout=20) as port:
+            port.read_until(b"]\r\n")  # the banner of the Arduino reset on open
+            port.write(program)
+            replies = b""
+            while replies.count(b"ok") < 7:
+                chunk = port.read(max(1, port.in_waiting))
+                assert chunk, f"no reply from the simulator; got {replies!r}"
+                replies += chunk
+        stats = json.loads(_wait_for(url + "stats.json", lambda b: json.loads(b)["commands_executed"] >= 7,
+                                     "the executed commands"))
+        assert stats["bytes_received"] == len(program)
+        _wait_for(url + "frame.png", _has_ink, "the line on the paper")
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(30) == 0
+    finally:
+        if proc.poll() is None:
+            os.kill(proc.pid, signal.SIGKILL)
+    assert _has_ink(out.read_bytes())
+    with pytest.raises(OSError):  # the view is gone with the simulator
+        urllib.request.urlopen(url, timeout=5)
+
+
+def test_replay_with_view_keeps_serving_until_stopped(tmp_path):
+    plot = tmp_path / "square.hpgl"
+    plot.write_bytes(b"IN;SP1;PU1000,1000;PD3000,1000,3000,3000,1000,3000,1000,1000;PU;SP0;")
+    out = tmp_path / "paper.svg"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _SIM_MAIN, "sim", "hp7475a", "--replay", str(plot), "--view", "-o", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    try:
+        url = proc.stdout.readline().strip()
+        assert url.startswith("http://127.0.0.1:")
+        assert proc.stdout.readline().startswith(f"replayed {plot.stat().st_size} bytes")
+        assert _has_ink(_wait_for(url + "frame.png", _has_ink, "the square"))
+        assert proc.poll() is None  # still serving after the replay
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(30) == 0
+    finally:
+        if proc.poll() is None:
+            os.kill(proc.pid, signal.SIGKILL)
+    assert out.read_text().count("<path") == 1
+
+
+_PANEL_MAIN = (
+    "import sys\n"
+    "from dataclasses import dataclass\n"
+    "from PIL import Image\n"
+    "from pixelpen.cli import main\n"
+    "from pixelpen.clock import REAL_CLOCK\n"
+    "from pixelpen.sim.base import register_simulator\n"
+    "@dataclass\n"
+    "class BusStats:\n"
+    "    bytes: int = 4242\n"
+    "    transfers: int = 7\n"
+    "class StubPanel:\n"
+    "    model = 'stubpanel'\n"
+    "    def __init__(self, clock=None, **options):\n"
+    "        self.clock = clock or REAL_CLOCK\n"
+    "        self.stats, self.events = BusStats(), ['one']\n"
+    "        self.image = Image.new('RGB', (6, 4), (0, 0, 255))\n"
+    "        self.image.putpixel((5, 3), (255, 255, 0))\n"
+    "        self.closed = False\n"
+    "    def glass(self):\n"
+    "        return self.image.copy()\n"
+    "    def close(self):\n"
+    "        self.closed = True\n"
+    "register_simulator('stubpanel', StubPanel)\n"
+    "sys.exit(main(sys.argv[1:]))\n"
+)
+"""``pixelpen`` with a panel simulator registered (the panel surface of the shared design: glass, stats, events)."""
+
+
+def test_a_panel_simulator_is_viewed_and_its_glass_written(tmp_path):
+    out = tmp_path / "glass.png"
+    proc = subprocess.Popen([sys.executable, "-c", _PANEL_MAIN, "sim", "stubpanel", "--view", "-o", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        url = proc.stdout.readline().strip()
+        assert url.startswith("http://127.0.0.1:")
+        glass = np.asarray(Image.open(io.BytesIO(_wait_for(url + "frame.png", lambda b: True, "the glass"))))
+        expected = np.zeros((4, 6, 3), np.uint8)
+        expected[..., 2] = 255
+        expected[3, 5] = (255, 255, 0)
+        np.testing.assert_array_equal(glass, expected)
+        assert json.loads(_wait_for(url + "stats.json", lambda b: True, "stats")) == \
+            {"bytes": 4242, "transfers": 7, "events": 1}
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(30) == 0
+    finally:
+        if proc.poll() is None:
+            os.kill(proc.pid, signal.SIGKILL)
+    np.testing.assert_array_equal(np.asarray(Image.open(out)), expected)
+
+
+def test_a_panel_has_no_pty():
+    proc = subprocess.run([sys.executable, "-c", _PANEL_MAIN, "sim", "stubpanel", "--pty"],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2
+    assert "stubpanel is a panel: it is reached through a bus, not a byte stream; watch it with --view" in proc.stderr
