@@ -25,6 +25,7 @@ from typing import Protocol
 import numpy as np
 
 from pixelpen.errors import ConfigError, LinkError
+from pixelpen.raster.colour import CHUNK_PIXELS
 
 log = logging.getLogger(__name__)
 
@@ -183,21 +184,31 @@ class PixelLayout:
                 out[..., self.transp.offset // 8] = 0xFF
             return out.reshape(h, w * bpp)
         dtype = np.uint16 if self.bits_per_pixel <= 16 else np.uint32
-        word = np.zeros((h, w), dtype=dtype)
-        for i, c in enumerate(channels):
-            word |= _scaled(rgb[..., i], c.length, dtype) << dtype(c.offset)
-        if self.transp.length:
-            word |= dtype(((1 << self.transp.length) - 1) << self.transp.offset)
+        flat = rgb.reshape(h * w, 3)
+        word = np.empty(h * w, dtype=dtype)
+        field = np.empty(min(h * w, CHUNK_PIXELS), dtype=dtype)
+        transp = ((1 << self.transp.length) - 1) << self.transp.offset
+        for start in range(0, h * w, CHUNK_PIXELS):  # cache-sized chunks of contiguous byte planes
+            part, value = flat[start:start + CHUNK_PIXELS], word[start:start + CHUNK_PIXELS]
+            value[...] = transp
+            for i, c in enumerate(channels):
+                _place(np.ascontiguousarray(part[:, i]), c, field[: part.shape[0]])
+                value |= field[: part.shape[0]]
         as_bytes = word.astype(word.dtype.newbyteorder("<"), copy=False).view(np.uint8).reshape(h, w, -1)
         return as_bytes[..., :bpp].reshape(h, w * bpp)
 
 
-def _scaled(channel: np.ndarray, length: int, dtype: type[np.unsignedinteger]) -> np.ndarray:
-    """8-bit channel values as ``length``-bit ones (truncated; widened by bit replication above 8 bits)."""
-    if length <= 8:
-        return (channel >> np.uint8(8 - length)).astype(dtype)
-    wide = channel.astype(dtype)
-    return (wide << dtype(length - 8)) | (wide >> dtype(16 - length))
+def _place(channel: np.ndarray, c: Channel, out: np.ndarray) -> None:
+    """8-bit values into ``out`` as the field ``c``: the top ``length`` bits at ``offset`` (bit replication > 8)."""
+    mask = out.dtype.type(((1 << c.length) - 1) << c.offset)
+    if c.length > 8:  # widen: the 8 bits, then their top bits again below them
+        np.left_shift(channel, c.offset + c.length - 8, out=out, dtype=out.dtype)
+        out |= np.right_shift(channel, 16 - c.length).astype(out.dtype) << out.dtype.type(c.offset)
+    elif c.offset + c.length >= 8:
+        np.left_shift(channel, c.offset + c.length - 8, out=out, dtype=out.dtype)
+    else:
+        np.right_shift(channel, 8 - c.length - c.offset, out=out, dtype=out.dtype)
+    out &= mask
 
 
 class Framebuffer:
