@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from importlib import resources
 from importlib.abc import Traversable
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any, TypeGuard
 
 from pixelpen.errors import ConfigError, ParseError, quote_token
@@ -195,6 +196,8 @@ class PanelProfile:
                               f"got {quote_token(dict(self.max_clock_hz))}")
         if len(self.init) > MAX_INIT_STEPS or not all(isinstance(s, InitStep) for s in self.init):
             raise ConfigError(f"{where}: init must be at most {MAX_INIT_STEPS} InitSteps")
+        for key in ("clock_hz", "max_clock_hz", "rotations"):  # a shared built-in profile stays unchanged
+            object.__setattr__(self, key, MappingProxyType(dict(getattr(self, key))))
         if self.oled:
             self._check_oled(where)
         else:
@@ -223,6 +226,10 @@ class PanelProfile:
                     and x + geometry.width <= ram_w and y + geometry.height <= ram_h):
                 raise ConfigError(f"{where}: rotation {rotation}: a {geometry.width}x{geometry.height} window at "
                                   f"offset {quote_token(setup.offset)} does not fit the {ram_w}x{ram_h} RAM")
+        for step in self.init[:-1]:
+            if step.command in _MIN_DELAY_MS and step.delay_ms < _MIN_DELAY_MS[step.command]:
+                raise ConfigError(f"{where}: init step 0x{step.command:02x} needs >= {_MIN_DELAY_MS[step.command]} ms "
+                                  f"before the next command (datasheet), got {step.delay_ms:g}")
         for step in self.init:
             if step.command == 0x3A and step.params and _COLMOD_FORMATS.get(step.params[0] & 7) != self.pixel_format:
                 raise ConfigError(f"{where}: init sets COLMOD 0x{step.params[0]:02x}, which is not {self.pixel_format}")
@@ -291,6 +298,8 @@ class PanelProfile:
         return False
 
 
+_MIN_DELAY_MS = {0x01: 5, 0x11: 5}
+"""MIPI DCS commands the controller needs time after: SWRESET and SLPOUT, 5 ms before the next command."""
 _COLMOD_FORMATS = {5: "rgb565be", 6: "rgb666"}
 """COLMOD's MCU-interface bits D[2:0] and the pixel format they select."""
 

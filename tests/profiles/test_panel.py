@@ -190,6 +190,8 @@ def test_user_file(tmp_path):
     p = load_panel_profile(write(tmp_path, MINIMAL))
     assert p.name == "mine" and p.pixel_format == "rgb565be" and p.geometry(0).y_offset == 80
     assert p.source.endswith("p.toml") and p.max_clock_hz == {}
+    with pytest.raises(TypeError):
+        p.clock_hz["spi"] = 1  # type: ignore[index]
     with pytest.raises(ConfigError, match="does not exist"):
         load_panel_profile(tmp_path / "missing.toml")
 
@@ -216,6 +218,7 @@ def test_user_file(tmp_path):
     (("init = [", "pixel_format = \"mono-pages\"\ninit = ["), "pixel_format must be rgb565be or rgb666"),
     (("{ command = 0x29 }", "{ command = 0x3A, params = [0x66] }"), "COLMOD 0x66, which is not rgb565be"),
     (("{ command = 0x29 }", "{ command = 0x21 }"), "INVON but invert is false"),
+    (("{ command = 0x11, delay_ms = 120 }", "{ command = 0x11 }"), "0x11 needs >= 5 ms before the next command"),
     (("[rotation.0]", "[oled]\nmultiplex = 64\n[rotation.0]"), "multiplex: SSD1306-family settings"),
     (("clock_hz", "i2c_address = 0x3C\nclock_hz"), "i2c_address: SSD1306-family settings, not for a st7789"),
 ])
