@@ -207,3 +207,14 @@ def test_stats_count_the_bytes_given_to_the_bus() -> None:
     display.flush()
     assert display.stats.last.bytes == sum(len(p) for _, p in bus.take())
     assert display.stats.host_seconds_per_frame > 0
+
+
+def test_every_option_is_documented() -> None:
+    from pathlib import Path
+
+    from pixelpen.devices.panels.ssd1306 import SSD1306Display
+
+    text = (Path(__file__).parents[3] / "docs" / "panels.md").read_text(encoding="utf-8")
+    for cls in (ST7789Display, SSD1306Display):
+        for spec in cls.OPTIONS:
+            assert f"| `{spec.name}` |" in text, spec.name
