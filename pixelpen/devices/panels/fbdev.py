@@ -132,6 +132,7 @@ class FramebufferDisplay(RasterDisplay):
         if not rects:
             return
         bpp = fb.layout.bytes_per_pixel
+        self._full = True  # until this frame is done: one cut short (a fault, Ctrl-C) is followed by a full one
         if fb.double_buffered:
             writes = merge_rects(rects + self._previous, DEFAULT_MERGE_COST, bpp)
         else:

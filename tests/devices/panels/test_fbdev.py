@@ -102,6 +102,22 @@ def test_single_buffering_writes_just_the_damage():
     assert np.array_equal(np.asarray(sim.glass()), display.canvas.array)
 
 
+def test_a_failed_pan_is_a_link_error_and_the_next_frame_is_full():
+    sim = marked_sim(16, 8, 32)
+    display = FramebufferDisplay(sim.open, simulator=sim).open()
+    display.canvas.blit(np.full((2, 2, 3), 255, dtype=np.uint8), 3, 3)
+    display.flush()  # shown by a pan to yoffset 0
+    display.canvas.blit(np.full((2, 2, 3), 99, dtype=np.uint8), 9, 1)
+    sim.fix["ypanstep"] = 3  # the driver now refuses yoffset 8: EINVAL
+    with pytest.raises(LinkError, match="FBIOPAN_DISPLAY to yoffset 8 failed"):
+        display.flush()
+    sim.fix["ypanstep"] = 1
+    before = display.bytes_written
+    display.flush()  # the damage was kept, and the frame is sent whole
+    assert display.bytes_written - before == 16 * 8 * 4
+    assert np.array_equal(np.asarray(sim.glass()), display.canvas.array)
+
+
 def test_vsync_is_waited_for_when_the_driver_has_it():
     clock = SimulatedClock()
     with pixelpen.open("sim:fbdev?size=16x8&bpp=32", clock=clock) as d:
