@@ -68,9 +68,37 @@ def test_ssd1306_init_is_lumas_sequence():
     assert flat(p.init).index(b"\x8d\x14") < flat(p.init).index(b"\xaf")  # charge pump before AF
 
 
+class Capture:
+    """A luma serial interface that records what the device sends."""
+
+    def __init__(self):
+        self.sent = []
+
+    def command(self, *cmd):
+        self.sent.append(("c", bytes(cmd)))
+
+    def data(self, data):
+        self.sent.append(("d", bytes(data)))
+
+    def cleanup(self):
+        pass
+
+
+@pytest.mark.parametrize("size", [(128, 64), (128, 32), (96, 16), (64, 48)])
+def test_ssd1306_init_and_column_start_equal_luma_oled(size):
+    device = pytest.importorskip("luma.oled.device")
+    capture = Capture()
+    device.ssd1306(serial_interface=capture, width=size[0], height=size[1])
+    commands = [v for k, v in capture.sent if k == "c"]
+    init, contrast, window, display_on = commands  # luma: init, contrast, the clearing frame's window, AF
+    p = load_panel_profile(f"ssd1306_{size[0]}x{size[1]}")
+    assert flat(p.init) == init + contrast + display_on
+    assert window[:2] == bytes([0x21, p.column_offset]) and window[2] == p.column_offset + size[0] - 1
+
+
 def test_oled_fields():
     assert [load_panel_profile(n).column_offset for n in ("ssd1306_64x48", "ssd1306_96x16", "sh1106_128x64")] == [
-        32, 16, 2]
+        32, 0, 2]
     p = load_panel_profile("sh1106_128x64")
     assert p.ram_size == (132, 64) and b"\x20" not in bytes(s.command for s in p.init)  # page addressing only
     for p in builtin_panel_profiles().values():
