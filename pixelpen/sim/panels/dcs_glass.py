@@ -1,0 +1,121 @@
+"""What a MIPI-DCS panel module shows: the known modules' glass geometry and the scan-out from frame memory.
+
+A module's glass is a window of the frame memory (at MADCTL 0, seen with the FPC at the bottom) at the
+module's offset, possibly wired mirrored, with RGB or BGR colour filters and a normally-white (TN) or
+normally-black (IPS, needs INVON) liquid crystal; a landscape module is its portrait glass turned by 90°.
+The facts are written here from the module makers' published drivers (not from pixelpen's own panel
+profiles, so each checks the other):
+
+* ST7789 240x240: RAM rows 0..239 (Adafruit ``_rowstart = 320 - height`` when MY is set, TFT_eSPI
+  rowstart 80 for its MX|MY rotation); 135x240 at column 52, row 40 (TFT_eSPI colstart 52/53, Pimoroni
+  240x135 offsets 40/53 with MADCTL 70h); 240x280 at row 20 (TFT_eSPI PR #1681); 170x320 at column 35;
+  172x320 at column 34; all IPS (every maker's init sends INVON), RGB filters.
+* ILI9341 240x320: mirrored (Adafruit and TFT_eSPI portrait MADCTL is MX|BGR 48h, landscape MV|BGR 28h),
+  BGR filters (luma's default sends BGR), TN.
+* ST7735R/S 128x160 "green tab": RAM 132x162 (GM 000) at column 2, row 1, BGR; 80x160 (0.96"): column 26,
+  row 1, BGR, IPS (TFT_eSPI GREENTAB160x80 offsets 26/1 under MX|MY, INVON).
+
+Other sizes get offset (0, 0), RGB, TN, unmirrored. Display off and sleep show a blank (black) page;
+PTLON blanks the rows outside PTLAR; IDMON keeps each component's top bit (8 colours); VSCRDEF/VSCSAD
+scroll the lines between the fixed areas.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from PIL import Image
+
+from pixelpen.sim.panels.dcs_pixels import to_8bit
+
+
+@dataclass(frozen=True)
+class Module:
+    """A panel module's glass: where it sits in frame memory and how it is wired."""
+
+    offset: tuple[int, int]
+    """RAM (column, row) of the portrait glass's top-left pixel at MADCTL 0."""
+    mirrored: bool = False
+    """Source outputs wired right to left (the upright MADCTL has MX set)."""
+    bgr: bool = False
+    """Colour filters in B, G, R order: MADCTL BGR=1 shows true colours."""
+    normally_black: bool = False
+    """IPS liquid crystal: true colours need INVON."""
+
+
+KNOWN_MODULES: dict[tuple[str, int, int], Module] = {
+    ("st7789", 240, 240): Module((0, 0), normally_black=True),
+    ("st7789", 240, 320): Module((0, 0), normally_black=True),
+    ("st7789", 135, 240): Module((52, 40), normally_black=True),
+    ("st7789", 240, 280): Module((0, 20), normally_black=True),
+    ("st7789", 170, 320): Module((35, 0), normally_black=True),
+    ("st7789", 172, 320): Module((34, 0), normally_black=True),
+    ("ili9341", 240, 320): Module((0, 0), mirrored=True, bgr=True),
+    ("st7735", 128, 160): Module((2, 1), bgr=True),
+    ("st7735", 80, 160): Module((26, 1), bgr=True, normally_black=True),
+}
+"""(model, portrait width, portrait height) -> module facts."""
+
+
+def known_module(model: str, portrait: tuple[int, int]) -> Module:
+    """The module of that model and portrait size, or an unmirrored RGB TN glass at offset (0, 0)."""
+    return KNOWN_MODULES.get((model, *portrait), Module((0, 0)))
+
+
+@dataclass(frozen=True)
+class ScanOut:
+    """The controller state the scan-out reads: what is on, the colour settings and the line mapping."""
+
+    showing: bool
+    """Sleep out, display on and not in reset."""
+    inverted: bool
+    bgr: bool
+    idle: bool
+    partial: tuple[int, int] | None
+    """PTLON's PSL..PEL rows (inclusive; PEL < PSL wraps), None in normal mode."""
+    scroll: tuple[int, int, int] | None
+    """(TFA, VSA, VSP) in vertical scroll mode, None otherwise."""
+
+
+def line_map(rows: int, scroll: tuple[int, int, int] | None) -> NDArray[np.intp]:
+    """The frame-memory row each panel line shows (VSCRDEF/VSCSAD rolling scroll, ST7789VW §8.14)."""
+    lines = np.arange(rows, dtype=np.intp)
+    if scroll is None:
+        return lines
+    tfa, vsa, vsp = scroll
+    area = (lines >= tfa) & (lines < tfa + vsa)
+    lines[area] = tfa + (lines[area] - tfa + vsp - tfa) % vsa
+    return lines
+
+
+def render(ram: NDArray[np.uint8], module: Module, size: tuple[int, int], turn: int, state: ScanOut) -> Image.Image:
+    """The glass as a person sees it: ``size`` (width, height) RGB, the portrait window turned ``turn`` degrees."""
+    width, height = size
+    pw, ph = (height, width) if turn % 180 else (width, height)
+    if not state.showing:
+        return Image.new("RGB", size)
+    col, row = module.offset
+    rows = line_map(ram.shape[0], state.scroll)
+    window = ram[rows[row:row + ph]][:, col:col + pw]
+    if window.shape[:2] != (ph, pw):  # a glass larger than the memory past its offset: the rest stays dark
+        padded = np.zeros((ph, pw, 3), dtype=np.uint8)
+        padded[:window.shape[0], :window.shape[1]] = window
+        window = padded
+    if state.idle:
+        window = np.where(window >= 32, 63, 0).astype(np.uint8)
+    if state.inverted != module.normally_black:
+        window = 63 - window
+    if state.bgr != module.bgr:
+        window = window[:, :, ::-1]
+    glass = to_8bit(window)
+    if state.partial is not None:  # the non-display area shows a blank page
+        first, last = state.partial
+        lines = np.arange(row, row + ph)
+        shown = (lines >= first) & (lines <= last) if first <= last else (lines >= first) | (lines <= last)
+        glass[~shown] = 0
+    if module.mirrored:
+        glass = glass[:, ::-1]
+    pixels = np.ascontiguousarray(np.rot90(glass, turn // 90))
+    return Image.fromarray(pixels, "RGB")
