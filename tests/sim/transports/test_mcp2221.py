@@ -6,7 +6,7 @@ import pytest
 
 from pixelpen.clock import SimulatedClock
 from pixelpen.sim.transports.mcp2221 import REPORT_SECONDS, SimMCP2221
-from tests.fuzzing import QUICK_CASES, campaign
+from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
 
 
 class StubBusDevice:
@@ -183,7 +183,18 @@ def fuzz_reports(data: bytes) -> None:
             fake.open()
 
 
+REPORT_SEEDS = [
+    bytes((0x90, 100, 0, 0x78)) + bytes(60) + bytes((0x90, 100, 0, 0x78)) + bytes(60),
+    bytes((0x10, 0, 0x10, 0x20, 27)) + bytes(59) + bytes((0x91, 3, 0, 0x79)) + bytes(60) + b"\x40" + bytes(63),
+]
+
+
 def test_fuzzed_reports_never_crash_the_chip():
-    seeds = [bytes((0x90, 100, 0, 0x78)) + bytes(60) + bytes((0x90, 100, 0, 0x78)) + bytes(60),
-             bytes((0x10, 0, 0x10, 0x20, 27)) + bytes(59) + bytes((0x91, 3, 0, 0x79)) + bytes(60) + b"\x40" + bytes(63)]
-    campaign("mcp2221 reports", fuzz_reports, seeds, QUICK_CASES, seed=5).check()
+    campaign("mcp2221 reports", fuzz_reports, REPORT_SEEDS, QUICK_CASES, seed=5).check()
+
+
+@pytest.mark.slow
+def test_fuzzed_reports_slow():
+    result = campaign("mcp2221 reports", fuzz_reports, REPORT_SEEDS, SLOW_CASES, seed=9)
+    print(result.summary())
+    result.check()
