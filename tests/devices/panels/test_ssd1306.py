@@ -100,18 +100,17 @@ def test_sh1106_partial_window_is_page_addressed() -> None:
     assert bus.take() == [("C", b"\xb1\x06\x11"), ("D", b"\x02\x02"), ("C", b"\xb2\x06\x11"), ("D", b"\x02\x02")]
 
 
-@pytest.mark.parametrize(("profile", "window", "data"), [
-    ("ssd1306_128x32", "21 00 7f 22 00 03", 512),
-    ("ssd1306_64x48", "21 20 5f 22 00 05", 384),   # 64-wide glass on columns 32..95
-    ("ssd1306_96x16", "21 10 6f 22 00 01", 192),   # luma: column start (128 - 96) / 2
-])
-def test_smaller_modules_window_their_columns_and_pages(profile: str, window: str, data: int) -> None:
-    display, bus = oled(SSD1306Display, profile, refresh="full")
+@pytest.mark.parametrize("size", [(128, 32), (64, 48), (96, 16)])
+def test_smaller_modules_send_the_window_and_bytes_luma_oled_sends(size: tuple[int, int]) -> None:
+    image = picture(*size, seed=3)
+    luma_bus = LumaCapture()
+    device = ssd1306(serial_interface=luma_bus, width=size[0], height=size[1])
+    luma_bus.log.clear()
+    device.display(image)
+    display, bus = oled(SSD1306Display, f"ssd1306_{size[0]}x{size[1]}", refresh="full")
     bus.take()
-    display.canvas.lines([[0, 0, 3, 0]], 1)
-    display.flush()
-    log = bus.take()
-    assert log[0] == ("C", bytes.fromhex(window)) and len(log[1][1]) == data
+    show(display, image)
+    assert bus.take() == luma_bus.log  # 64x48: 21 20 5f (columns 32..95); 128x32: pages 0..3
 
 
 def test_128x32_init_sets_multiplex_32_and_sequential_com_pins() -> None:
