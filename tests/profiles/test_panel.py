@@ -141,6 +141,41 @@ def test_ili9341_init_is_adafruits_table():
     assert p.max_clock_hz["spi"] == 10_000_000
 
 
+class FakeGPIO:
+    """Just enough of RPi.GPIO for luma.lcd's backlight handling."""
+
+    OUT, BCM, HIGH, LOW = 0, 11, 1, 0
+
+    def setmode(self, *args):
+        pass
+
+    def setup(self, *args, **kwargs):
+        pass
+
+    def output(self, *args):
+        pass
+
+    def cleanup(self, *args):
+        pass
+
+
+def test_ili9341_table_equals_luma_lcd():
+    device = pytest.importorskip("luma.lcd.device")
+    capture = Capture()
+    device.ili9341(serial_interface=capture, gpio=FakeGPIO())
+    sent, pairs = capture.sent, []
+    for i, (kind, value) in enumerate(sent):
+        if kind == "c":
+            params = sent[i + 1][1] if i + 1 < len(sent) and sent[i + 1][0] == "d" else b""
+            pairs.append((value[0], params))
+    luma = pairs[: [c for c, _ in pairs].index(0x11) + 1]
+    ours = [(s.command, s.params) for s in load_panel_profile("ili9341_240x320").init]
+    # luma differs on purpose in MADCTL (its 320x240 default) and COLMOD (18-bit 0x46), sends no SWRESET and
+    # no VSCRSADD; everything else, undocumented EFh..EAh included, is the same table in the same order.
+    differ = {0x01, 0x36, 0x37, 0x3A}
+    assert [p for p in luma if p[0] not in differ] == [p for p in ours if p[0] not in differ and p[0] != 0x29]
+
+
 def test_st7735_tables():
     black, mini = load_panel_profile("st7735_128x160"), load_panel_profile("st7735_80x160")
     assert [s.command for s in black.init] == [0x01, 0x11, 0xB1, 0xB2, 0xB3, 0xB4, 0xC0, 0xC1, 0xC2, 0xC3, 0xC4,
