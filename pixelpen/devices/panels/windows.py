@@ -3,7 +3,9 @@
 The cost model lives here and nowhere else.  A window costs its pixel bytes plus the commands that open it
 (MIPI DCS: CASET 2Ah + 4, RASET 2Bh + 4, RAMWR 2Ch = 11 bytes; SSD1306 horizontal mode: ``21 s e 22 s e``
 = 6; SH1106 page mode: ``B0+p, 0x0L, 0x1H`` = 3 per page), plus framing per transfer on I2C (the control byte
-0x00 before commands and 0x40 before each data chunk).  :func:`plan_windows` rounds every rectangle
+0x00 before commands and 0x40 before each data chunk).  Bytes are what the host sends (a bus's ``bytes_sent``);
+an I2C transaction's START, address byte and STOP are wire time, counted per transfer by
+:mod:`pixelpen.devices.panels.pacing`.  :func:`plan_windows` rounds every rectangle
 outward to the controller's alignment (SSD1306: pages of 8 rows), clips it to the panel, then merges by
 cost with :func:`pixelpen.raster.damage.merge_rects`: two windows become their bounding window when that
 costs no more; more than ``max_windows`` are merged cheapest-first until they fit.
