@@ -10,7 +10,7 @@ import usb.core
 import usb.util
 
 from pixelpen.clock import SimulatedClock
-from pixelpen.sim.transports.ftdi import Ft232hBackend
+from pixelpen.sim.transports.ftdi import Ft232hBackend, use_for_urls
 from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
 from tests.sim.transports.test_mcp2221 import StubBusDevice
 
@@ -180,3 +180,20 @@ def test_fuzzed_mpsse_streams_slow():
     result = campaign("ft232h mpsse", fuzz_mpsse, MPSSE_SEEDS, SLOW_CASES, seed=7)
     print(result.summary())
     result.check()
+
+
+def test_luma_ftdi_spi_drives_the_simulated_chip():
+    """A third-party client: luma.core's ftdi_spi (pyftdi underneath) through the URL backend."""
+    serial = pytest.importorskip("luma.core.interface.serial")
+    device = StubBusDevice(SimulatedClock())
+    backend = Ft232hBackend(device, dc=5, rst=6)
+    with use_for_urls(backend):
+        luma = serial.ftdi_spi(device="ftdi://ftdi:232h/1", bus_speed_hz=8_000_000, gpio_DC=5, gpio_RST=6)
+        luma.command(0x2A, 0x00, 0x00, 0x00, 0xEF)
+        luma.data([b % 256 for b in range(5000)])
+        luma.cleanup()
+    assert device.frames[0] == (b"\x2a\x00\x00\x00\xef", False)
+    assert [len(f) for f, _ in device.frames[1:]] == [4096, 904]  # luma writes 4096-byte blocks
+    assert b"".join(f for f, _ in device.frames[1:]) == bytes(b % 256 for b in range(5000))
+    assert all(dc for _, dc in device.frames[1:])
+    assert device.lines == [("reset", True)]  # ADBUS6 was low from power-on: luma released the reset
