@@ -4,7 +4,8 @@ Layouts are ``linux/fb.h``'s (``fb_var_screeninfo`` 160 bytes of u32; ``fb_fix_s
 long`` fields, 80 bytes on 64-bit, 68 on 32-bit), decoded with ctypes.  A pixel lives at
 ``(y + yoffset)·line_length + (x + xoffset)·bpp/8``: the stride ``line_length`` is honoured (real hardware pads
 rows: 1366 px at 16 bpp -> 2752 bytes).  Pixels are packed from the var bitfields (offset and length per
-channel, any bpp of 8/16/24/32) into the pixel word stored little-endian (x86 and ARM boards).  With
+channel, any bpp of 8/16/24/32) into the pixel word stored little-endian (x86 and ARM boards); 8-bit grey
+framebuffers get luma levels, 8-bit pseudocolour ones an RGB 3-3-2 palette (FBIOPUTCMAP).  With
 ``yres_virtual >= 2·yres`` and a ``ypanstep`` the driver can pan to, frames are drawn on the hidden page and
 shown by FBIOPAN_DISPLAY; otherwise single buffering (``buffering`` says why).  The OS is behind
 :class:`FramebufferDevice` (ioctl + mmap), so a simulator stands where ``/dev/fb0`` would.
@@ -32,6 +33,7 @@ log = logging.getLogger(__name__)
 FBIOGET_VSCREENINFO = 0x4600
 FBIOPUT_VSCREENINFO = 0x4601
 FBIOGET_FSCREENINFO = 0x4602
+FBIOPUTCMAP = 0x4605
 FBIOPAN_DISPLAY = 0x4606
 FBIOBLANK = 0x4611
 FBIO_WAITFORVSYNC = 0x40044620  # _IOW('F', 0x20, __u32)
@@ -80,6 +82,16 @@ class FbFixScreeninfo(ctypes.Structure):
         ("xpanstep", ctypes.c_uint16), ("ypanstep", ctypes.c_uint16), ("ywrapstep", ctypes.c_uint16),
         ("line_length", ctypes.c_uint32), ("mmio_start", ctypes.c_ulong), ("mmio_len", ctypes.c_uint32),
         ("accel", ctypes.c_uint32), ("capabilities", ctypes.c_uint16), ("reserved", ctypes.c_uint16 * 2),
+    ]
+
+
+class FbCmap(ctypes.Structure):
+    """``struct fb_cmap``: ``len`` palette entries from ``start``, 16-bit levels behind four pointers."""
+
+    _fields_ = [
+        ("start", ctypes.c_uint32), ("len", ctypes.c_uint32), ("red", ctypes.POINTER(ctypes.c_uint16)),
+        ("green", ctypes.POINTER(ctypes.c_uint16)), ("blue", ctypes.POINTER(ctypes.c_uint16)),
+        ("transp", ctypes.POINTER(ctypes.c_uint16)),
     ]
 
 
@@ -211,6 +223,10 @@ def _place(channel: np.ndarray, c: Channel, out: np.ndarray) -> None:
     out &= mask
 
 
+RGB332 = PixelLayout(8, Channel(5, 3), Channel(2, 3), Channel(0, 2), Channel(0, 0), grey=False)
+"""8-bit pseudocolour with the RGB 3-3-2 palette pixelpen loads."""
+
+
 class Framebuffer:
     """A mapped framebuffer: pack and write rectangles of RGB pixels, flip pages, wait for vsync, blank."""
 
@@ -293,12 +309,29 @@ class Framebuffer:
                               f"directcolor, grey)")
         if grey and bpp != 8:
             raise ConfigError(f"{where}: a grey framebuffer at var.bits_per_pixel = {bpp} is not supported (8)")
-        if visual == FB_VISUAL_PSEUDOCOLOR and var.grayscale != 1:
-            log.warning("%s: 8-bit pseudocolour: pixelpen writes grey levels as indices; the driver's palette "
-                        "decides the colours", where)
+        if visual == FB_VISUAL_PSEUDOCOLOR and var.grayscale != 1 and self._load_rgb332_palette():
+            return RGB332
+        if visual != FB_VISUAL_PSEUDOCOLOR and var.grayscale != 1 and grey:
+            log.warning("%s: static pseudocolour: pixelpen writes grey levels as indices; the driver's fixed "
+                        "palette decides the colours", where)
         channels = {name: self._channel(name, bpp, needed=not grey and name != "transp")
                     for name in ("red", "green", "blue", "transp")}
         return PixelLayout(bpp, channels["red"], channels["green"], channels["blue"], channels["transp"], grey)
+
+    def _load_rgb332_palette(self) -> bool:
+        """FBIOPUTCMAP an RGB 3-3-2 palette (index RRRGGGBB); False, with a warning, if the driver refuses."""
+        levels = [[(i >> 5 & 7) * 0xFFFF // 7 for i in range(256)], [(i >> 2 & 7) * 0xFFFF // 7 for i in range(256)],
+                  [(i & 3) * 0xFFFF // 3 for i in range(256)]]
+        red, green, blue = ((ctypes.c_uint16 * 256)(*level) for level in levels)
+        entry = ctypes.POINTER(ctypes.c_uint16)
+        cmap = FbCmap(0, 256, ctypes.cast(red, entry), ctypes.cast(green, entry), ctypes.cast(blue, entry), None)
+        try:
+            self.device.ioctl(FBIOPUTCMAP, bytes(cmap))  # red, green, blue stay alive across the call
+        except OSError as exc:
+            log.warning("%s: 8-bit pseudocolour and FBIOPUTCMAP failed (%s): pixelpen writes grey levels as "
+                        "indices; the driver's palette decides the colours", self.name, exc)
+            return False
+        return True
 
     def _channel(self, name: str, bpp: int, *, needed: bool) -> Channel:
         field = getattr(self.var, name)

@@ -188,6 +188,40 @@ def test_grey_8_bpp_is_the_luma_of_each_pixel(tmp_path):
             assert raw[y * 8 + x] == (299 * r + 587 * g + 114 * b + 500) // 1000
 
 
+class PaletteNode(Node):
+    """A pseudocolour node that keeps the FBIOPUTCMAP levels (read at the struct's pointers) or refuses it."""
+
+    def __init__(self, *args, refuse=False, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.refuse, self.cmap = refuse, None
+
+    def ioctl(self, request, arg):
+        if request != 0x4605:
+            return super().ioctl(request, arg)
+        if self.refuse:
+            raise OSError(errno.EINVAL, "Invalid argument")
+        start, length, red, green, blue, transp = struct.unpack("<IIQQQQ", arg)  # fb.h: u32, u32, 4 pointers
+        self.cmap = (start, length, transp, [np.frombuffer(ctypes.string_at(p, 2 * length), "<u2")
+                                             for p in (red, green, blue)])
+        return bytes(arg)
+
+
+@pytest.mark.skipif(not LP64, reason="fb_cmap written for 64-bit pointers")
+def test_pseudocolour_gets_an_rgb332_palette(tmp_path, caplog):
+    fields = {"red": (0, 8, 0), "green": (0, 8, 0), "blue": (0, 8, 0), "transp": (0, 0, 0)}
+    node = PaletteNode(4, 2, 8, line_length=8, visual=3, fields=fields, tmp_path=tmp_path)
+    fb = Framebuffer(node)
+    start, length, transp, (red, green, blue) = node.cmap
+    assert (start, length, transp) == (0, 256, 0)
+    index = 0b101_011_10  # RRRGGGBB
+    assert (red[index], green[index], blue[index]) == (5 * 65535 // 7, 3 * 65535 // 7, 2 * 65535 // 3)
+    fb.write(np.array([[[255, 0, 0], [0, 255, 0], [0, 0, 255], [160, 100, 170]]], dtype=np.uint8))
+    assert list(node.raw()[:4]) == [0b111_000_00, 0b000_111_00, 0b000_000_11, index]
+    refused = Framebuffer(PaletteNode(4, 2, 8, line_length=8, visual=3, fields=fields, refuse=True,
+                                      tmp_path=tmp_path))
+    assert refused.layout.grey and "FBIOPUTCMAP failed" in caplog.text
+
+
 @pytest.mark.parametrize("width, stride", [(1366, 2752), (480, 1024)])
 def test_padded_strides_of_real_hardware(tmp_path, width, stride):
     node = Node(width, 4, 16, line_length=stride, tmp_path=tmp_path)

@@ -4,7 +4,8 @@ The structs are laid out from ``linux/fb.h`` at the literal byte offsets below (
 driver's ctypes decoder, so each checks the other).  ``open()`` gives a node with ``ioctl`` and ``map`` as
 ``/dev/fbN`` has: FBIOGET/FBIOPUT_VSCREENINFO, FBIOGET_FSCREENINFO, FBIOPAN_DISPLAY (checked as the kernel's
 ``fb_pan_display`` does: EINVAL for an offset off ``ypanstep`` or past the virtual screen), FBIOBLANK,
-FBIO_WAITFORVSYNC (option ``vsync``; else ENOTTY, as drivers without it answer), anything else ENOTTY.
+FBIO_WAITFORVSYNC (option ``vsync``; else ENOTTY, as drivers without it answer), FBIOPUTCMAP (8-bit
+pseudocolour; the levels are read at the caller's pointers in this process), anything else ENOTTY.
 Rows are padded (default stride: the row rounded up to 64 bytes) and the virtual screen is two pages high.
 """
 
@@ -13,6 +14,7 @@ from __future__ import annotations
 import errno
 import math
 import mmap
+import os
 import struct
 import tempfile
 from collections.abc import Mapping
@@ -28,7 +30,7 @@ from pixelpen.sim.base import register_simulator
 from pixelpen.urls import parse_size
 
 FBIOGET_VSCREENINFO, FBIOPUT_VSCREENINFO, FBIOGET_FSCREENINFO = 0x4600, 0x4601, 0x4602
-FBIOPAN_DISPLAY, FBIOBLANK, FBIO_WAITFORVSYNC = 0x4606, 0x4611, 0x40044620
+FBIOPUTCMAP, FBIOPAN_DISPLAY, FBIOBLANK, FBIO_WAITFORVSYNC = 0x4605, 0x4606, 0x4611, 0x40044620
 FB_VMODE_YWRAP = 256
 
 VAR_SIZE = 160
@@ -59,7 +61,9 @@ FIX_LAYOUTS: dict[int, tuple[int, dict[str, tuple[int, str]]]] = {
 FIX_SIZE = FIX_LAYOUTS[struct.calcsize("@L")][0]
 """The struct's size on this machine (80 on 64-bit, 68 on 32-bit)."""
 
-VISUAL_TRUECOLOR, VISUAL_STATIC_PSEUDOCOLOR = 2, 5
+VISUAL_TRUECOLOR, VISUAL_PSEUDOCOLOR, VISUAL_STATIC_PSEUDOCOLOR = 2, 3, 5
+CMAP_LAYOUTS = {8: (40, "<IIQQQQ"), 4: (24, "<IIIIII")}
+"""``fb_cmap`` by ``sizeof(void *)``: (size, struct code for start, len, red, green, blue, transp pointers)."""
 SMEM_START = 0xFD000000
 """The physical address the simulated memory pretends to start at."""
 
@@ -86,7 +90,8 @@ class FbdevSim:
     def __init__(
         self, width: int, height: int, bpp: int = 16, *, stride: int | None = None,
         virtual_height: int | None = None, bitfields: Mapping[str, Field] | None = None, bgr: bool = False,
-        vsync: bool = True, panstep: int = 1, refresh_hz: float = 60.0, path: str | None = None,
+        vsync: bool = True, panstep: int = 1, pseudocolor: bool = False, refresh_hz: float = 60.0,
+        path: str | None = None,
         clock: Clock | None = None, name: str = "pixelpen-fbsim",
     ) -> None:
         if bpp not in DEFAULT_BITFIELDS:
@@ -102,6 +107,8 @@ class FbdevSim:
         virtual_height = 2 * height if virtual_height is None else virtual_height
         if virtual_height < height:
             raise ConfigError(f"fbdev simulator: virtual height {virtual_height} is less than the height {height}")
+        if pseudocolor and bpp != 8:
+            raise ConfigError(f"fbdev simulator: pseudocolour needs bpp 8, got {bpp}")
         if not 0 <= panstep <= 0xFFFF:
             raise ConfigError(f"fbdev simulator: panstep must be 0..65535, got {panstep}")
         fields = dict(DEFAULT_BITFIELDS[bpp])
@@ -115,16 +122,19 @@ class FbdevSim:
         self.var: dict[str, int] = dict.fromkeys(VAR_OFFSETS, 0)
         """The current ``fb_var_screeninfo`` fields (``red.offset`` style names for the bitfields)."""
         self.var.update(xres=width, yres=height, xres_virtual=width, yres_virtual=virtual_height,
-                        bits_per_pixel=bpp, grayscale=int(bpp == 8 and bitfields is None), height=0, width=0)
+                        bits_per_pixel=bpp, grayscale=int(bpp == 8 and bitfields is None and not pseudocolor))
         for channel, (offset, length) in fields.items():
             self.var[f"{channel}.offset"], self.var[f"{channel}.length"] = offset, length
         size = stride * virtual_height
         self.fix: dict[str, int] = dict.fromkeys(FIX_LAYOUTS[8][1], 0)
         """The ``fb_fix_screeninfo`` fields (``id`` apart)."""
         self.fix.update(smem_start=SMEM_START, smem_len=-(-size // mmap.PAGESIZE) * mmap.PAGESIZE,
-                        visual=VISUAL_STATIC_PSEUDOCOLOR if self.var["grayscale"] else VISUAL_TRUECOLOR,
+                        visual=VISUAL_PSEUDOCOLOR if pseudocolor else VISUAL_STATIC_PSEUDOCOLOR if self.var["grayscale"]
+                        else VISUAL_TRUECOLOR,
                         ypanstep=panstep, line_length=stride)
         self.fix_id = name.encode("ascii", "replace")[:15]
+        self.palette = np.repeat(np.arange(256, dtype=np.uint16)[:, None] * 257, 3, axis=1)
+        """Pseudocolour: (256, 3) uint16 red, green, blue levels per index (FBIOPUTCMAP; a grey ramp at first)."""
         self.blank_level = 0
         """The last FBIOBLANK level (0: showing; 1..4 blanked: the glass is black)."""
         self.pans = 0
@@ -186,6 +196,9 @@ class FbdevSim:
         if request == FBIOPAN_DISPLAY:
             self._pan(self._copy_in(arg, VAR_SIZE))
             return bytes(arg)
+        if request == FBIOPUTCMAP and self.fix["visual"] == VISUAL_PSEUDOCOLOR:
+            self._put_cmap(arg)
+            return bytes(arg)
         if request == FBIO_WAITFORVSYNC and self.vsync:
             if struct.unpack_from("<I", self._copy_in(arg, 4))[0] != 0:
                 raise OSError(errno.ENODEV, "no such CRTC")
@@ -238,6 +251,15 @@ class FbdevSim:
             self._pan(data)
         self.var["activate"] = want["activate"]
 
+    def _put_cmap(self, arg: bytes) -> None:
+        """FBIOPUTCMAP: levels read at the caller's pointers (this process's memory, via /proc/self/mem)."""
+        size, code = CMAP_LAYOUTS[struct.calcsize("P")]
+        start, length, *pointers = struct.unpack(code, self._copy_in(arg, size))
+        if length == 0 or start + length > 256:
+            raise OSError(errno.EINVAL, f"palette entries {start}..{start + length - 1} of 256")
+        levels = [_user_words(pointer, length) for pointer in pointers[:3]]
+        self.palette[start:start + length] = np.stack(levels, axis=1)
+
     def _wait_vblank(self) -> None:
         """Sleep on the clock to the next refresh boundary (multiples of 1/refresh_hz)."""
         now = self.clock.now()
@@ -283,6 +305,8 @@ class FbdevSim:
             word |= cells[..., k] << np.uint32(8 * k)
         if var["grayscale"]:
             return Image.fromarray(self._field(word, "red"), "L")
+        if self.fix["visual"] == VISUAL_PSEUDOCOLOR:
+            return Image.fromarray((self.palette[word & 0xFF] >> 8).astype(np.uint8), "RGB")
         return Image.fromarray(np.dstack([self._field(word, c) for c in ("red", "green", "blue")]), "RGB")
 
     def _field(self, word: np.ndarray, channel: str) -> np.ndarray:
@@ -306,6 +330,22 @@ class FbdevSim:
             return
         self.closed = True
         self._file.close()
+
+
+def _user_words(address: int, count: int) -> np.ndarray:
+    """``count`` u16 at ``address`` of this process (EFAULT for a bad pointer, as copy_from_user fails)."""
+    if not 0 < address < 1 << 63:
+        raise OSError(errno.EFAULT, f"bad address {address:#x}")
+    fd = os.open("/proc/self/mem", os.O_RDONLY)
+    try:
+        data = os.pread(fd, 2 * count, address)
+    except OSError:
+        raise OSError(errno.EFAULT, f"bad address {address:#x}") from None
+    finally:
+        os.close(fd)
+    if len(data) != 2 * count:
+        raise OSError(errno.EFAULT, f"bad address {address:#x}")
+    return np.frombuffer(data, dtype="<u2")
 
 
 class FbdevNode:
@@ -351,6 +391,7 @@ OPTIONS: tuple[OptionSpec[Any], ...] = (
     OptionSpec("bgr", boolean, False, "swap red and blue (BGR565, BGR888, XBGR8888)"),
     OptionSpec("vsync", boolean, True, "the driver answers FBIO_WAITFORVSYNC (false: ENOTTY)"),
     OptionSpec("panstep", integer(0, 0xFFFF), 1, "fix.ypanstep (0: the driver cannot pan)"),
+    OptionSpec("pseudocolor", boolean, False, "8 bpp with a palette (FBIOPUTCMAP) instead of grey levels"),
     OptionSpec("hz", number(1.0, 1000.0), 60.0, "refresh rate: vertical blanks per second"),
     OptionSpec("path", text, "", "file holding the framebuffer memory (default: a temporary file)"),
 )
@@ -363,6 +404,7 @@ def create(clock: Clock | None = None, **options: str) -> FbdevSim:
     try:
         return FbdevSim(width, height, values["bpp"], stride=values["stride"], virtual_height=values["virtual"],
                         bgr=values["bgr"], vsync=values["vsync"], panstep=values["panstep"],
+                        pseudocolor=values["pseudocolor"],
                         refresh_hz=values["hz"], path=values["path"] or None, clock=clock)
     except ConfigError as exc:
         raise URLError(f"sim:fbdev: {exc}") from None

@@ -86,7 +86,7 @@ def test_put_vscreeninfo_pans_but_refuses_a_mode_change():
 
 
 @pytest.mark.parametrize("request_, arg, code", [
-    (0x4605, bytes(40), errno.ENOTTY),  # FBIOPUTCMAP: not modelled
+    (0x4605, bytes(40), errno.ENOTTY),  # FBIOPUTCMAP on a truecolour framebuffer
     (GET_V, bytes(100), errno.EFAULT),
     (PAN, 3, errno.EFAULT),
     (BLANK, 9, errno.EINVAL),
@@ -137,6 +137,27 @@ def test_glass_decodes_the_visible_page_with_bitfields_and_stride(bpp, bgr):
     assert not np.asarray(sim.glass()).any()  # a blanked screen is dark
 
 
+@pytest.mark.skipif(not LP64, reason="fb_cmap written for 64-bit pointers")
+def test_pseudocolour_glass_reads_the_palette_put_by_fbioputcmap():
+    import ctypes
+
+    sim = FbdevSim(4, 1, 8, pseudocolor=True)
+    assert sim.fix["visual"] == 3 and sim.var["grayscale"] == 0
+    levels = [(ctypes.c_uint16 * 2)(0xFFFF, 0x1200), (ctypes.c_uint16 * 2)(0, 0x3400), (ctypes.c_uint16 * 2)(0, 0x5600)]
+    cmap = struct.pack("<IIQQQQ", 7, 2, *(ctypes.addressof(level) for level in levels), 0)  # fb.h fb_cmap
+    sim.ioctl(0x4605, cmap)
+    sim.map(sim.fix["smem_len"])[:4] = bytes([7, 8, 0, 255])
+    assert np.asarray(sim.glass())[0].tolist() == [[255, 0, 0], [0x12, 0x34, 0x56], [0, 0, 0], [255, 255, 255]]
+    for bad, code in ((struct.pack("<IIQQQQ", 255, 2, 8, 8, 8, 0), errno.EINVAL),
+                      (struct.pack("<IIQQQQ", 0, 1, 16, 16, 16, 0), errno.EFAULT)):
+        with pytest.raises(OSError) as info:
+            sim.ioctl(0x4605, bad)
+        assert info.value.errno == code
+    with pytest.raises(OSError) as info:
+        FbdevSim(4, 1, 16).ioctl(0x4605, cmap)  # a truecolour driver has no palette to set
+    assert info.value.errno == errno.ENOTTY
+
+
 def test_gram_is_the_raw_memory_and_survives_close():
     sim = FbdevSim(6, 3, 16)
     node = sim.open()
@@ -168,11 +189,11 @@ def test_url_options_build_the_simulator():
 
 def test_seeded_fuzz_of_ioctls_raises_only_oserror():
     rng = random.Random(10)
-    sim = FbdevSim(16, 8, 32, clock=SimulatedClock())
+    sim = FbdevSim(16, 8, 8, clock=SimulatedClock(), pseudocolor=True)
     requests = [GET_V, PUT_V, GET_F, PAN, BLANK, VSYNC, 0x4605, rng.randrange(1 << 32)]
-    for _ in range(300):
+    for _ in range(400):
         arg: bytes | int = (rng.randrange(-5, 10) if rng.random() < 0.2
-                            else bytes(rng.randrange(256) for _ in range(rng.choice((0, 3, 4, 80, 160, 200)))))
+                            else bytes(rng.randrange(256) for _ in range(rng.choice((0, 3, 4, 40, 80, 160, 200)))))
         with contextlib.suppress(OSError):
             sim.ioctl(rng.choice(requests), arg)
         assert 0 <= sim.var["yoffset"] <= 8 and sim.var["xoffset"] == 0
