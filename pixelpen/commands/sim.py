@@ -36,20 +36,31 @@ import threading
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field, is_dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from pixelpen.clock import REAL_CLOCK, SimulatedClock
 from pixelpen.commands import argtypes
+from pixelpen.display.registry import open_display, scheme_names
 from pixelpen.errors import ConfigError, PixelpenError, URLError
 from pixelpen.options import integer
+from pixelpen.scene import draw_reference
 from pixelpen.sim.base import Fault, StreamDevice, create_simulator, simulator_models
 from pixelpen.sim.transports.options import TransportOptions, line_baud, split_options
 from pixelpen.sim.transports.port import LinkStats, SimPort
 from pixelpen.sim.view import MAX_FPS, ViewServer, source_for
+from pixelpen.urls import format_url
+
+if TYPE_CHECKING:
+    from pixelpen.devices.panels.base import PanelDisplay
 
 log = logging.getLogger(__name__)
 
 READY_MARGIN = 2
 """Bytes a paced replay leaves free in a device buffer (a byte may be on the wire when the line is sampled)."""
+DEMO_FPS = 25.0
+"""Frames a second of the panel demo (wall time; the live view shows at most its own --fps of them)."""
 MAX_SETTLE_S = 24 * 3600.0
 """Simulated seconds a replay waits at most, after its last byte, for the device to finish."""
 _ERROR_PREFIXES = ("error:", "alarm:", "!")
@@ -266,6 +277,60 @@ def _counters(device: StreamDevice) -> str:
     return ", ".join(f"{k}={v:.3f}" if isinstance(v, float) else f"{k}={v}" for k, v in asdict(stats).items())
 
 
+class PanelDemo:
+    """The panel demo of ``pixelpen sim PANEL --view``: the reference scene, and a ball bouncing over it.
+
+    Drawn through the real panel display (``pixelpen.open("sim:MODEL")``), so each frame is the driver's
+    partial refresh: the ball's old and new squares, on the simulator's bus.
+    """
+
+    def __init__(self, display: PanelDisplay) -> None:
+        self.display = display
+        draw_reference(display)
+        display.refresh()
+        canvas = display.canvas
+        self._background = canvas.array.copy()
+        self.radius = max(2, min(canvas.width, canvas.height) // 10)
+        self._position = np.array([self.radius + 1.0, self.radius + 1.0])
+        self._velocity = np.array([0.031, 0.023]) * max(canvas.width, canvas.height)
+        self._ink = canvas.colour_value((255, 96, 0))
+        self.frames = 0
+
+    def step(self) -> None:
+        """Move the ball one frame and send the frame."""
+        canvas, r = self.display.canvas, self.radius
+        x, y = np.rint(self._position).astype(int)
+        canvas.blit(self._background[max(0, y - r):y + r + 1, max(0, x - r):x + r + 1], max(0, x - r), max(0, y - r))
+        low, high = np.array([r, r], dtype=float), np.array([canvas.width - 1 - r, canvas.height - 1 - r], dtype=float)
+        self._position += self._velocity
+        bounced = (self._position < low) | (self._position > high)
+        self._velocity[bounced] *= -1
+        self._position = np.clip(self._position, low, high)
+        canvas.circles(np.rint(self._position).astype(int)[None, :], [r], self._ink, fill=True)
+        self.display.refresh()
+        self.frames += 1
+
+
+def run_panel_demo(display: PanelDisplay, lock: threading.Lock, stop: threading.Event, fps: float = DEMO_FPS) -> None:
+    """Animate ``display`` (a PanelDemo) at ``fps`` frames a second of wall time until ``stop``; ``lock`` per frame."""
+    with lock:
+        demo = PanelDemo(display)
+    while not stop.wait(1.0 / fps):
+        with lock:
+            demo.step()
+
+
+def _open_panel_display(model: str, options: dict[str, str]) -> PanelDisplay:
+    """The panel display ``sim:MODEL?options`` (its simulator behind its bus)."""
+    from pixelpen.devices.panels.base import PanelDisplay
+
+    display = open_display(format_url("sim", model, options))
+    if not isinstance(display, PanelDisplay):
+        display.close()
+        raise ConfigError(f"sim:{model} is not a panel display")
+    return display
+
+
 def _report_replay(result: ReplayResult, device: StreamDevice, name: str, baud: int | None, speed: str) -> None:
     """Print what a replay did: bytes and time, the line's counters, the device's counters and errors."""
     link = result.link
@@ -305,13 +370,27 @@ def run_sim(args: argparse.Namespace) -> int:
             raise ConfigError(f"cannot read {args.replay}: {exc.strerror or exc}") from None
     lock = threading.Lock()
     view = None
+    display: PanelDisplay | None = None
+    stop = threading.Event()
+    animator = None
+    shown: Any = device
+    """What the view shows and the glass or paper comes from: the panel display's simulator in the demo."""
     try:
+        if panel and args.model.lower() in scheme_names():
+            device.close()
+            display = _open_panel_display(args.model, parse_options(args.option))
+            shown = display.simulator
+            animator = threading.Thread(target=run_panel_demo, args=(display, lock, stop), name="panel-demo",
+                                        daemon=True)
         if args.view:
-            view = start_view(device, args, lock)
+            view = start_view(shown, args, lock)
             if not args.pty:
                 print(view.url, flush=True)
-                print(f"pixelpen sim: live view of {device.model} on {view.url}; press Ctrl-C to stop",
-                      file=sys.stderr, flush=True)
+                print(f"pixelpen sim: live view of {shown.model} on {view.url}"
+                      + (" (a demo drawn through the panel display)" if display is not None else "")
+                      + "; press Ctrl-C to stop", file=sys.stderr, flush=True)
+        if animator is not None:
+            animator.start()
         if args.pty:
             run_pty(device, transport, lock=lock, view=view)
         elif data is not None:
@@ -324,15 +403,21 @@ def run_sim(args: argparse.Namespace) -> int:
         else:
             wait_for_stop()
     finally:
+        stop.set()
+        if animator is not None and animator.is_alive():
+            animator.join(10)
         if view is not None:
             view.close()
-        device.close()
+        with lock:
+            if display is not None:
+                display.close()
+            shown.close()
     output = args.output or ("glass.png" if panel else "paper.png")
     if panel:
-        device.glass().save(output)  # type: ignore[attr-defined]
+        shown.glass().save(output)
         print(f"glass: {output}")
     else:
-        device.save_paper(output)  # type: ignore[attr-defined]
+        shown.save_paper(output)
         print(f"paper: {output}")
     return 0
 

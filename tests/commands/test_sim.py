@@ -16,6 +16,8 @@ from PIL import Image
 
 from pixelpen.cli import main
 from pixelpen.commands import sim as simcmd
+from pixelpen.display.capabilities import Capabilities
+from pixelpen.display.kinds import RasterDisplay
 from pixelpen.errors import URLError
 from pixelpen.sim.transports.port import SimPort, TransportOptions
 
@@ -350,3 +352,97 @@ def test_a_panel_has_no_pty():
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2
     assert "stubpanel is a panel: it is reached through a bus, not a byte stream; watch it with --view" in proc.stderr
+
+
+class RecordingPanel(RasterDisplay):
+    """A raster display standing in for a panel display: it keeps each frame's damage rectangles."""
+
+    def __init__(self, width: int = 64, height: int = 48) -> None:
+        caps = Capabilities(model="recording", category="panel", kind="raster", size=(width, height),
+                            unit_mm=0.2, colour_model="rgb565", y_down=True)
+        super().__init__(caps, mode="RGB", background="black")
+        self.frames: list[list] = []
+        self.open()
+
+    @classmethod
+    def from_url(cls, url, **kwargs):
+        raise NotImplementedError
+
+    def _open_device(self) -> None:
+        pass
+
+    def _close_device(self) -> None:
+        pass
+
+    def _show(self, canvas) -> None:
+        self.frames.append(list(canvas.damage()))
+
+    def refresh(self) -> None:
+        self.flush()
+
+
+def test_the_panel_demo_draws_the_scene_then_moves_a_ball_in_small_frames():
+    panel = RecordingPanel(64, 48)
+    demo = simcmd.PanelDemo(panel)
+    scene = panel.canvas.array.copy()
+    assert (scene != 0).any(axis=2).mean() > 0.02  # the reference scene is on the glass
+    r = demo.radius
+    assert r == 4  # a tenth of the short side
+    box = (2 * r + 1) ** 2
+    ink = np.array([255, 96, 0], np.uint8)
+    for _ in range(60):  # long enough to bounce off an edge
+        before = panel.canvas.array.copy()
+        demo.step()
+        after = panel.canvas.array
+        changed = np.argwhere((after != before).any(axis=2))
+        damaged = np.zeros(after.shape[:2], bool)
+        for rect in panel.frames[-1]:
+            damaged[rect.y0:rect.y1, rect.x0:rect.x1] = True
+        assert damaged[tuple(changed.T)].all()  # every changed pixel was in the frame sent
+        assert damaged.sum() <= 2 * box  # the ball's old and new squares, no more
+        differs = (after != scene).any(axis=2)
+        ball = differs & (after == ink).all(axis=2)
+        ys, xs = np.nonzero(ball)
+        assert len(ys) and np.ptp(ys) <= 2 * r and np.ptp(xs) <= 2 * r  # one disc, inside the glass
+        assert not (differs & ~ball).any()  # elsewhere the scene is as it was
+    assert demo.frames == 60
+
+
+def test_panel_demo_runs_until_stopped():
+    panel = RecordingPanel(32, 24)
+    lock, stop = threading.Lock(), threading.Event()
+    runner = threading.Thread(target=simcmd.run_panel_demo, args=(panel, lock, stop, 200.0))
+    runner.start()
+    for _ in range(500):
+        if len(panel.frames) >= 5:
+            break
+        stop.wait(0.01)
+    stop.set()
+    runner.join(10)
+    assert not runner.is_alive() and len(panel.frames) >= 5
+
+
+def test_a_panel_with_a_display_is_viewed_through_the_demo(tmp_path):
+    from pixelpen.sim.base import simulator_models
+
+    if "st7789" not in simulator_models():
+        pytest.skip("the st7789 simulator is not registered yet (pixelpen.sim.panels)")
+    out = tmp_path / "glass.png"
+    proc = subprocess.Popen([sys.executable, "-c", _SIM_MAIN, "sim", "st7789", "--view", "-o", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        url = proc.stdout.readline().strip()
+        assert url.startswith("http://127.0.0.1:"), proc.stderr.read() if proc.poll() is not None else url
+        first = json.loads(_wait_for(url + "stats.json", lambda b: json.loads(b)["frames"] >= 2, "demo frames"))
+        later = json.loads(_wait_for(url + "stats.json", lambda b: json.loads(b)["frames"] > first["frames"] + 3,
+                                     "more demo frames"))
+        full = 240 * 240 * 2
+        assert later["bytes"] - first["bytes"] < full  # ball frames are partial refreshes
+        glass = Image.open(io.BytesIO(_wait_for(url + "frame.png", lambda b: True, "the glass")))
+        assert glass.size == (240, 240) and len(set(glass.convert("RGB").getdata())) > 2
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(30) == 0
+    finally:
+        if proc.poll() is None:
+            os.kill(proc.pid, signal.SIGKILL)
+    assert Image.open(out).size == (240, 240)
