@@ -58,6 +58,7 @@ import usb.backend
 import usb.core
 
 from pixelpen.clock import Clock, SimulatedClock
+from pixelpen.errors import Disconnected
 from pixelpen.sim.base import BusDevice
 
 VID: Final = 0x0403
@@ -140,7 +141,8 @@ class Ft232hBackend(usb.backend.IBackend):
     def find(self) -> usb.core.Device:
         """The simulated FT232H as a pyusb Device, for ``SpiController().configure(device)``."""
         found = usb.core.find(idVendor=VID, idProduct=PID, backend=self)
-        assert isinstance(found, usb.core.Device)  # this backend enumerates exactly that device
+        if not isinstance(found, usb.core.Device):
+            raise Disconnected("simulated FT232H: unplugged (close() was called)")
         return found
 
     @property

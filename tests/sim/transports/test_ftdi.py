@@ -10,6 +10,7 @@ import usb.core
 import usb.util
 
 from pixelpen.clock import SimulatedClock
+from pixelpen.errors import Disconnected
 from pixelpen.sim.transports.ftdi import Ft232hBackend, use_for_urls
 from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
 from tests.sim.transports.test_mcp2221 import StubBusDevice
@@ -155,6 +156,8 @@ def test_an_unplugged_chip_answers_no_such_device(chip):
     with pytest.raises(usb.core.USBError) as info:
         send(dev, b"\x87")
     assert info.value.errno == errno.ENODEV
+    with pytest.raises(Disconnected):
+        backend.find()
 
 
 MPSSE_SEEDS = [bytes((0x80, 0x28, DIRECTION)) + frame_bytes(True, bytes(range(100))) + b"\x81\x87\xaa",
