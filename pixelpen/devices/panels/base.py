@@ -26,7 +26,7 @@ from pixelpen.devices.panels.wiring import Interface, Pins, Wiring, open_wiring,
 from pixelpen.display.capabilities import Capabilities, ColourModel
 from pixelpen.display.kinds import RasterDisplay
 from pixelpen.drivers.bus import PanelBus
-from pixelpen.errors import ConfigError, InvalidArgument, URLError
+from pixelpen.errors import ConfigError, InvalidArgument, LinkError, URLError
 from pixelpen.options import OptionSpec, OptionValues, boolean, choice, integer, positive, text
 from pixelpen.profiles.panel import InitStep, PanelProfile, load_panel_profile, panel_profile_for
 from pixelpen.raster.canvas import Canvas
@@ -340,18 +340,17 @@ class PanelDisplay(RasterDisplay):
             self._force = False
 
     def _close_device(self) -> None:
-        wiring, self._wiring = self._wiring, None
+        wiring = self._wiring
         self._pacer = None
         if wiring is None:
             return
         try:
             if not self.persist:
-                self._wiring = wiring
-                try:
-                    self._power(False)
-                finally:
-                    self._wiring = None
+                self._power(False)
+        except LinkError as exc:  # closing must release the bus even when the panel cannot be reached
+            log.warning("%s: could not turn the display off: %s", self.profile.name, exc)
         finally:
+            self._wiring = None
             wiring.close(backlight_on=self.persist)
 
     def reset(self) -> None:
@@ -480,7 +479,7 @@ class PanelDisplay(RasterDisplay):
         if self._frame.full:
             self._shadow = np.empty_like(native)
         assert self._shadow is not None
-        self._wait_te()
+        waited = self._wait_te()
         for window in windows:
             rows, cols = window.slices
             self._write_window(window, self._pack(native, window))
@@ -489,7 +488,7 @@ class PanelDisplay(RasterDisplay):
         if self._pacer is not None:
             self._pacer.sent()
         self._frame.windows = len(windows)
-        self._frame.host_seconds = max(time.perf_counter() - started - self._bus_perf, 0.0)
+        self._frame.host_seconds = max(time.perf_counter() - started - waited - self._bus_perf, 0.0)
         self.stats.add(self._frame)
 
     def _pack(self, native: np.ndarray, window: Rect) -> bytes:
@@ -518,11 +517,16 @@ class PanelDisplay(RasterDisplay):
             out.extend(Rect(a.x0 + f.x0, a.y0 + f.y0, a.x0 + f.x1, a.y0 + f.y1) for f in found)
         return out
 
-    def _wait_te(self) -> None:
-        """Start at the tearing-effect pulse when a TE line is wired (a missing pulse is logged, not fatal)."""
+    def _wait_te(self) -> float:
+        """Start at the tearing-effect pulse when a TE line is wired (a missing pulse is logged, not fatal);
+        returns the processor seconds the wait took (neither host nor bus time)."""
         te = self.wiring.te
-        if te is not None and not self._timed(te.wait_edge, True, TE_TIMEOUT):
+        if te is None:
+            return 0.0
+        started = time.perf_counter()
+        if not te.wait_edge(True, TE_TIMEOUT):
             log.debug("%s: no TE pulse within %g s; sending anyway", self.profile.name, TE_TIMEOUT)
+        return time.perf_counter() - started
 
     # -- the bus, counted -------------------------------------------------------------------------
     def _command(self, *cmd: int | bytes) -> None:

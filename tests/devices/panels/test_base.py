@@ -218,3 +218,16 @@ def test_every_option_is_documented() -> None:
     for cls in (ST7789Display, SSD1306Display):
         for spec in cls.OPTIONS:
             assert f"| `{spec.name}` |" in text, spec.name
+
+
+def test_close_releases_the_bus_even_when_display_off_fails() -> None:
+    bus = StubBus()
+    display = st7789(bus, persist=False)
+    display.open()
+
+    def broken(*cmd: int | bytes) -> None:
+        raise LinkError("stub: unplugged")
+
+    bus.command = broken  # type: ignore[method-assign]
+    display.close()
+    assert bus.log[-1] == ("X", b"") and not display.is_open
