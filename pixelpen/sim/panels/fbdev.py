@@ -18,6 +18,7 @@ import os
 import struct
 import tempfile
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import IO, Any
 
 import numpy as np
@@ -82,6 +83,17 @@ STRIDE_ALIGN = 64
 """Default row padding: rows start every multiple of this many bytes (as many display controllers need)."""
 
 
+@dataclass
+class FbdevStats:
+    """What programs did to the simulated framebuffer (counters; the live view shows them)."""
+
+    ioctls: int = 0
+    pans: int = 0
+    """Successful FBIOPAN_DISPLAY calls (and yoffset changes by FBIOPUT_VSCREENINFO)."""
+    vsync_waits: int = 0
+    palette_loads: int = 0
+
+
 class FbdevSim:
     """A simulated ``/dev/fbN``: screeninfo structs, ioctls and a memory-mapped file as the framebuffer memory."""
 
@@ -137,9 +149,7 @@ class FbdevSim:
         """Pseudocolour: (256, 3) uint16 red, green, blue levels per index (FBIOPUTCMAP; a grey ramp at first)."""
         self.blank_level = 0
         """The last FBIOBLANK level (0: showing; 1..4 blanked: the glass is black)."""
-        self.pans = 0
-        """Successful FBIOPAN_DISPLAY calls (and yoffset changes by FBIOPUT_VSCREENINFO)."""
-        self.vsync_waits = 0
+        self.stats = FbdevStats()
         self.path = path
         self._file: IO[bytes] = open(path, "w+b") if path else tempfile.TemporaryFile()  # noqa: SIM115
         self._file.truncate(self.fix["smem_len"])
@@ -179,6 +189,7 @@ class FbdevSim:
         """Answer one ioctl as a framebuffer driver does; failures are OSError with the kernel's errno."""
         if self.closed:
             raise OSError(errno.ENODEV, "no such device")
+        self.stats.ioctls += 1
         if request == FBIOBLANK:
             if not isinstance(arg, int) or not 0 <= arg <= 4:
                 raise OSError(errno.EINVAL, f"FBIOBLANK level {arg!r}")
@@ -237,7 +248,7 @@ class FbdevSim:
         if want["vmode"] & FB_VMODE_YWRAP:  # the simulator does not wrap: refuse as a driver without it does
             raise OSError(errno.EINVAL, "y-wrap is not supported")
         var["xoffset"], var["yoffset"] = x, y
-        self.pans += 1
+        self.stats.pans += 1
 
     def _put_var(self, data: bytes) -> None:
         """FBIOPUT_VSCREENINFO: the mode is fixed (other geometry is EINVAL); new offsets pan."""
@@ -259,12 +270,13 @@ class FbdevSim:
             raise OSError(errno.EINVAL, f"palette entries {start}..{start + length - 1} of 256")
         levels = [_user_words(pointer, length) for pointer in pointers[:3]]
         self.palette[start:start + length] = np.stack(levels, axis=1)
+        self.stats.palette_loads += 1
 
     def _wait_vblank(self) -> None:
         """Sleep on the clock to the next refresh boundary (multiples of 1/refresh_hz)."""
         now = self.clock.now()
         self.clock.sleep((math.floor(now * self.refresh_hz) + 1) / self.refresh_hz - now)
-        self.vsync_waits += 1
+        self.stats.vsync_waits += 1
 
     def map(self, length: int) -> mmap.mmap:
         """A shared mapping of the memory (EINVAL past ``smem_len``, as the fbdev mmap refuses)."""

@@ -79,7 +79,7 @@ def test_only_damage_is_written_and_the_hidden_page_catches_up():
     sim = marked_sim(64, 48, 16)
     display = FramebufferDisplay(sim.open, simulator=sim).open()
     assert display.framebuffer.double_buffered and display.bytes_written == 64 * 48 * 2  # the first frame: full
-    assert (sim.pans, sim.var["yoffset"]) == (2, 48)  # the set-up pan to page 0, then the first frame's
+    assert (sim.stats.pans, sim.var["yoffset"]) == (2, 48)  # the set-up pan to page 0, then the first frame's
     display.canvas.blit(np.full((4, 5, 3), 200, dtype=np.uint8), 0, 0)
     display.flush()  # the hidden page lacks the first frame too: written whole again
     assert display.bytes_written == 2 * 64 * 48 * 2 and sim.var["yoffset"] == 0
@@ -87,7 +87,7 @@ def test_only_damage_is_written_and_the_hidden_page_catches_up():
     display.flush()  # this frame's block and the last frame's, far apart: two rectangles
     assert display.bytes_written == 2 * 64 * 48 * 2 + (4 * 5 + 3 * 6) * 2 and sim.var["yoffset"] == 48
     display.flush()  # nothing changed: nothing written, no pan
-    assert display.frames == 3 and sim.pans == 4
+    assert display.frames == 3 and sim.stats.pans == 4
     assert np.array_equal(np.asarray(sim.glass()), rgb565_seen(display.canvas.array))
 
 
@@ -98,7 +98,7 @@ def test_single_buffering_writes_just_the_damage():
     start = display.bytes_written
     display.canvas.blit(np.full((4, 5, 3), 7, dtype=np.uint8), 10, 20)
     display.flush()
-    assert display.bytes_written - start == 4 * 5 * 4 and sim.pans == 0
+    assert display.bytes_written - start == 4 * 5 * 4 and sim.stats.pans == 0
     assert np.array_equal(np.asarray(sim.glass()), display.canvas.array)
 
 
@@ -123,9 +123,9 @@ def test_vsync_is_waited_for_when_the_driver_has_it():
     with pixelpen.open("sim:fbdev?size=16x8&bpp=32", clock=clock) as d:
         d.canvas.blit(np.full((2, 2, 3), 255, dtype=np.uint8), 0, 0)
         d.flush()
-        assert d.simulator.vsync_waits == 2 and clock.now() == pytest.approx(2 / 60)
+        assert d.simulator.stats.vsync_waits == 2 and clock.now() == pytest.approx(2 / 60)
     with pixelpen.open("sim:fbdev?size=16x8&bpp=32&vsync=false&double=false") as d:
-        assert not d.simulator.vsync and not d.framebuffer.double_buffered and d.simulator.vsync_waits == 0
+        assert not d.simulator.vsync and not d.framebuffer.double_buffered and d.simulator.stats.vsync_waits == 0
 
 
 def test_persist_false_clears_the_screen_and_a_display_reopens():

@@ -64,12 +64,12 @@ def test_default_stride_pads_rows_to_64_bytes(width, bpp, stride):
 def test_pan_follows_the_kernel_checks():
     sim = FbdevSim(8, 4, 16, panstep=2)
     sim.ioctl(PAN, var_with(sim, yoffset=4))
-    assert sim.var["yoffset"] == 4 and sim.pans == 1
+    assert sim.var["yoffset"] == 4 and sim.stats.pans == 1
     for fields in ({"yoffset": 5}, {"yoffset": 3}, {"xoffset": 1}, {"yoffset": 6}):
         with pytest.raises(OSError) as info:
             sim.ioctl(PAN, var_with(sim, **fields))
         assert info.value.errno == errno.EINVAL
-    assert sim.var["yoffset"] == 4 and sim.pans == 1
+    assert sim.var["yoffset"] == 4 and sim.stats.pans == 1
     no_pan = FbdevSim(8, 4, 16, panstep=0)
     no_pan.ioctl(PAN, var_with(no_pan, yoffset=0))  # offset 0 needs no pan step
     with pytest.raises(OSError, match="cannot pan"):
@@ -79,7 +79,7 @@ def test_pan_follows_the_kernel_checks():
 def test_put_vscreeninfo_pans_but_refuses_a_mode_change():
     sim = FbdevSim(8, 4, 16)
     answer = sim.ioctl(PUT_V, var_with(sim, yoffset=4))
-    assert u32(answer, 20) == 4 and sim.pans == 1
+    assert u32(answer, 20) == 4 and sim.stats.pans == 1
     with pytest.raises(OSError) as info:
         sim.ioctl(PUT_V, var_with(sim, bits_per_pixel=32))
     assert info.value.errno == errno.EINVAL and "bits_per_pixel" in str(info.value)
@@ -102,7 +102,7 @@ def test_vsync_waits_for_the_next_refresh_or_is_absent():
     clock = SimulatedClock(0.005)
     sim = FbdevSim(8, 4, 16, clock=clock, refresh_hz=100.0)
     sim.ioctl(VSYNC, bytes(4))
-    assert clock.now() == pytest.approx(0.01) and sim.vsync_waits == 1
+    assert clock.now() == pytest.approx(0.01) and sim.stats.vsync_waits == 1
     with pytest.raises(OSError) as info:
         FbdevSim(8, 4, 16, vsync=False).ioctl(VSYNC, bytes(4))
     assert info.value.errno == errno.ENOTTY
