@@ -394,12 +394,16 @@ def run_sim(args: argparse.Namespace) -> int:
         if args.pty:
             run_pty(device, transport, lock=lock, view=view)
         elif data is not None:
-            with _sigterm_stops():
-                result = replay(device, data, transport, lock)
-            _report_replay(result, device, args.replay, transport.baud, speed)
-            if view is not None:
-                sys.stdout.flush()
-                wait_for_stop()
+            try:
+                with _sigterm_stops():
+                    result = replay(device, data, transport, lock)
+            except KeyboardInterrupt:
+                print("pixelpen sim: replay stopped", file=sys.stderr)
+            else:
+                _report_replay(result, device, args.replay, transport.baud, speed)
+                if view is not None:
+                    sys.stdout.flush()
+                    wait_for_stop()
         else:
             wait_for_stop()
     finally:

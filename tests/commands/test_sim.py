@@ -446,3 +446,51 @@ def test_a_panel_with_a_display_is_viewed_through_the_demo(tmp_path):
         if proc.poll() is None:
             os.kill(proc.pid, signal.SIGKILL)
     assert Image.open(out).size == (240, 240)
+
+
+def test_a_real_time_replay_is_watched_and_stopped_with_ctrl_c(tmp_path):
+    plot = tmp_path / "zigzag.hpgl"
+    plot.write_bytes(b"IN;SP1;PU0,0;PD" + b",".join(b"%d,%d" % (i * 40, (i % 2) * 2000) for i in range(400)) + b";PU;")
+    out = tmp_path / "paper.png"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _SIM_MAIN, "sim", "hp7475a", "--replay", str(plot), "--speed", "real", "--view",
+         "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    try:
+        url = proc.stdout.readline().strip()
+        _wait_for(url + "frame.png", _has_ink, "the first strokes")
+        stats = json.loads(_wait_for(url + "stats.json", lambda b: True, "stats"))
+        assert 0 < stats["bytes_received"] < plot.stat().st_size  # seen while the file is still arriving
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(30) == 0
+        assert "replay stopped" in proc.stderr.read()
+    finally:
+        if proc.poll() is None:
+            os.kill(proc.pid, signal.SIGKILL)
+    assert _has_ink(out.read_bytes())
+
+
+def test_the_guarded_device_holds_the_lock_around_every_call(tmp_path):
+    device, _ = simcmd.open_simulator("grbl", {}, "fast")
+    lock = threading.Lock()
+    guarded = simcmd.GuardedDevice(device, lock)
+    held = []
+    for name in ("receive", "take_output", "advance_to", "next_event_time", "inject", "save_paper", "close"):
+        original = getattr(device, name)
+
+        def spy(*args, _original=original, **kwargs):
+            held.append(lock.locked())
+            return _original(*args, **kwargs)
+
+        setattr(device, name, spy)
+    assert guarded.resets_on_dtr is True and guarded.model == "grbl" and guarded.clock is device.clock
+    guarded.receive(b"$I\n")
+    guarded.advance_to(device.clock.now() + 1)
+    assert b"[VER:1.1h" in guarded.take_output()
+    guarded.next_event_time()
+    guarded.inject("reset")
+    assert guarded.ready_to_receive is True
+    guarded.save_paper(tmp_path / "paper.png")
+    guarded.close()
+    assert (tmp_path / "paper.png").exists() and device.closed
+    assert held == [True] * 7
