@@ -355,3 +355,17 @@ def test_the_source_lock_is_held_while_the_device_is_looked_at():
     panel.glass = lambda: (seen.append(lock.locked()), original())[1]
     PanelSource(panel, lock=lock).version()
     assert seen == [True]
+
+
+@pytest.mark.parametrize("host, url_host", [("localhost", "localhost"), ("::1", "[::1]")])
+def test_any_loopback_name_is_served(host, url_host):
+    try:
+        view = ViewServer(StubSource(pattern(1)), host=host).start()
+    except ConfigError as exc:
+        pytest.skip(f"this machine has no {host}: {exc}")
+    try:
+        assert view.url == f"http://{url_host}:{view.port}/"
+        status, _, body = get(view.url + "stats.json")
+        assert status == 200 and json.loads(body) == {"bytes": 0, "transfers": 0}
+    finally:
+        view.close()
