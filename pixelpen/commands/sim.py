@@ -36,12 +36,13 @@ import threading
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field, is_dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from pixelpen.clock import REAL_CLOCK, SimulatedClock
 from pixelpen.commands import argtypes
+from pixelpen.display.kinds import RasterDisplay
 from pixelpen.display.registry import open_display, scheme_names
 from pixelpen.errors import ConfigError, PixelpenError, URLError
 from pixelpen.options import integer
@@ -51,9 +52,6 @@ from pixelpen.sim.transports.options import TransportOptions, line_baud, split_o
 from pixelpen.sim.transports.port import LinkStats, SimPort
 from pixelpen.sim.view import MAX_FPS, ViewServer, source_for
 from pixelpen.urls import format_url
-
-if TYPE_CHECKING:
-    from pixelpen.devices.panels.base import PanelDisplay
 
 log = logging.getLogger(__name__)
 
@@ -280,14 +278,14 @@ def _counters(device: StreamDevice) -> str:
 class PanelDemo:
     """The panel demo of ``pixelpen sim PANEL --view``: the reference scene, and a ball bouncing over it.
 
-    Drawn through the real panel display (``pixelpen.open("sim:MODEL")``), so each frame is the driver's
-    partial refresh: the ball's old and new squares, on the simulator's bus.
+    Drawn through the real display (``pixelpen.open("sim:MODEL")``: a panel or a framebuffer), so each frame
+    is the driver's partial refresh: the ball's old and new squares, on the simulator's bus.
     """
 
-    def __init__(self, display: PanelDisplay) -> None:
+    def __init__(self, display: RasterDisplay) -> None:
         self.display = display
         draw_reference(display)
-        display.refresh()
+        display.flush()
         canvas = display.canvas
         self._background = canvas.array.copy()
         self.radius = max(2, min(canvas.width, canvas.height) // 10)
@@ -307,11 +305,11 @@ class PanelDemo:
         self._velocity[bounced] *= -1
         self._position = np.clip(self._position, low, high)
         canvas.circles(np.rint(self._position).astype(int)[None, :], [r], self._ink, fill=True)
-        self.display.refresh()
+        self.display.flush()
         self.frames += 1
 
 
-def run_panel_demo(display: PanelDisplay, lock: threading.Lock, stop: threading.Event, fps: float = DEMO_FPS) -> None:
+def run_panel_demo(display: RasterDisplay, lock: threading.Lock, stop: threading.Event, fps: float = DEMO_FPS) -> None:
     """Animate ``display`` (a PanelDemo) at ``fps`` frames a second of wall time until ``stop``; ``lock`` per frame."""
     with lock:
         demo = PanelDemo(display)
@@ -320,14 +318,12 @@ def run_panel_demo(display: PanelDisplay, lock: threading.Lock, stop: threading.
             demo.step()
 
 
-def _open_panel_display(model: str, options: dict[str, str]) -> PanelDisplay:
-    """The panel display ``sim:MODEL?options`` (its simulator behind its bus)."""
-    from pixelpen.devices.panels.base import PanelDisplay
-
+def _open_simulated_display(model: str, options: dict[str, str]) -> RasterDisplay:
+    """The raster display ``sim:MODEL?options`` with its simulator (``display.simulator``) behind its bus."""
     display = open_display(format_url("sim", model, options))
-    if not isinstance(display, PanelDisplay):
+    if not isinstance(display, RasterDisplay) or getattr(display, "simulator", None) is None:
         display.close()
-        raise ConfigError(f"sim:{model} is not a panel display")
+        raise ConfigError(f"sim:{model} is not a raster display with a simulator behind it")
     return display
 
 
@@ -370,7 +366,7 @@ def run_sim(args: argparse.Namespace) -> int:
             raise ConfigError(f"cannot read {args.replay}: {exc.strerror or exc}") from None
     lock = threading.Lock()
     view = None
-    display: PanelDisplay | None = None
+    display: RasterDisplay | None = None
     stop = threading.Event()
     animator = None
     shown: Any = device
@@ -378,8 +374,8 @@ def run_sim(args: argparse.Namespace) -> int:
     try:
         if panel and args.model.lower() in scheme_names():
             device.close()
-            display = _open_panel_display(args.model, parse_options(args.option))
-            shown = display.simulator
+            display = _open_simulated_display(args.model, parse_options(args.option))
+            shown = display.simulator  # type: ignore[attr-defined]
             animator = threading.Thread(target=run_panel_demo, args=(display, lock, stop), name="panel-demo",
                                         daemon=True)
         if args.view:
@@ -387,7 +383,7 @@ def run_sim(args: argparse.Namespace) -> int:
             if not args.pty:
                 print(view.url, flush=True)
                 print(f"pixelpen sim: live view of {shown.model} on {view.url}"
-                      + (" (a demo drawn through the panel display)" if display is not None else "")
+                      + (f" (a demo drawn through the display sim:{args.model})" if display is not None else "")
                       + "; press Ctrl-C to stop", file=sys.stderr, flush=True)
         if animator is not None:
             animator.start()

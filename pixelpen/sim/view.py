@@ -143,10 +143,15 @@ class PanelSource:
         return cast(Image.Image, self._glass)
 
     def stats(self) -> Stats:
-        """BusStats (bytes, transfers, bus_seconds, frames, ...) and ``events``: how many the controller flagged."""
+        """BusStats (bytes, transfers, bus_seconds, frames, ...) and ``events``: how many the controller flagged.
+
+        A framebuffer simulator has its own counters (ioctls, pans, ...) and no event log.
+        """
         with self._lock:
             out = _counters(getattr(self.device, "stats", None))
-            out["events"] = len(getattr(self.device, "events", ()))
+            events = getattr(self.device, "events", None)
+            if events is not None:
+                out["events"] = len(events)
         return out
 
 

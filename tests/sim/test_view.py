@@ -369,3 +369,19 @@ def test_any_loopback_name_is_served(host, url_host):
         assert status == 200 and json.loads(body) == {"bytes": 0, "transfers": 0}
     finally:
         view.close()
+
+
+def test_a_framebuffer_without_an_event_log_shows_its_own_counters():
+    @dataclass
+    class FbdevStats:
+        ioctls: int = 3
+        pans: int = 1
+
+    class Framebuffer:
+        model = "fbdev"
+        stats = FbdevStats()
+
+        def glass(self) -> Image.Image:
+            return Image.new("RGB", (4, 4))
+
+    assert source_for(Framebuffer()).stats() == {"ioctls": 3, "pans": 1}
