@@ -17,8 +17,11 @@ never overrun, whatever the file holds.
 ``--view`` also serves a live web page (:mod:`pixelpen.sim.view`) of the paper as it is drawn, with the device's
 counters, on 127.0.0.1 (``--host``/``--port``; another host only when given explicitly) and prints its URL
 on stdout (after the pty path with ``--pty``); with ``--replay`` the page stays up after the replay until
-Ctrl-C.  A panel simulator (``pixelpen sim st7789 --view``) has no byte stream: the page shows its glass, and
-the glass is written at the end (``glass.png``).  The pty bridge, the replay and the page share one lock
+Ctrl-C.  A panel simulator (``pixelpen sim st7789 --view``, also ``sim fbdev``) has no byte stream: when
+its model is a display scheme, a demo (:class:`PanelDemo`: the reference scene and a bouncing ball) is drawn
+through the real display ``sim:MODEL`` (the ``--option`` values go into that URL) and the page shows the
+glass of the simulator behind it; a panel simulator without a display is shown as it is.  The glass is
+written at the end (``glass.png``).  The pty bridge, the replay, the demo and the page share one lock
 around the device (:class:`GuardedDevice`).
 
 ``--option KEY=VALUE`` passes simulator options (``paper=a3``, ``pens=black,red``, ``model=se_a3``) and
