@@ -433,7 +433,8 @@ class _Handler(BaseHTTPRequestHandler):
         except ConfigError as exc:
             self._send(HTTPStatus.SERVICE_UNAVAILABLE, "text/plain; charset=utf-8", str(exc).encode())
             return
-        except StopIteration:
+        except StopIteration:  # closed meanwhile
+            self._send(HTTPStatus.SERVICE_UNAVAILABLE, "text/plain; charset=utf-8", b"live view: closed")
             return
         self.send_response(HTTPStatus.OK)
         self.send_header("Content-Type", "text/event-stream")

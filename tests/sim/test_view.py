@@ -385,3 +385,20 @@ def test_a_framebuffer_without_an_event_log_shows_its_own_counters():
             return Image.new("RGB", (4, 4))
 
     assert source_for(Framebuffer()).stats() == {"ioctls": 3, "pans": 1}
+
+
+def test_a_port_in_use_is_named():
+    import socket
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        with pytest.raises(ConfigError, match=f"cannot listen on 127.0.0.1:{port}"):
+            ViewServer(StubSource(pattern(1)), port=port)
+
+
+def test_a_closed_view_has_no_more_updates():
+    view = ViewServer(StubSource(pattern(1)))
+    view.close()
+    assert list(view.updates()) == [] and view.clients == 0
