@@ -291,7 +291,7 @@ class ViewServer:
         """
         with self._changed:
             if self._clients >= self.max_clients:
-                raise ConfigError(f"live view {self.url}: {self.max_clients} pages are watching already")
+                raise ConfigError(f"live view {self.url}: at most {self.max_clients} pages may watch at once")
             self._clients += 1
         try:
             self.frame()

@@ -189,8 +189,8 @@ def test_event_streams_are_limited():
         with urllib.request.urlopen(view.url + "events", timeout=10) as stream:
             next_message(stream)
             status, _, body = get(view.url + "events")
-            assert status == 503 and b"1 pages are watching already" in body
-            with pytest.raises(ConfigError, match="watching already"):
+            assert status == 503 and b"at most 1 pages may watch at once" in body
+            with pytest.raises(ConfigError, match="may watch at once"):
                 next(view.updates())
             assert get(view.url + "frame.png")[0] == 200  # the pictures are still served
     finally:
