@@ -130,3 +130,20 @@ def test_sim_i2c_wiring_sends_control_bytes_and_naks_become_link_errors() -> Non
     wrong = sim_wiring(chip, "i2c", Pins(addr=0x3D, hz=400e3), clock=chip.clock)
     with pytest.raises(LinkError):
         wrong.bus.command(0xAE)
+
+
+@pytest.mark.parametrize(("url", "match"), [
+    ("st7789:spi:0.0?size=240x240", "needs its D/C line"),
+    ("st7789:i2c:1", "is not driven over i2c"),
+    ("ssd1306:usb:1", "panel target"),
+    ("st7789:spi:0.0?dc=25&colour=rgb444", "option colour"),
+    ("ssd1306:i2c:1?addr=0x99", "option addr"),
+    ("st7789:spi:0.0?dc=25&size=100x100", "no built-in st7789 profile of size 100x100"),
+    ("st7789:spi:0.0?dc=25&rotation=45", "option rotation"),
+    ("st7789:spi:0.0?dc=25&contrast=3", "unknown option"),
+])
+def test_urls_that_cannot_be_wired_say_why(url: str, match: str) -> None:
+    import pixelpen
+
+    with pytest.raises(ConfigError, match=match):
+        pixelpen.open(url)
