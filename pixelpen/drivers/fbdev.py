@@ -44,6 +44,9 @@ FB_BLANK_UNBLANK, FB_BLANK_POWERDOWN = 0, 4
 FB_ACTIVATE_VBL = 16
 """``activate`` flag: apply the pan at the next vertical blank (drivers that can, do)."""
 
+MAX_SIDE = 1 << 16
+"""Largest xres/yres (virtual too) taken as sane: a canvas side's limit."""
+
 _VISUALS = {0: "mono01", 1: "mono10", 2: "truecolor", 3: "pseudocolor", 4: "directcolor", 5: "static pseudocolor",
             6: "fourcc"}
 
@@ -282,9 +285,9 @@ class Framebuffer:
         bpp = int(var.bits_per_pixel)
         if bpp not in (8, 16, 24, 32):
             raise ConfigError(f"{where}: var.bits_per_pixel = {bpp} is not supported (8, 16, 24 or 32)")
-        for field in ("xres", "yres"):
-            if getattr(var, field) == 0:
-                raise ConfigError(f"{where}: var.{field} = 0")
+        for field in ("xres", "yres", "xres_virtual", "yres_virtual"):
+            if not 0 < getattr(var, field) <= MAX_SIDE:
+                raise ConfigError(f"{where}: var.{field} = {getattr(var, field)} is not 1..{MAX_SIDE}")
         if var.xres_virtual < var.xres or var.yres_virtual < var.yres:
             raise ConfigError(f"{where}: var.xres_virtual x yres_virtual = {var.xres_virtual}x{var.yres_virtual} "
                               f"is smaller than the visible {var.xres}x{var.yres}")

@@ -20,6 +20,7 @@ from pixelpen.drivers import fbdev
 from pixelpen.drivers.fbdev import DeviceNode, FbFixScreeninfo, FbVarScreeninfo, Framebuffer
 from pixelpen.errors import ConfigError, LinkError
 from pixelpen.sim.panels.fbdev import FbdevSim
+from tests.fuzzing import QUICK_CASES, campaign
 
 LP64 = ctypes.sizeof(ctypes.c_ulong) == 8
 VAR = {"xres": 0, "yres": 4, "xres_virtual": 8, "yres_virtual": 12, "xoffset": 16, "yoffset": 20,
@@ -239,6 +240,7 @@ def test_padded_strides_of_real_hardware(tmp_path, width, stride):
     ({"bits_per_pixel": 0}, "var.bits_per_pixel = 0"),
     ({"bits_per_pixel": 4}, "var.bits_per_pixel = 4"),
     ({"xres": 0}, "var.xres = 0"),
+    ({"yres_virtual": 1 << 20}, r"var.yres_virtual = 1048576 is not 1..65536"),
     ({"yres_virtual": 2}, "yres_virtual"),
     ({"yoffset": 4}, "var.xoffset, yoffset"),
     ({"grayscale": 0x34325258}, "FOURCC"),
@@ -341,3 +343,39 @@ def test_a_get_ioctl_failing_is_a_link_error(tmp_path):
 
     with pytest.raises(LinkError, match="testfb: FBIOGET_VSCREENINFO failed"):
         Framebuffer(NotFb(4, 3, 16, line_length=8, tmp_path=tmp_path))
+
+
+class BytesNode:
+    """A node answering the two GET ioctls with given bytes (maybe truncated or oversized), memory a sparse file."""
+
+    def __init__(self, var: bytes, fix: bytes, path):
+        self.name, self.var, self.fix, self.path = "fuzzfb", var, fix, path
+
+    def ioctl(self, request, arg):
+        if request in (0x4600, 0x4602):
+            return self.var if request == 0x4600 else self.fix
+        raise OSError(errno.ENOTTY, "Inappropriate ioctl for device")
+
+    def map(self, length):
+        with open(self.path, "w+b") as file:
+            file.truncate(length)
+            return mmap.mmap(file.fileno(), length)
+
+    def close(self):
+        pass
+
+
+def test_seeded_fuzz_of_screeninfo_gives_a_framebuffer_or_a_clean_error(tmp_path):
+    seed = Node(13, 7, 16, line_length=64, yres_virtual=14, tmp_path=tmp_path)
+    seeds = [seed.var_bytes() + seed.fix_bytes(), seed.var_bytes()[:100] + seed.fix_bytes()]
+
+    def target(data: bytes) -> None:
+        fb = Framebuffer(BytesNode(data[:160], data[160:240], tmp_path / "fuzzmem"))
+        try:
+            pixel = np.full((1, 1, 3), 200, dtype=np.uint8)
+            fb.write(pixel, 0, 0)
+            fb.write(pixel, fb.width - 1, fb.height - 1)
+        finally:
+            fb.close()
+
+    campaign("fbdev screeninfo", target, seeds, QUICK_CASES, seed=7).check()
