@@ -79,6 +79,9 @@ DEFAULT_BITFIELDS: dict[int, dict[str, Field]] = {
 }
 """Default layouts: 8 bpp grey, RGB565, RGB888 (memory B, G, R), XRGB8888; ``bgr`` swaps red and blue."""
 
+MAX_MEMORY = 1 << 28
+"""Largest simulated framebuffer memory in bytes (line_length x yres_virtual): 256 MiB."""
+
 STRIDE_ALIGN = 64
 """Default row padding: rows start every multiple of this many bytes (as many display controllers need)."""
 
@@ -103,8 +106,7 @@ class FbdevSim:
         self, width: int, height: int, bpp: int = 16, *, stride: int | None = None,
         virtual_height: int | None = None, bitfields: Mapping[str, Field] | None = None, bgr: bool = False,
         vsync: bool = True, panstep: int = 1, pseudocolor: bool = False, refresh_hz: float = 60.0,
-        path: str | None = None,
-        clock: Clock | None = None, name: str = "pixelpen-fbsim",
+        path: str | None = None, clock: Clock | None = None, name: str = "pixelpen-fbsim",
     ) -> None:
         if bpp not in DEFAULT_BITFIELDS:
             raise ConfigError(f"fbdev simulator: bpp must be 8, 16, 24 or 32, got {bpp!r}")
@@ -127,6 +129,13 @@ class FbdevSim:
         if bgr:
             fields["red"], fields["blue"] = fields["blue"], fields["red"]
         fields.update(bitfields or {})
+        for channel, (offset, length) in fields.items():
+            if channel not in DEFAULT_BITFIELDS[16] or not (offset >= 0 and length >= 0 and offset + length <= 32):
+                raise ConfigError(f"fbdev simulator: bitfield {channel} = ({offset}, {length}) is not a channel's "
+                                  f"(offset, length) inside a 32-bit word")
+        if stride * virtual_height > MAX_MEMORY:
+            raise ConfigError(f"fbdev simulator: {stride} x {virtual_height} bytes is more than MAX_MEMORY = "
+                              f"{MAX_MEMORY}")
         self.clock = clock if clock is not None else REAL_CLOCK
         self.refresh_hz = refresh_hz
         self.vsync = vsync
@@ -140,10 +149,9 @@ class FbdevSim:
         size = stride * virtual_height
         self.fix: dict[str, int] = dict.fromkeys(FIX_LAYOUTS[8][1], 0)
         """The ``fb_fix_screeninfo`` fields (``id`` apart)."""
+        visual = VISUAL_STATIC_PSEUDOCOLOR if self.var["grayscale"] else VISUAL_TRUECOLOR
         self.fix.update(smem_start=SMEM_START, smem_len=-(-size // mmap.PAGESIZE) * mmap.PAGESIZE,
-                        visual=VISUAL_PSEUDOCOLOR if pseudocolor else VISUAL_STATIC_PSEUDOCOLOR if self.var["grayscale"]
-                        else VISUAL_TRUECOLOR,
-                        ypanstep=panstep, line_length=stride)
+                        visual=VISUAL_PSEUDOCOLOR if pseudocolor else visual, ypanstep=panstep, line_length=stride)
         self.fix_id = name.encode("ascii", "replace")[:15]
         self.palette = np.repeat(np.arange(256, dtype=np.uint16)[:, None] * 257, 3, axis=1)
         """Pseudocolour: (256, 3) uint16 red, green, blue levels per index (FBIOPUTCMAP; a grey ramp at first)."""

@@ -12,7 +12,7 @@ import pytest
 from PIL import Image
 
 from pixelpen.clock import SimulatedClock
-from pixelpen.errors import URLError
+from pixelpen.errors import ConfigError, URLError
 from pixelpen.sim.base import create_simulator
 from pixelpen.sim.panels.fbdev import FbdevSim
 
@@ -59,6 +59,12 @@ def test_fix_screeninfo_bytes_are_at_fb_h_offsets():
     (500, 16, 1024), (480, 16, 960), (320, 16, 640), (100, 24, 320), (10, 32, 64)])
 def test_default_stride_pads_rows_to_64_bytes(width, bpp, stride):
     assert FbdevSim(width, 4, bpp).fix["line_length"] == stride
+
+
+def test_bitfields_are_checked():
+    assert FbdevSim(4, 2, 16, bitfields={"transp": (15, 1), "red": (10, 5)}).var["transp.offset"] == 15
+    with pytest.raises(ConfigError, match=r"bitfield green = \(30, 6\)"):
+        FbdevSim(4, 2, 32, bitfields={"green": (30, 6)})
 
 
 def test_pan_follows_the_kernel_checks():
@@ -182,7 +188,8 @@ def test_url_options_build_the_simulator():
     assert (sim.var["red.offset"], sim.var["blue.offset"], sim.vsync, sim.fix["ypanstep"]) == (0, 11, False, 0)
     for options, words in (({"stride": "100"}, "stride 100 is shorter than a row of 64 pixels"),
                            ({"bpp": "12"}, "bpp must be 8, 16, 24 or 32"),
-                           ({"size": "10x2.5"}, "whole pixels"), ({"colour": "x"}, "unknown option")):
+                           ({"size": "10x2.5"}, "whole pixels"), ({"colour": "x"}, "unknown option"),
+                           ({"stride": "99999999"}, "MAX_MEMORY")):
         with pytest.raises(URLError, match=words):
             create_simulator("fbdev", **{"size": "64x8", **options})
 
