@@ -315,7 +315,11 @@ class SimulatedDevice(ABC):
 
 # ---- the model registry -----------------------------------------------------------------------------
 
-SimulatorFactory = Callable[..., StreamDevice]
+SimDevice = Any
+"""What a simulator factory returns: a ``StreamDevice`` (plotters), a ``BusDevice`` (panels) or another device
+(the framebuffer simulator); callers check the protocol they need (``isinstance(d, BusDevice)``)."""
+
+SimulatorFactory = Callable[..., SimDevice]
 
 BUILTIN_SIMULATORS: dict[str, str] = {
     "hp7475a": "pixelpen.sim.plotters.hpgl.plotter",
@@ -324,6 +328,10 @@ BUILTIN_SIMULATORS: dict[str, str] = {
     "grbl": "pixelpen.sim.plotters.grbl.controller",
     "axidraw": "pixelpen.sim.plotters.ebb.board",
     "ebb": "pixelpen.sim.plotters.ebb.board",
+    "st7789": "pixelpen.sim.panels.mipidcs",
+    "ili9341": "pixelpen.sim.panels.mipidcs",
+    "st7735": "pixelpen.sim.panels.mipidcs",
+    "fbdev": "pixelpen.sim.panels.fbdev",
 }
 """Model -> the module that registers its simulator when imported (only that module is loaded)."""
 
@@ -332,7 +340,7 @@ ENTRY_POINT_GROUP = "pixelpen.simulators"
 
 _REGISTRY: dict[str, SimulatorFactory] = {}
 _OPTIONS: dict[str, tuple[OptionSpec[Any], ...]] = {}
-_NAMED: dict[str, StreamDevice] = {}
+_NAMED: dict[str, SimDevice] = {}
 
 
 def register_simulator(model: str, factory: SimulatorFactory, options: Sequence[OptionSpec[Any]] = ()) -> None:
@@ -347,7 +355,7 @@ def simulator_options(model: str) -> tuple[OptionSpec[Any], ...]:
     return _OPTIONS.get(model.lower(), ())
 
 
-def create_simulator(model: str, /, *, clock: Clock | None = None, **options: str) -> StreamDevice:
+def create_simulator(model: str, /, *, clock: Clock | None = None, **options: str) -> SimDevice:
     """Build the simulator of ``model`` with URL options (strings) on ``clock``; unknown models list the known ones.
 
     The option ``id=NAME`` names the instance: a later URL with the same ``id`` reaches the same
@@ -385,7 +393,7 @@ def simulator_factory(model: str) -> SimulatorFactory:
         raise URLError(f"no simulator for model {model!r}; known: {', '.join(simulator_models())}") from None
 
 
-def named_simulator(name: str) -> StreamDevice:
+def named_simulator(name: str) -> SimDevice:
     """The simulator created with ``id=name`` (KeyError naming the known ids otherwise)."""
     try:
         return _NAMED[name]
