@@ -3,7 +3,8 @@
 One row per command byte: its name, how many parameter bytes it takes (a range where datasheets and
 common init tables differ; RAMWR/WRMEMC take a pixel stream), and the simulator action that carries it
 out (``register``: stored, no visible effect; ``read``: a read command, its data phase is the host
-clocking dummy bytes). Counts are from the command lists: ST7789VW v1.0 §9.1/§9.2, ILI9341 v1.11 §8.1
+clocking dummy bytes). Counts are from the command lists: ST7789VW v1.0 §9.1/§9.2 (VDVVRHEN: 1 or 2, its
+fixed FFh second byte is left out by every common init), ILI9341 v1.11 §8.1
 (plus the "extend register" commands §8.4 and the undocumented EF with the three parameters of the
 Adafruit/luma init), ST7735 v1.2 §10.1/§10.2 with the ST7735R/S counts of Adafruit's tables (PWCTR1 3,
 VMCTR1 1). Undefined bytes are "treated as NOP" (ILI9341 and ST7735 notes).
@@ -115,7 +116,7 @@ _ST7789_ONLY = _table(
     (0xB3, "FRCTRL1", 3, "register"), (0xB5, "PARCTRL", 1, "register"), (0xB7, "GCTRL", 1, "register"),
     (0xB8, "GTADJ", 4, "register"), (0xBA, "DGMEN", 1, "register"), (0xBB, "VCOMS", 1, "register"),
     (0xBC, "POWSAVE", 1, "register"), (0xBD, "DLPOFFSAVE", 1, "register"), (0xC0, "LCMCTRL", 1, "register"),
-    (0xC1, "IDSET", 3, "register"), (0xC2, "VDVVRHEN", 2, "register"), (0xC3, "VRHS", 1, "register"),
+    (0xC1, "IDSET", 3, "register"), (0xC2, "VDVVRHEN", (1, 2), "register"), (0xC3, "VRHS", 1, "register"),
     (0xC4, "VDVS", 1, "register"), (0xC5, "VCMOFSET", 1, "register"), (0xC6, "FRCTRL2", 1, "register"),
     (0xC7, "CABCCTRL", 1, "register"), (0xC8, "REGSEL1", 1, "register"), (0xCA, "REGSEL2", 1, "register"),
     (0xCC, "PWMFRSEL", 1, "register"), (0xD0, "PWCTRL1", 2, "register"), (0xD2, "VAPVANEN", 1, "register"),

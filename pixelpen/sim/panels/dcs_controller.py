@@ -11,6 +11,7 @@ not flagged; the glass stays blank until SLPOUT and DISPON.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -20,8 +21,11 @@ from pixelpen.sim.panels.dcs_glass import ScanOut
 from pixelpen.sim.panels.dcs_memory import MV, FrameMemory
 from pixelpen.sim.panels.dcs_pixels import FORMAT_18, decode, decode_tail
 
-Flag = Callable[[int, str], None]
-"""Report what the controller would flag: (command byte or -1, message)."""
+Flag = Callable[[int | None, str], None]
+"""Report what the controller would flag: (the command byte it concerns, or None; message)."""
+
+EDGE_EPSILON = 1e-9
+"""TE edges closer than this (seconds) to the present count as past (no event loop on rounding)."""
 
 _UNKNOWN = Command(-1, "unknown", 0, 0, "nop")
 _NONE = Command(-1, "none", 0, 0, "nop")
@@ -30,12 +34,12 @@ _NONE = Command(-1, "none", 0, 0, "nop")
 class DcsController:
     """A controller's registers, modes and frame memory, driven byte by byte at clock times."""
 
-    def __init__(self, model: Model, flag: Flag, *, seed: int = 0) -> None:
+    def __init__(self, model: Model, flag: Flag, count_frame: Callable[[], None], *, seed: int = 0) -> None:
         self.model = model
         self._flag = flag
+        self._count_frame = count_frame
+        """Called when a RAMWR/WRMEMC reaches its window's last pixel, or ends early having written some."""
         self.memory = FrameMemory(model.cols, model.rows, seed=seed)
-        self.frames = 0
-        """RAMWR/WRMEMC writes completed (ended by the next command) that stored at least one pixel."""
         self.hardware_reset(0.0)
 
     # ---- reset -------------------------------------------------------------------------------------
@@ -78,12 +82,13 @@ class DcsController:
         """A D/CX=0 byte at time ``t``: ends the command in progress, then starts (or carries out) this one."""
         self._finish(t)
         command = self.model.commands.get(code)
+        complained = command is None
         if command is None:
-            self._flag(code, f"undefined command 0x{code:02X} (treated as NOP)")
+            self._flag(code, f"undefined command 0x{code:02X} (treated as NOP; its data too)")
             command = _UNKNOWN
         elif command.action != "nop":
             self._check_wait(command, t)
-        self._command, self._params, self._complained = command, bytearray(), False
+        self._command, self._params, self._complained = command, bytearray(), complained
         if command.action in ("ramwr", "wrmemc"):
             self._start_write(command)
         elif command.most == 0:
@@ -124,7 +129,7 @@ class DcsController:
     def _complain(self, command: Command, message: str) -> None:
         if not self._complained:
             self._complained = True
-            self._flag(command.code, message)
+            self._flag(None if command is _NONE else command.code, message)
 
     def _check_wait(self, command: Command, t: float) -> None:
         """Flag the first command inside a wait (the wait's later commands are the same mistake)."""
@@ -170,6 +175,9 @@ class DcsController:
     def _store(self, pixels: np.ndarray) -> None:
         result = self.memory.write(pixels)
         self._written += len(pixels)
+        if len(pixels) and self.memory.window_pixels() and self.memory.next_pixel == 0:  # last pixel in: a frame
+            self._written = 0
+            self._count_frame()
         if result.wrapped and not self._wrapped:
             self._wrapped = True
             self._flag(self._command.code, f"{self._command.name} ran past the window's "
@@ -182,7 +190,7 @@ class DcsController:
                                      f"{self.pixel_format.group_bytes}-byte {self.pixel_format.name} group")
             self._carry = b""
         if self._written:
-            self.frames += 1
+            self._count_frame()
         self._may_continue = True
 
     # ---- carrying out commands --------------------------------------------------------------------
@@ -328,6 +336,10 @@ class DcsController:
         if self.tearing is None or self.sleeping:
             return None
         timing = self.frame_timing()
-        start = t - (t - self._scan_start) % timing.period
-        rise = start + timing.period - timing.blanking
-        return rise if rise > t else start + timing.period
+        frame = math.floor((t - self._scan_start) / timing.period)
+        for k in (frame, frame + 1, frame + 2):
+            end = self._scan_start + (k + 1) * timing.period
+            for edge in (end - timing.blanking, end):
+                if edge > t + EDGE_EPSILON:
+                    return edge
+        return None  # pragma: no cover - two frames always hold an edge

@@ -15,7 +15,7 @@ profiles, so each checks the other):
 * ST7735R/S 128x160 "green tab": RAM 132x162 (GM 000) at column 2, row 1, BGR; 80x160 (0.96"): column 26,
   row 1, BGR, IPS (TFT_eSPI GREENTAB160x80 offsets 26/1 under MX|MY, INVON).
 
-Other sizes get offset (0, 0), RGB, TN, unmirrored. Display off and sleep show a blank (black) page;
+Other sizes get offset (0, 0) and the model's common wiring. Display off and sleep show a blank (black) page;
 PTLON blanks the rows outside PTLAR; IDMON keeps each component's top bit (8 colours); VSCRDEF/VSCSAD
 scroll the lines between the fixed areas.
 """
@@ -59,9 +59,17 @@ KNOWN_MODULES: dict[tuple[str, int, int], Module] = {
 """(model, portrait width, portrait height) -> module facts."""
 
 
+GENERIC_MODULES: dict[str, Module] = {
+    "st7789": Module((0, 0), normally_black=True),
+    "ili9341": Module((0, 0), mirrored=True, bgr=True),
+    "st7735": Module((0, 0), bgr=True),
+}
+"""An unlisted size of each model: wired like the model's common modules, at offset (0, 0)."""
+
+
 def known_module(model: str, portrait: tuple[int, int]) -> Module:
-    """The module of that model and portrait size, or an unmirrored RGB TN glass at offset (0, 0)."""
-    return KNOWN_MODULES.get((model, *portrait), Module((0, 0)))
+    """The module of that model and portrait size, or the model's generic one."""
+    return KNOWN_MODULES.get((model, *portrait), GENERIC_MODULES.get(model, Module((0, 0))))
 
 
 @dataclass(frozen=True)
