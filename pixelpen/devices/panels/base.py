@@ -32,6 +32,7 @@ from pixelpen.profiles.panel import InitStep, PanelProfile, load_panel_profile, 
 from pixelpen.raster.canvas import Canvas
 from pixelpen.raster.damage import Rect, tile_damage
 from pixelpen.sim.base import BusDevice, create_simulator
+from pixelpen.sim.base import simulator_options as simulator_specs
 from pixelpen.urls import DeviceURL, parse_size
 
 if TYPE_CHECKING:
@@ -202,7 +203,8 @@ class PanelDisplay(RasterDisplay):
         if sim_options is not None:
             interface: Interface = "spi" if opts["dc"] is not None and "spi" in cls.interfaces else cls.interfaces[0]
             pins = cls._pins(opts, profile, interface)
-            device = create_simulator(model, clock=clock, **cls.simulator_options(sim_options, opts, profile, pins))
+            options = cls.simulator_options(model, sim_options, opts, profile, pins)
+            device = create_simulator(model, clock=clock, **options)
             wiring: Wiring | Callable[[], Wiring] = sim_wiring(_bus_device(device, where), interface, pins,
                                                                 clock=clock)
         else:
@@ -238,11 +240,14 @@ class PanelDisplay(RasterDisplay):
         return {}
 
     @classmethod
-    def simulator_options(cls, sim_options: dict[str, str], opts: OptionValues, profile: PanelProfile,
+    def simulator_options(cls, model: str, sim_options: dict[str, str], opts: OptionValues, profile: PanelProfile,
                           pins: Pins) -> dict[str, str]:
-        """Options for the simulator of a ``sim:`` URL: as given, with the module's size."""
+        """Options for the simulator of a ``sim:`` URL: as given, with the module's size and the bus clock
+        (when the simulator counts bus time at a clock of its own: its ``hz`` option)."""
         out = dict(sim_options)
         out.setdefault("size", f"{profile.size[0]}x{profile.size[1]}")
+        if "hz" in {spec.name for spec in simulator_specs(model)}:
+            out.setdefault("hz", f"{pins.hz:g}")
         return out
 
     # -- what a controller implements --------------------------------------------------------------

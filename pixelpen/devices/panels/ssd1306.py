@@ -18,6 +18,7 @@ from pixelpen.errors import ConfigError
 from pixelpen.options import OptionSpec, OptionValues, integer
 from pixelpen.profiles.panel import InitStep, PanelGeometry, PanelProfile
 from pixelpen.raster.damage import Rect
+from pixelpen.sim.base import simulator_options as simulator_specs
 
 SET_CONTRAST, NORMAL, INVERSE, DISPLAY_OFF, DISPLAY_ON = 0x81, 0xA6, 0xA7, 0xAE, 0xAF
 SEGMENT_NORMAL, SEGMENT_REMAP, COM_NORMAL, COM_REVERSE = 0xA0, 0xA1, 0xC0, 0xC8
@@ -61,11 +62,12 @@ class SSD1306Display(PanelDisplay):
         return {"contrast": opts["contrast"]}
 
     @classmethod
-    def simulator_options(cls, sim_options: dict[str, str], opts: OptionValues, profile: PanelProfile,
+    def simulator_options(cls, model: str, sim_options: dict[str, str], opts: OptionValues, profile: PanelProfile,
                           pins: Pins) -> dict[str, str]:
-        """The module's size and the I2C address the display talks to."""
-        out = super().simulator_options(sim_options, opts, profile, pins)
-        out.setdefault("address", hex(pins.addr))
+        """The module's size, the bus clock, and the I2C address the display talks to."""
+        out = super().simulator_options(model, sim_options, opts, profile, pins)
+        if "address" in {spec.name for spec in simulator_specs(model)}:
+            out.setdefault("address", hex(pins.addr))
         return out
 
     @property
