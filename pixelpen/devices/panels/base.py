@@ -304,15 +304,25 @@ class PanelDisplay(RasterDisplay):
         self._cost = window_cost(self.profile.controller, pixel_format=self.pixel_format,
                                  bus_kind=getattr(bus, "kind", "spi"), max_transfer=bus.max_transfer)
         try:
-            self._start_pacer()
+            self._pacer = None
+            if self.target_fps is not None:
+                self.check_fps(self.target_fps)
             self._initialise()
+            self._start_pacer()
         except BaseException:
             self._wiring.close(backlight_on=False)
             self._wiring = None
             raise
 
     def _initialise(self) -> None:
-        """Reset, the init table up to display-on, the option settings, a full frame, then display-on."""
+        """Reset, the init table up to display-on, the option settings, a full frame, then display-on (unpaced)."""
+        pacer, self._pacer = self._pacer, None
+        try:
+            self._bring_up()
+        finally:
+            self._pacer = pacer
+
+    def _bring_up(self) -> None:
         self.wiring.bus.reset()
         steps = list(self.profile.init)
         on_at = max((i for i, s in enumerate(steps) if s.command == self.display_on), default=None)
@@ -399,12 +409,13 @@ class PanelDisplay(RasterDisplay):
 
     # -- pacing ------------------------------------------------------------------------------------------
     def _start_pacer(self) -> None:
+        """A pacer for ``target_fps`` whose first slot follows the frame just sent."""
         self._pacer = None
         if self.target_fps is not None:
             from pixelpen.devices.panels.pacing import FramePacer
 
-            self.check_fps(self.target_fps)
             self._pacer = FramePacer(self.clock, self.target_fps)
+            self._pacer.sent()
 
     def check_fps(self, fps: float) -> None:
         """ConfigError when ``fps`` full frames a second cannot pass the configured bus at its clock."""
@@ -437,6 +448,7 @@ class PanelDisplay(RasterDisplay):
         ``target_fps`` (default: the ``fps`` option; neither: at once).  True when anything was sent."""
         self._require_open()
         if target_fps is not None and target_fps != self.target_fps:
+            self.check_fps(target_fps)
             self.target_fps = target_fps
             self._start_pacer()
         if self._pacer is not None:
