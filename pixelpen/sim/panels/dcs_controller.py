@@ -22,7 +22,7 @@ from pixelpen.sim.panels.dcs_memory import MV, FrameMemory
 from pixelpen.sim.panels.dcs_pixels import FORMAT_18, decode, decode_tail
 
 Flag = Callable[[int | None, str], None]
-"""Report what the controller would flag: (the command byte it concerns, or None; message)."""
+"""Report what the controller would flag: (the command byte it concerns, negative or None for none; message)."""
 
 EDGE_EPSILON = 1e-9
 """TE edges closer than this (seconds) to the present count as past (no event loop on rounding)."""
@@ -34,12 +34,15 @@ _NONE = Command(-1, "none", 0, 0, "nop")
 class DcsController:
     """A controller's registers, modes and frame memory, driven byte by byte at clock times."""
 
-    def __init__(self, model: Model, flag: Flag, count_frame: Callable[[], None], *, seed: int = 0) -> None:
+    def __init__(self, model: Model, flag: Flag, count_frame: Callable[[], None], *,
+                 ram: tuple[int, int] | None = None, seed: int = 0) -> None:
         self.model = model
         self._flag = flag
         self._count_frame = count_frame
         """Called when a RAMWR/WRMEMC reaches its window's last pixel, or ends early having written some."""
-        self.memory = FrameMemory(model.cols, model.rows, seed=seed)
+        cols, rows = ram if ram is not None else (model.cols, model.rows)
+        self.memory = FrameMemory(cols, rows, seed=seed)
+        """The frame memory (a module may strap a smaller one: ST7735 GM 011 is 128x160)."""
         self.hardware_reset(0.0)
 
     # ---- reset -------------------------------------------------------------------------------------
@@ -56,8 +59,8 @@ class DcsController:
         self.inverted = False
         self.idle = False
         self.partial = False
-        self.partial_rows = (0, self.model.rows - 1)
-        self.scroll_area = (0, self.model.rows, 0)
+        self.partial_rows = (0, self.memory.rows - 1)
+        self.scroll_area = (0, self.memory.rows, 0)
         self.scroll_start = 0
         self.scrolling = False
         self.tearing: int | None = None
@@ -129,7 +132,7 @@ class DcsController:
     def _complain(self, command: Command, message: str) -> None:
         if not self._complained:
             self._complained = True
-            self._flag(None if command is _NONE else command.code, message)
+            self._flag(command.code, message)
 
     def _check_wait(self, command: Command, t: float) -> None:
         """Flag the first command inside a wait (the wait's later commands are the same mistake)."""
@@ -265,8 +268,8 @@ class DcsController:
 
     def _do_vscrdef(self, command: Command, params: bytes, t: float) -> None:
         tfa, vsa, bfa = (int.from_bytes(params[i:i + 2], "big") for i in (0, 2, 4))
-        if tfa + vsa + bfa != self.model.rows:
-            self._flag(command.code, f"VSCRDEF TFA {tfa} + VSA {vsa} + BFA {bfa} != {self.model.rows} "
+        if tfa + vsa + bfa != self.memory.rows:
+            self._flag(command.code, f"VSCRDEF TFA {tfa} + VSA {vsa} + BFA {bfa} != {self.memory.rows} "
                                      "(scrolling undefined; not scrolled)")
         self.scroll_area = (tfa, vsa, bfa)
 
@@ -308,7 +311,7 @@ class DcsController:
         _, invert = self.model.madctl_xor(self.registers)
         tfa, vsa, bfa = self.scroll_area
         scroll = None
-        if self.scrolling and tfa + vsa + bfa == self.model.rows and vsa > 0:
+        if self.scrolling and tfa + vsa + bfa == self.memory.rows and vsa > 0:
             scroll = (tfa, vsa, self.scroll_start)
         return ScanOut(
             showing=self.display_on and not self.sleeping and not in_reset,

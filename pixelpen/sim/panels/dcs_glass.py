@@ -1,19 +1,21 @@
 """What a MIPI-DCS panel module shows: the known modules' glass geometry and the scan-out from frame memory.
 
-A module's glass is a window of the frame memory (at MADCTL 0, seen with the FPC at the bottom) at the
-module's offset, possibly wired mirrored, with RGB or BGR colour filters and a normally-white (TN) or
-normally-black (IPS, needs INVON) liquid crystal; a landscape module is its portrait glass turned by 90°.
-The facts are written here from the module makers' published drivers (not from pixelpen's own panel
-profiles, so each checks the other):
+A module's glass is a window of the frame memory at the module's offset (given at MADCTL 0), seen the
+way Adafruit's drivers call rotation 0 upright: ST7789 and ST7735 modules turned 180° from the memory
+(their rotation 0 is MX|MY), ILI9341 modules mirrored (rotation 0 is MX); with RGB or BGR colour filters
+and a normally-white (TN) or normally-black (IPS, needs INVON) liquid crystal. A module held landscape
+is its portrait glass turned by 90° (Adafruit rotation 1, MY|MV or MV, upright). The facts are written
+here from the makers' published drivers (not from pixelpen's own panel profiles, so each checks the other):
 
 * ST7789 240x240: RAM rows 0..239 (Adafruit ``_rowstart = 320 - height`` when MY is set, TFT_eSPI
   rowstart 80 for its MX|MY rotation); 135x240 at column 52, row 40 (TFT_eSPI colstart 52/53, Pimoroni
   240x135 offsets 40/53 with MADCTL 70h); 240x280 at row 20 (TFT_eSPI PR #1681); 170x320 at column 35;
   172x320 at column 34; all IPS (every maker's init sends INVON), RGB filters.
-* ILI9341 240x320: mirrored (Adafruit and TFT_eSPI portrait MADCTL is MX|BGR 48h, landscape MV|BGR 28h),
-  BGR filters (luma's default sends BGR), TN.
-* ST7735R/S 128x160 "green tab": RAM 132x162 (GM 000) at column 2, row 1, BGR; 80x160 (0.96"): column 26,
-  row 1, BGR, IPS (TFT_eSPI GREENTAB160x80 offsets 26/1 under MX|MY, INVON).
+* ILI9341 240x320: BGR filters (luma's default and Adafruit send BGR), TN.
+* ST7735R/S 128x160 "black tab" (Adafruit's default ``INITR_BLACKTAB``: MX|MY, RGB, no offsets, so the
+  GM pins strap the 128x160 memory); 80x160 (0.96"): RAM 132x162 at column 26, row 1, BGR, IPS
+  (TFT_eSPI GREENTAB160x80 offsets 26/1 under MX|MY, INVON). A "green tab" 128x160 (132x162 memory at
+  column 2, row 1, BGR) is ``ram=(132, 162), offset=(2, 1), bgr=True``.
 
 Other sizes get offset (0, 0) and the model's common wiring. Display off and sleep show a blank (black) page;
 PTLON blanks the rows outside PTLAR; IDMON keeps each component's top bit (8 colours); VSCRDEF/VSCSAD
@@ -36,33 +38,37 @@ class Module:
     """A panel module's glass: where it sits in frame memory and how it is wired."""
 
     offset: tuple[int, int]
-    """RAM (column, row) of the portrait glass's top-left pixel at MADCTL 0."""
+    """RAM (column, row) of the glass's top-left pixel at MADCTL 0 (before the module's turn)."""
+    flipped: bool = False
+    """Mounted turned 180° from the memory (the upright MADCTL has MX and MY set)."""
     mirrored: bool = False
     """Source outputs wired right to left (the upright MADCTL has MX set)."""
     bgr: bool = False
     """Colour filters in B, G, R order: MADCTL BGR=1 shows true colours."""
     normally_black: bool = False
     """IPS liquid crystal: true colours need INVON."""
+    ram: tuple[int, int] | None = None
+    """The frame memory's (columns, rows) when the module straps a smaller one than the chip's."""
 
 
 KNOWN_MODULES: dict[tuple[str, int, int], Module] = {
-    ("st7789", 240, 240): Module((0, 0), normally_black=True),
-    ("st7789", 240, 320): Module((0, 0), normally_black=True),
-    ("st7789", 135, 240): Module((52, 40), normally_black=True),
-    ("st7789", 240, 280): Module((0, 20), normally_black=True),
-    ("st7789", 170, 320): Module((35, 0), normally_black=True),
-    ("st7789", 172, 320): Module((34, 0), normally_black=True),
+    ("st7789", 240, 240): Module((0, 0), flipped=True, normally_black=True),
+    ("st7789", 240, 320): Module((0, 0), flipped=True, normally_black=True),
+    ("st7789", 135, 240): Module((52, 40), flipped=True, normally_black=True),
+    ("st7789", 240, 280): Module((0, 20), flipped=True, normally_black=True),
+    ("st7789", 170, 320): Module((35, 0), flipped=True, normally_black=True),
+    ("st7789", 172, 320): Module((34, 0), flipped=True, normally_black=True),
     ("ili9341", 240, 320): Module((0, 0), mirrored=True, bgr=True),
-    ("st7735", 128, 160): Module((2, 1), bgr=True),
-    ("st7735", 80, 160): Module((26, 1), bgr=True, normally_black=True),
+    ("st7735", 128, 160): Module((0, 0), flipped=True, ram=(128, 160)),
+    ("st7735", 80, 160): Module((26, 1), flipped=True, bgr=True, normally_black=True),
 }
 """(model, portrait width, portrait height) -> module facts."""
 
 
 GENERIC_MODULES: dict[str, Module] = {
-    "st7789": Module((0, 0), normally_black=True),
+    "st7789": Module((0, 0), flipped=True, normally_black=True),
     "ili9341": Module((0, 0), mirrored=True, bgr=True),
-    "st7735": Module((0, 0), bgr=True),
+    "st7735": Module((0, 0), flipped=True),
 }
 """An unlisted size of each model: wired like the model's common modules, at offset (0, 0)."""
 
@@ -125,5 +131,5 @@ def render(ram: NDArray[np.uint8], module: Module, size: tuple[int, int], turn: 
         glass[~shown] = 0
     if module.mirrored:
         glass = glass[:, ::-1]
-    pixels = np.ascontiguousarray(np.rot90(glass, turn // 90))
+    pixels = np.ascontiguousarray(np.rot90(glass, (turn + (180 if module.flipped else 0)) // 90))
     return Image.fromarray(pixels, "RGB")

@@ -13,7 +13,7 @@ are not modelled.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -55,8 +55,9 @@ class DcsState:
 class MipiDcsSim(PanelSim):
     """A MIPI-DCS TFT module: ``model`` "st7789", "ili9341" or "st7735", glass ``width`` x ``height``.
 
-    ``offset`` overrides the module table's RAM (column, row) of the glass's top-left at MADCTL 0;
-    ``turn`` (0, 90, 180, 270) how the glass is held (default: 90 for a landscape size, else 0);
+    ``offset`` overrides the module table's RAM (column, row) of the glass's top-left at MADCTL 0, ``ram``
+    its frame memory size, ``bgr`` its colour filter order; ``turn`` (0, 90, 180, 270) how the glass is
+    held (default: 90 for a landscape size, else 0);
     ``te=False``: the TE pin is not wired (reads low); ``clock_hz``: the SPI clock for bus time (default
     the datasheet's write-clock limit; faster writes are reported).
     """
@@ -71,6 +72,8 @@ class MipiDcsSim(PanelSim):
         clock_hz: float | None = None,
         offset: tuple[int, int] | None = None,
         turn: int | None = None,
+        ram: tuple[int, int] | None = None,
+        bgr: bool | None = None,
         te: bool = True,
         strict: bool = False,
     ) -> None:
@@ -82,18 +85,10 @@ class MipiDcsSim(PanelSim):
         turn = (90 if width > height else 0) if turn is None else turn
         if turn not in (0, 90, 180, 270):
             raise ConfigError(f"{key}: turn={turn} is not 0, 90, 180 or 270")
-        portrait = (height, width) if turn % 180 else (width, height)
-        if width < 1 or height < 1 or portrait[0] > spec.cols or portrait[1] > spec.rows:
-            raise ConfigError(f"{key}: a {width}x{height} glass does not fit the {spec.cols}x{spec.rows} "
-                              "frame memory (held either way)")
-        module = known_module(key, portrait)
-        if offset is not None:
-            module = Module(offset, module.mirrored, module.bgr, module.normally_black)
-        col, row = module.offset
-        if col < 0 or row < 0 or col + portrait[0] > spec.cols or row + portrait[1] > spec.rows:
-            raise ConfigError(f"{key}: offset {module.offset} puts the {portrait[0]}x{portrait[1]} glass past the "
-                              f"{spec.cols}x{spec.rows} frame memory")
-        self.width, self.height, self.turn, self.module, self.te_wired = width, height, turn, module, te
+        self.width, self.height, self.turn, self.te_wired = width, height, turn, te
+        self.module = _module(key, (height, width) if turn % 180 else (width, height), offset=offset, ram=ram,
+                              bgr=bgr)
+        """The module's glass facts (offset, turn, mirroring, colour filters, IPS, memory size)."""
         super().__init__(clock=clock, clock_hz=spec.default_clock_hz if clock_hz is None else clock_hz,
                          strict=strict, spi_limit_hz=spec.max_write_hz)
         self._power_ups = 0
@@ -102,7 +97,8 @@ class MipiDcsSim(PanelSim):
     def _power_up(self) -> DcsController:
         """A controller just powered: registers at their reset values, the frame memory seeded noise."""
         self._power_ups += 1
-        chip = DcsController(MODELS[self.model], self._report, self._count_frame, seed=self._power_ups)
+        chip = DcsController(MODELS[self.model], self._report, self._count_frame, ram=self.module.ram,
+                             seed=self._power_ups)
         chip.hardware_reset(self._now)
         return chip
 
@@ -152,6 +148,23 @@ class MipiDcsSim(PanelSim):
         return self._chip.next_tearing_edge(self._now) if self.te_wired else None
 
 
+def _module(model: str, portrait: tuple[int, int], *, offset: tuple[int, int] | None, ram: tuple[int, int] | None,
+            bgr: bool | None) -> Module:
+    """The known module of that portrait size with the caller's overrides, checked against the memory."""
+    module = known_module(model, portrait)
+    changes: dict[str, Any] = {"offset": offset, "ram": ram, "bgr": bgr}
+    module = replace(module, **{k: v for k, v in changes.items() if v is not None})
+    spec = MODELS[model]
+    cols, rows = module.ram if module.ram is not None else (spec.cols, spec.rows)
+    if module.ram is not None and not (0 < cols <= spec.cols and 0 < rows <= spec.rows):
+        raise ConfigError(f"{model}: ram={cols}x{rows} is not within the chip's {spec.cols}x{spec.rows}")
+    col, row = module.offset
+    if min(portrait) < 1 or col < 0 or row < 0 or col + portrait[0] > cols or row + portrait[1] > rows:
+        raise ConfigError(f"{model}: a {portrait[0]}x{portrait[1]} glass at offset {module.offset} does not fit "
+                          f"the {cols}x{rows} frame memory")
+    return module
+
+
 def _offset(text: str) -> tuple[int, int]:
     col, sep, row = text.partition(",")
     if not sep:
@@ -176,6 +189,8 @@ OPTIONS: tuple[OptionSpec[Any], ...] = (
     OptionSpec("hz", number(1, above=True), None, "SPI clock in Hz for bus time (default: the datasheet's)"),
     OptionSpec("offset", _offset, None, "RAM COL,ROW of the glass's top-left at MADCTL 0 (default: known modules)"),
     OptionSpec("turn", choice("0", "90", "180", "270"), None, "how the module is held (default: 90 if landscape)"),
+    OptionSpec("ram", _size, None, "frame memory WxH the module straps (ST7735 green tab: 132x162)"),
+    OptionSpec("bgr", boolean, None, "the glass's colour filters are BGR (default: known modules)"),
     OptionSpec("te", boolean, True, "the TE pin is wired"),
     OptionSpec("strict", boolean, False, "raise ProtocolError for what the controller would flag"),
 )
@@ -188,7 +203,7 @@ def _factory(model: str) -> Any:
         width, height = values["size"] or _DEFAULT_SIZES[model]
         turn = None if values["turn"] is None else int(values["turn"])
         return MipiDcsSim(model, width, height, clock=clock, clock_hz=values["hz"], offset=values["offset"],
-                          turn=turn, te=values["te"], strict=values["strict"])
+                          turn=turn, ram=values["ram"], bgr=values["bgr"], te=values["te"], strict=values["strict"])
     return create
 
 

@@ -78,6 +78,7 @@ def messages(sim: MipiDcsSim) -> list[str]:
 
 
 def upright(image: Image.Image, sim: MipiDcsSim) -> bool:
+    """The glass shows ``image`` as it is (tests that reason in memory order hold ST77xx modules ``turn=180``)."""
     return np.array_equal(np.asarray(sim.glass()), np.asarray(image))
 
 
@@ -159,6 +160,38 @@ def test_wrmemc_continues_after_the_last_pixel_written():
     send(sim, 0x3C, *rgb666([[4, 4, 4], [5, 5, 5]]))
     assert [int(sim.gram[20, c, 0]) for c in range(10, 14)] == [1, 2, 3, 4]
     assert int(sim.gram[21, 10, 0]) == 5
+
+
+def test_ramwr_goes_on_across_held_and_released_chip_select_and_empty_data_phases():
+    sim = awake(make("st7789", 240, 320))
+    window(sim, 0, 4, 0, 0)
+    send(sim, 0x2C)
+    sim.chip_select(True)
+    sim.data(rgb666([[1, 1, 1]]))
+    assert sim.spi_transfer(rgb666([[2, 2, 2], [3, 3, 3]]), dc=True) == bytes(6)  # write-only: MISO zeros
+    sim.chip_select(False)
+    sim.data(b"")
+    sim.data(rgb666([[4, 4, 4]])[:2])  # a pixel split across frames
+    sim.data(rgb666([[4, 4, 4]])[2:] + rgb666([[5, 5, 5]]))
+    assert [int(sim.gram[0, c, 0]) for c in range(5)] == [1, 2, 3, 4, 5]
+    assert sim.events == [] and sim.stats.frames == 1
+
+
+def test_a_read_command_s_data_phase_is_not_flagged():
+    sim = awake(make("st7789", 240, 320))
+    send(sim, 0x04)
+    assert sim.spi_transfer(bytes(4), dc=True) == bytes(4)
+    assert sim.events == []
+
+
+def test_an_oversized_write_keeps_the_last_window_s_worth_and_reports_the_wrap_once():
+    sim = awake(make("st7789", 240, 320))
+    window(sim, 0, 239, 0, 319)
+    frames = np.random.default_rng(3).integers(0, 64, (3 * 320 * 240, 3), dtype=np.uint8)
+    send(sim, 0x2C, *rgb666(frames[:10]))
+    sim.data(rgb666(frames[10:]))
+    assert np.array_equal(sim.gram.reshape(-1, 3), frames[2 * 320 * 240:])
+    assert sum("wrapped" in m for m in messages(sim)) == 1
 
 
 def test_overrun_wraps_to_the_window_start_and_is_reported():
@@ -363,22 +396,26 @@ def draw(sim: MipiDcsSim, image: Image.Image, madctl: int, x0: int, y0: int) -> 
     send(sim, 0x00)
 
 
-# (model, module size, MADCTL, CASET/RASET start, how the image looks on the glass); the offsets are the makers'.
+# (model, module size, MADCTL, CASET/RASET start, the turn that shows the image upright); the offsets are the
+# makers'. Adafruit's rotation 0 is upright, TFT_eSPI's rotation 0 (MADCTL 0 on ST77xx) is Adafruit's 2.
+R180 = Image.Transpose.ROTATE_180
 MAKERS = [
-    ("st7789", (240, 240), 0x00, (0, 0), None),                       # TFT_eSPI rotation 0
-    ("st7789", (240, 240), 0xC0, (0, 80), Image.Transpose.ROTATE_180),  # Adafruit rotation 0 (rowstart 80)
-    ("st7789", (135, 240), 0x00, (52, 40), None),                     # TFT_eSPI rotation 0
-    ("st7789", (135, 240), 0xC0, (53, 40), Image.Transpose.ROTATE_180),  # TFT_eSPI rotation 2
-    ("st7789", (240, 135), 0x70, (40, 53), None),                     # Pimoroni 240x135, MADCTL 70h
-    ("st7789", (240, 280), 0xC0, (0, 20), Image.Transpose.ROTATE_180),  # TFT_eSPI rotation 2 (rowstart 20)
-    ("st7789", (170, 320), 0x00, (35, 0), None),
-    ("st7789", (320, 240), 0x60, (0, 0), None),                       # TFT_eSPI rotation 1 (MX|MV)
-    ("ili9341", (240, 320), 0x48, (0, 0), None),                      # Adafruit rotation 0 (MX|BGR)
-    ("ili9341", (320, 240), 0x28, (0, 0), None),                      # Adafruit rotation 1, luma's default
-    ("ili9341", (320, 240), 0xE8, (0, 0), Image.Transpose.ROTATE_180),  # Adafruit rotation 3
-    ("st7735", (128, 160), 0xC8, (2, 1), Image.Transpose.ROTATE_180),  # Adafruit green tab rotation 0
-    ("st7735", (128, 160), 0x08, (2, 1), None),                       # Adafruit green tab rotation 2
-    ("st7735", (80, 160), 0xC8, (26, 1), Image.Transpose.ROTATE_180),  # TFT_eSPI GREENTAB160x80 rotation 0
+    ("st7789", (240, 240), 0xC0, (0, 80), None),       # Adafruit rotation 0 (rowstart 80)
+    ("st7789", (240, 240), 0x00, (0, 0), R180),        # Adafruit rotation 2, TFT_eSPI rotation 0
+    ("st7789", (135, 240), 0xC0, (53, 40), None),      # TFT_eSPI rotation 2
+    ("st7789", (135, 240), 0x00, (52, 40), R180),      # TFT_eSPI rotation 0
+    ("st7789", (240, 135), 0xA0, (40, 52), None),      # Adafruit rotation 1 (MY|MV)
+    ("st7789", (240, 135), 0x70, (40, 53), R180),      # Pimoroni 240x135, MADCTL 70h
+    ("st7789", (240, 280), 0xC0, (0, 20), None),       # TFT_eSPI rotation 2 (rowstart 20)
+    ("st7789", (170, 320), 0x00, (35, 0), R180),       # TFT_eSPI rotation 0 (colstart 35)
+    ("st7789", (320, 240), 0xA0, (0, 0), None),        # Adafruit rotation 1
+    ("st7789", (320, 240), 0x60, (0, 0), R180),        # TFT_eSPI rotation 1 (MX|MV)
+    ("ili9341", (240, 320), 0x48, (0, 0), None),       # Adafruit rotation 0 (MX|BGR)
+    ("ili9341", (320, 240), 0x28, (0, 0), None),       # Adafruit rotation 1, luma's default
+    ("ili9341", (320, 240), 0xE8, (0, 0), R180),       # Adafruit rotation 3
+    ("st7735", (128, 160), 0xC0, (0, 0), None),        # Adafruit black tab rotation 0 (128x160 memory)
+    ("st7735", (128, 160), 0x00, (0, 0), R180),        # Adafruit black tab rotation 2
+    ("st7735", (80, 160), 0xC8, (26, 1), None),        # TFT_eSPI GREENTAB160x80 rotation 0
 ]
 
 
@@ -392,6 +429,13 @@ def test_the_makers_rotations_and_offsets_put_the_image_on_the_glass(model, size
     assert upright(image, sim)
 
 
+def test_a_green_tab_st7735_is_a_132x162_memory_at_column_2_row_1_with_bgr_filters():
+    sim = awake(make("st7735", 128, 160, ram=(132, 162), offset=(2, 1), bgr=True), invert=False)
+    image = scene(128, 160)
+    draw(sim, image, 0xC8, 2, 1)  # Adafruit INITR_GREENTAB rotation 0: MX|MY|BGR, colstart 2, rowstart 1
+    assert upright(image, sim) and sim.gram.shape == (162, 132, 3)
+
+
 def test_ips_glass_is_inverted_without_invon_and_bgr_swaps_on_the_way_to_the_glass():
     sim = awake(make("st7789", 240, 240), invert=False)
     draw(sim, Image.new("RGB", (240, 240), (252, 0, 0)), 0x00, 0, 0)
@@ -403,7 +447,7 @@ def test_ips_glass_is_inverted_without_invon_and_bgr_swaps_on_the_way_to_the_gla
 
 
 def test_display_off_sleep_and_reset_blank_the_glass_and_display_on_restores_it():
-    sim = awake(make("st7789", 240, 240))
+    sim = awake(make("st7789", 240, 240, turn=180))
     image = scene(240, 240)
     draw(sim, image, 0x00, 0, 0)
     send(sim, 0x28)
@@ -418,7 +462,7 @@ def test_display_off_sleep_and_reset_blank_the_glass_and_display_on_restores_it(
 
 
 def test_idle_mode_keeps_the_top_bit_and_partial_mode_blanks_outside_ptlar():
-    sim = awake(make("st7789", 240, 240))
+    sim = awake(make("st7789", 240, 240, turn=180))
     image = scene(240, 240)
     draw(sim, image, 0x00, 0, 0)
     send(sim, 0x39)
@@ -433,7 +477,7 @@ def test_idle_mode_keeps_the_top_bit_and_partial_mode_blanks_outside_ptlar():
 
 
 def test_vertical_scrolling_shows_the_memory_from_vsp():
-    sim = awake(make("st7789", 240, 320))
+    sim = awake(make("st7789", 240, 320, turn=180))
     image = scene(240, 320)
     draw(sim, image, 0x00, 0, 0)
     send(sim, 0x33, 0, 10, 0x01, 0x2C, 0, 10)  # TFA 10, VSA 300, BFA 10
@@ -447,7 +491,7 @@ def test_vertical_scrolling_shows_the_memory_from_vsp():
 
 
 def test_offset_option_moves_the_glass_window():
-    sim = awake(make("st7789", 100, 50, offset=(7, 9), turn=0))
+    sim = awake(make("st7789", 100, 50, offset=(7, 9), turn=180))
     image = scene(100, 50)
     draw(sim, image, 0x00, 7, 9)
     assert upright(image, sim)

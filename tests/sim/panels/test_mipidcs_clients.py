@@ -40,38 +40,56 @@ def truncated(image: Image.Image) -> np.ndarray:
     return (six << 2) | (six >> 4)
 
 
-def luma_device(kind: str, sim: MipiDcsSim) -> Any:
+@pytest.fixture
+def clock(monkeypatch: pytest.MonkeyPatch) -> SimulatedClock:
+    """Simulated time, also for luma's own ``time.sleep`` calls (its reset and SLPOUT waits)."""
+    clock = SimulatedClock()
+    monkeypatch.setattr(lcd, "sleep", clock.sleep)
+    monkeypatch.setattr(serial, "sleep", clock.sleep)
+    return clock
+
+
+def luma_device(kind: str, sim: MipiDcsSim, **spi: float) -> Any:
     """luma's ``kind`` device on the simulated wiring (GPIO 24 D/C, 25 RST, 18 backlight), left on at exit."""
     wiring = SimSpiWiring(sim, clock=sim.clock)
     interface = serial.spi(spi=wiring.spidev, gpio=wiring.gpio_module, gpio_DC=24, gpio_RST=25,
-                           bus_speed_hz=32_000_000)
+                           bus_speed_hz=32_000_000, **spi)
     device = getattr(lcd, kind)(interface, gpio=wiring.gpio_module)
     device.persist = True
     return device
 
 
-def test_luma_st7789_puts_its_image_on_the_glass():
-    # luma's MADCTL 70h (MX|MV|ML) is upright on a 240x240 module held turned 90° from TFT_eSPI's rotation 0
-    sim = MipiDcsSim("st7789", 240, 240, clock=SimulatedClock(), turn=90)
+def test_luma_st7789_puts_its_image_on_the_glass(clock):
+    # luma's MADCTL 70h (MX|MV|ML) is upright on a 240x240 module held a quarter turn from Adafruit's rotation 0
+    sim = MipiDcsSim("st7789", 240, 240, clock=clock, turn=270)
     device = luma_device("st7789", sim)
     image = picture((240, 240))
     device.display(image)
     assert np.array_equal(np.asarray(sim.glass()), truncated(image))
-    found = [(e.command, e.message) for e in sim.events]
-    assert any(code == 0x29 and "after SLPOUT" in text for code, text in found)  # SLPOUT -> DISPON, no wait
-    assert sim.stats.frames >= 2  # the clear() and this image
+    assert [(e.command, e.message.split(" ms after ")[1].split(" (")[0]) for e in sim.events] == [
+        (0x36, "RESX"),    # luma.core's spi() releases RST and sends at once (reset_release_time=0)
+        (0x11, "RESX"),    # so SLPOUT comes within RESX's 120 ms too
+        (0x29, "SLPOUT"),  # and DISPON straight after SLPOUT (5 ms)
+    ]
+    assert sim.stats.frames == 2  # the clear() and this image
 
 
-def test_luma_st7789_at_rotation_0_shows_a_turned_image_on_tft_espi_s_orientation():
-    sim = MipiDcsSim("st7789", 240, 240, clock=SimulatedClock())
+def test_luma_with_reset_release_time_is_flagged_only_for_its_slpout_dispon(clock):
+    sim = MipiDcsSim("st7789", 240, 240, clock=clock)
+    luma_device("st7789", sim, reset_hold_time=1e-5, reset_release_time=0.150)
+    assert [e.command for e in sim.events] == [0x29]
+
+
+def test_luma_st7789_at_rotation_0_shows_its_image_a_quarter_turn_from_adafruit_s_rotation_0(clock):
+    sim = MipiDcsSim("st7789", 240, 240, clock=clock)
     device = luma_device("st7789", sim)
     image = picture((240, 240))
     device.display(image)
-    assert np.array_equal(np.asarray(sim.glass()), truncated(image.transpose(Image.Transpose.ROTATE_270)))
+    assert np.array_equal(np.asarray(sim.glass()), truncated(image.transpose(Image.Transpose.ROTATE_90)))
 
 
-def test_luma_ili9341_puts_its_image_on_the_glass_and_diffs_small_changes():
-    sim = MipiDcsSim("ili9341", 320, 240, clock=SimulatedClock())
+def test_luma_ili9341_puts_its_image_on_the_glass_and_diffs_small_changes(clock):
+    sim = MipiDcsSim("ili9341", 320, 240, clock=clock)
     device = luma_device("ili9341", sim)
     image = picture((320, 240))
     device.display(image)
@@ -81,4 +99,5 @@ def test_luma_ili9341_puts_its_image_on_the_glass_and_diffs_small_changes():
     device.display(image)
     assert np.array_equal(np.asarray(sim.glass()), truncated(image))
     assert sim.stats.data_bytes - sent < 320 * 240 * 3 // 4  # luma's diff_to_previous sent a window, not a frame
-    assert all(e.command != 0x29 or "after SLPOUT" not in e.message for e in sim.events)  # luma waits 120 ms here
+    assert [(e.command, "after RESX" in e.message) for e in sim.events] == [(0xEF, True), (0x11, True)]
+    # luma sleeps 120 ms after SLPOUT on this model: nothing after it is flagged
