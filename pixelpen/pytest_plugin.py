@@ -1,4 +1,4 @@
-"""pytest plugin ``pixelpen``: simulated plotters for testing the applications that drive them.
+"""pytest plugin ``pixelpen``: simulated plotters and panels for testing the applications that drive them.
 
 Installed with pixelpen (entry point ``pytest11``), it offers:
 
@@ -12,7 +12,14 @@ Installed with pixelpen (entry point ``pytest11``), it offers:
 * ``make_sim_plotter`` - a factory, ``make_sim_plotter("grbl", pen="z")`` or ``make_sim_plotter("grbl",
   port=True)``, for tests that need several devices or options chosen in the test;
 * ``--pixelpen-paper-dir DIR`` - save the paper of every simulated device a test used, as
-  ``DIR/<test name>-<model>[-N].png``, for inspection.
+  ``DIR/<test name>-<model>[-N].png``, for inspection;
+* ``sim_panel`` - a :class:`SimPanel`: ``url`` (``sim:MODEL?id=...``) for the application, or ``open()`` to
+  open the display and keep watching it; then ``glass()``, ``gram``, ``bus`` / ``bus_bytes`` (the
+  simulator's bus counters), ``events``, ``frames`` (per frame: bytes, windows, bus and host seconds) and
+  ``recording()`` (the command and data frames on the bus).  ``st7789`` 240x240 unless parametrised
+  indirectly like ``sim_plotter``; ``make_sim_panel(model, **options)`` is the factory;
+* ``--pixelpen-glass-dir DIR`` - save the glass of every simulated panel a failed test used, as
+  ``DIR/<test name>-<model>[-N].png``.
 
 The simulated device is created when the application first opens the URL and reached again by its ``id``
 (also after a reconnect); it lives in the test's process, so the application must run in that process
@@ -22,10 +29,13 @@ Every device is forgotten (closed) when its test ends.
 
 from __future__ import annotations
 
+import contextlib
+import functools
+import io
 import itertools
 import re
 import uuid
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -33,12 +43,19 @@ import pytest
 
 if TYPE_CHECKING:
     import numpy as np
+    from PIL import Image
 
+    from pixelpen.devices.panels.base import FrameStats
+    from pixelpen.display.kinds import RasterDisplay
+    from pixelpen.drivers.bustrace import BusTrace
     from pixelpen.sim.base import StreamDevice
 
 DEFAULT_MODEL = "hp7475a"
 """The model ``sim_plotter`` and ``sim_port`` simulate unless parametrised."""
+DEFAULT_PANEL = "st7789?size=240x240"
+"""The panel ``sim_panel`` simulates unless parametrised."""
 _ids = itertools.count(1)
+_REPORTS = pytest.StashKey[dict[str, pytest.TestReport]]()
 
 
 class SimPlotter:
@@ -113,6 +130,192 @@ class SimPlotter:
         return float(self.device.clock.now())
 
 
+def _new_id() -> str:
+    return f"pytest-{next(_ids)}-{uuid.uuid4().hex[:8]}"
+
+
+class SimPanel:
+    """A simulated panel (or framebuffer) for one test: the URL to hand the application, the chip behind it,
+    and, for a display opened with :meth:`open`, its frames and bus traffic."""
+
+    def __init__(self, model: str, options: dict[str, str] | None = None) -> None:
+        from pixelpen.display.registry import scheme_names
+        from pixelpen.urls import format_url
+
+        model = model.lower()
+        panels = [name for name in scheme_names() if _is_panel_scheme(name)]
+        if model not in panels:
+            raise pytest.UsageError(f"pixelpen: no simulated panel {model!r}; known: {', '.join(panels)}")
+        options = dict(options or {})
+        if "id" in options:
+            raise pytest.UsageError("pixelpen: option 'id' is set by the fixture (a unique id)")
+        self.model = model
+        self.id = _new_id()
+        """The simulator instance's name (the URL's ``id=``)."""
+        self.url = format_url("sim", model, {"id": self.id, **options})
+        """``sim:MODEL?id=...&options`` for ``pixelpen.open``."""
+        self._display: RasterDisplay | None = None
+        self._frames: list[FrameStats] = []
+
+    def __repr__(self) -> str:
+        return f"SimPanel({self.url!r})"
+
+    def __str__(self) -> str:
+        """The URL, so the object can be handed on where a URL string is expected."""
+        return self.url
+
+    # -- the display ---------------------------------------------------------------------------------
+    def open(self, **options: Any) -> RasterDisplay:
+        """Open the display of :attr:`url` (plus display ``options``, e.g. ``rotation=90``) and watch it:
+        its frames are counted in :attr:`frames` from the first (the full frame of the initialisation)."""
+        import pixelpen
+        from pixelpen.display.kinds import RasterDisplay
+        from pixelpen.urls import format_url, parse_url
+
+        parsed = parse_url(self.url)
+        display = pixelpen.open(format_url("sim", self.model, {**parsed.options,
+                                                               **{k: str(v) for k, v in options.items()}}))
+        if not isinstance(display, RasterDisplay):  # pragma: no cover - every panel scheme is raster
+            display.close()
+            raise TypeError(f"{self.url} did not open a raster display")
+        self._display = display
+        self._frames = []
+        stats = getattr(display, "stats", None)
+        if stats is not None and hasattr(stats, "add"):
+            display.stats = _frame_log_class().following(stats, self._frames)  # type: ignore[attr-defined]
+        return display
+
+    @property
+    def display(self) -> RasterDisplay:
+        """The display :meth:`open` opened (LookupError before)."""
+        if self._display is None:
+            raise LookupError(f"{self.url}: no display was opened with open() (an application's own display "
+                              "is reached through simulator, glass(), gram and bus)")
+        return self._display
+
+    @property
+    def frames(self) -> list[FrameStats]:
+        """Every frame the display of :meth:`open` sent: ``bytes``, ``windows``, ``bus_seconds``,
+        ``host_seconds``, ``full`` (``pixelpen.devices.panels.base.FrameStats``)."""
+        display = self.display
+        if not hasattr(getattr(display, "stats", None), "add"):
+            raise LookupError(f"{self.model}: this display keeps no per-frame statistics")
+        return list(self._frames)
+
+    @contextlib.contextmanager
+    def recording(self) -> Iterator[BusTrace]:
+        """Record the bus traffic of the display of :meth:`open` meanwhile: a ``BusTrace`` whose ``events``
+        are its command (``C``) and data (``D``) frames, filled in when the block ends."""
+        from pixelpen.drivers.bustrace import BusTrace, RecordingBus, parse_bus_trace
+
+        wiring = getattr(self.display, "wiring", None)
+        if wiring is None:
+            raise LookupError(f"{self.model}: this display has no panel bus to record")
+        inner = wiring.bus
+        text = io.StringIO()
+        trace = BusTrace()
+        wiring.bus = RecordingBus(inner, text, url=self.url, clock=getattr(self.display, "clock", None))
+        try:
+            yield trace
+        finally:
+            wiring.bus = inner
+            parsed = parse_bus_trace(text.getvalue().splitlines(keepends=True), source=self.url)
+            for name in trace.__dataclass_fields__:
+                setattr(trace, name, getattr(parsed, name))
+
+    # -- the simulated chip ------------------------------------------------------------------------------
+    @property
+    def opened(self) -> bool:
+        """True once the URL was opened (the simulator exists)."""
+        from pixelpen.sim.base import named_simulator
+
+        try:
+            named_simulator(self.id)
+        except KeyError:
+            return False
+        return True
+
+    @property
+    def simulator(self) -> Any:
+        """The simulated chip (``MipiDcsSim``, ``SSD1306Sim``, ``FbdevSim``); LookupError before the URL is opened."""
+        from pixelpen.sim.base import named_simulator
+
+        try:
+            return named_simulator(self.id)
+        except KeyError:
+            raise LookupError(f"the application has not opened {self.url} yet, so there is no panel") from None
+
+    def glass(self) -> Image.Image:
+        """What the panel shows now, as a PIL image (RGB for a TFT, "1"/"L" for a mono OLED)."""
+        return self.simulator.glass()
+
+    def save_glass(self, path: str | Path) -> Path:
+        """Write the glass to ``path`` (format from the extension); return the path."""
+        path = Path(path)
+        self.glass().save(path)
+        return path
+
+    @property
+    def gram(self) -> np.ndarray:
+        """The controller's memory as the simulator stores it (see its class)."""
+        return self.simulator.gram
+
+    @property
+    def bus(self) -> Any:
+        """The simulator's bus counters (``BusStats``: bytes, command_bytes, data_bytes, transfers, bus_seconds,
+        frames)."""
+        return self.simulator.stats
+
+    @property
+    def bus_bytes(self) -> int:
+        """Every byte the panel received on its bus (I2C address and control bytes included)."""
+        return int(self.bus.bytes)
+
+    @property
+    def events(self) -> list[Any]:
+        """What the controller flagged (``PanelEvent``: time, offset, command, message); empty when all was well."""
+        return list(getattr(self.simulator, "events", []))
+
+    def close(self) -> None:
+        """Close the display of :meth:`open`, if still open."""
+        if self._display is not None:
+            self._display.close()
+
+
+def _is_panel_scheme(name: str) -> bool:
+    """True for the schemes of panels and framebuffers (their simulators are reached through ``sim:``)."""
+    from pixelpen.display.registry import BUILTIN_DISPLAYS
+
+    target = BUILTIN_DISPLAYS.get(name, "")
+    return target.startswith("pixelpen.devices.panels.")
+
+
+@functools.cache
+def _frame_log_class() -> Any:
+    """``FrameLog(PanelStats)``, made on first use (the plugin imports no display code until a test needs it)."""
+    from pixelpen.devices.panels.base import PanelStats
+
+    class FrameLog(PanelStats):
+        """PanelStats that also keep every frame in a list."""
+
+        history: list[Any]
+
+        @classmethod
+        def following(cls, stats: PanelStats, history: list[Any]) -> FrameLog:
+            """A log carrying on from ``stats`` (its last frame is the first in ``history``)."""
+            log = cls(**{f: getattr(stats, f) for f in stats.__dataclass_fields__})
+            log.history = history
+            if stats.frames:
+                history.append(stats.last)
+            return log
+
+        def add(self, frame: Any) -> None:
+            super().add(frame)
+            self.history.append(frame)
+
+    return FrameLog
+
+
 class _Session:
     """The SimPlotters of one test, saved (if asked) and forgotten when it ends."""
 
@@ -138,19 +341,52 @@ class _Session:
                 forget_simulator(plotter.id)
 
     def _save(self, folder: Path) -> None:
-        folder.mkdir(parents=True, exist_ok=True)
-        stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", self.request.node.name).strip("_")
-        used = [p for p in self.made if p.opened]
-        for n, plotter in enumerate(used, start=1):
-            suffix = f"-{n}" if len(used) > 1 else ""
-            plotter.save_paper(folder / f"{stem}-{plotter.model}{suffix}.png")
+        for plotter, path in _image_paths(folder, self.request, self.made):
+            plotter.save_paper(path)
 
 
-def _parse_param(param: object) -> tuple[str, dict[str, str]]:
+class _PanelSession:
+    """The SimPanels of one test: displays closed, glass saved when the test failed (if asked), chips forgotten."""
+
+    def __init__(self, request: pytest.FixtureRequest) -> None:
+        self.request = request
+        self.made: list[SimPanel] = []
+
+    def make(self, model: str, **options: Any) -> SimPanel:
+        """A new SimPanel of ``model`` with URL options (values become strings)."""
+        panel = SimPanel(model, {k: str(v) for k, v in options.items()})
+        self.made.append(panel)
+        return panel
+
+    def finish(self) -> None:
+        from pixelpen.sim.base import forget_simulator
+
+        glass_dir = self.request.config.getoption("pixelpen_glass_dir")
+        try:
+            for panel in self.made:
+                panel.close()
+            reports = self.request.node.stash.get(_REPORTS, {})
+            if glass_dir and any(r.failed for r in reports.values()):
+                for panel, path in _image_paths(Path(glass_dir), self.request, self.made):
+                    panel.save_glass(path)
+        finally:
+            for panel in self.made:
+                forget_simulator(panel.id)
+
+
+def _image_paths(folder: Path, request: pytest.FixtureRequest, made: list[Any]) -> list[tuple[Any, Path]]:
+    """``folder/<test name>-<model>[-N].png`` for each device of ``made`` that was opened (folder created)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", request.node.name).strip("_")
+    used = [d for d in made if d.opened]
+    return [(d, folder / f"{stem}-{d.model}{f'-{n}' if len(used) > 1 else ''}.png") for n, d in enumerate(used, 1)]
+
+
+def _parse_param(param: object, default: str = DEFAULT_MODEL) -> tuple[str, dict[str, str]]:
     """An indirect parameter: ``"MODEL"``, ``"MODEL?key=value&..."`` or a ``{"model": ..., key: value}`` dict."""
     if isinstance(param, dict):
         options = {k: str(v) for k, v in param.items()}
-        return options.pop("model", DEFAULT_MODEL), options
+        return options.pop("model", default), options
     if isinstance(param, str):
         from pixelpen.urls import parse_url
 
@@ -160,10 +396,21 @@ def _parse_param(param: object) -> tuple[str, dict[str, str]]:
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
-    """``--pixelpen-paper-dir DIR``: save every test's simulated paper there."""
+    """``--pixelpen-paper-dir DIR``: save every test's simulated paper there; ``--pixelpen-glass-dir DIR``: the
+    glass of the simulated panels of failed tests."""
     group = parser.getgroup("pixelpen", "pixelpen simulated devices")
     group.addoption("--pixelpen-paper-dir", dest="pixelpen_paper_dir", default=None, metavar="DIR",
                     help="save the paper of every simulated plotter a test used as DIR/<test>-<model>.png")
+    group.addoption("--pixelpen-glass-dir", dest="pixelpen_glass_dir", default=None, metavar="DIR",
+                    help="save the glass of every simulated panel a failed test used as DIR/<test>-<model>.png")
+
+
+@pytest.hookimpl(wrapper=True, tryfirst=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Generator[None, Any, Any]:
+    """Keep each phase's report on the test item, so the panel fixtures know whether the test failed."""
+    report: pytest.TestReport = yield
+    item.stash.setdefault(_REPORTS, {})[report.when] = report
+    return report
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -193,3 +440,20 @@ def sim_port(request: pytest.FixtureRequest, make_sim_plotter: Callable[..., Sim
     """A simulated device whose ``url`` (``sim://MODEL?...``) the application opens with pyserial."""
     model, options = _parse_param(getattr(request, "param", DEFAULT_MODEL))
     return make_sim_plotter(model, port=True, **options)
+
+
+@pytest.fixture
+def make_sim_panel(request: pytest.FixtureRequest) -> Iterator[Callable[..., SimPanel]]:
+    """Factory ``make_sim_panel(model, **options) -> SimPanel``; displays closed and chips forgotten after the test."""
+    session = _PanelSession(request)
+    try:
+        yield session.make
+    finally:
+        session.finish()
+
+
+@pytest.fixture
+def sim_panel(request: pytest.FixtureRequest, make_sim_panel: Callable[..., SimPanel]) -> SimPanel:
+    """A simulated panel (ST7789 240x240 unless parametrised) whose ``url`` the application opens."""
+    model, options = _parse_param(getattr(request, "param", DEFAULT_PANEL), DEFAULT_PANEL.partition("?")[0])
+    return make_sim_panel(model, **options)
