@@ -187,3 +187,30 @@ def test_open_failures_say_which_node_and_what_to_do(monkeypatch, error, words):
 def test_open_with_the_real_smbus2_names_the_missing_node():
     with pytest.raises(LinkError, match="/dev/i2c-99 does not exist"):
         I2CBus.open(99, 0x3C)
+
+
+def test_end_to_end_an_ssd1306_simulator_shows_what_the_bus_sent():
+    import numpy as np
+
+    from pixelpen.clock import SimulatedClock
+
+    SSD1306Sim = pytest.importorskip("pixelpen.sim.panels.ssd1306", reason="the SSD1306 simulator (H1)").SSD1306Sim
+    clock = SimulatedClock()
+    sim = SSD1306Sim(128, 64, clock=clock)
+    bus = I2CBus(SimSMBus(sim, clock_hz=400_000), 0x3C, clock=clock, name="i2c-1")
+    # SSD1306 application note's initialisation: display off, clock, multiplex 64, offset 0, start line 0,
+    # charge pump on, horizontal addressing, segment remap, COM scan down, COM pins 12h, contrast, pre-charge,
+    # VCOMH, resume from RAM, normal (not inverted), display on
+    bus.command(0xAE, 0xD5, 0x80, 0xA8, 0x3F, 0xD3, 0x00, 0x40, 0x8D, 0x14, 0x20, 0x00, 0xA1, 0xC8, 0xDA, 0x12,
+                0x81, 0xCF, 0xD9, 0xF1, 0xDB, 0x40, 0xA4, 0xA6, 0xAF)
+    bus.command(0x21, 0, 127, 0x22, 0, 7)  # the whole 128x8-page window
+    page = bytes([0xFF] * 64 + [0x00] * 64)  # RAM columns 0..63 lit in every page
+    start = clock.now()
+    bus.data(page * 8)
+    assert clock.now() - start == pytest.approx((1 + 9 * (1 + 1025) + 1) / 400e3)  # one transaction, 23.1 ms
+    assert sim.events == []
+    lit = np.asarray(sim.glass()).astype(bool)
+    assert lit.shape == (64, 128)
+    assert lit.sum() == 64 * 64 and np.all(lit.all(axis=0) | ~lit.any(axis=0))  # half the glass, whole columns
+    assert sim.stats.transfers == bus.transfers == 3
+    assert sim.stats.bytes == bus.bytes_sent + bus.transfers  # the simulator also counts each address byte

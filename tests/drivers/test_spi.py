@@ -281,3 +281,35 @@ def test_a_simulated_frame_takes_its_wire_time():
     assert isinstance(chip.clock, SimulatedClock)
     bus.data(bytes(115_200))
     assert chip.clock.now() == pytest.approx(14.7456e-3)
+
+
+def test_end_to_end_an_st7789_simulator_shows_what_the_bus_sent():
+    from pixelpen.sim.panels import MipiDcsSim
+
+    clock = SimulatedClock()
+    sim = MipiDcsSim("st7789", 240, 240, clock=clock, clock_hz=62.5e6)
+    wiring = SimSpiWiring(sim)
+    bus = SpiBus(wiring.spidev, dc=wiring.dc, reset=wiring.reset, clock_hz=62.5e6, clock=clock)
+    # ST7789VW datasheet: RESX low >= 10 us, 120 ms to sleep-out; SLPOUT then 120 ms; COLMOD 55h = 16 bit/pixel;
+    # MADCTL 00h; INVON (an IPS module); CASET 0..239, RASET 0..319 (the whole 240x320 memory); RAMWR; DISPON
+    bus.reset(recovery=0.120)
+    bus.command(0x11)
+    clock.sleep(0.120)
+    for code, params in ((0x3A, b"\x55"), (0x36, b"\x00"), (0x21, b""), (0x2A, b"\x00\x00\x00\xef"),
+                         (0x2B, b"\x00\x00\x01\x3f")):
+        bus.command(code)
+        bus.data(params)
+    bus.command(0x2C)
+    start = clock.now()
+    bus.data((b"\x00\x1f" * 120 + b"\xf8\x00" * 120) * 320)
+    assert clock.now() - start == pytest.approx(240 * 320 * 2 * 8 / 62.5e6)  # 19.66 ms on the wire
+    bus.command(0x29)
+    assert sim.events == []  # nothing too soon after reset or SLPOUT, no truncated parameters
+    glass = np.asarray(sim.glass())
+    assert glass.shape == (240, 240, 3)
+    blue = np.all(glass == (0, 0, 255), axis=2)
+    red = np.all(glass == (255, 0, 0), axis=2)
+    # RAM columns 0..119 blue (RGB565 001Fh), 120..239 red (F800h): half the glass each, in whole columns
+    assert blue.sum() == red.sum() == 120 * 240
+    assert np.all(blue.all(axis=0) | red.all(axis=0))
+    assert (sim.stats.bytes, sim.stats.transfers) == (bus.bytes_sent, bus.transfers)
