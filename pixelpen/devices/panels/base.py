@@ -291,8 +291,14 @@ class PanelDisplay(RasterDisplay):
 
     @property
     def simulator(self) -> BusDevice | None:
-        """The simulated chip of a ``sim:`` display (None on hardware)."""
-        return None if self._wiring is None else self._wiring.simulator
+        """The simulated chip of a ``sim:`` display (None on hardware); it stays readable after close."""
+        source = self._wiring_source
+        return source.simulator if isinstance(source, Wiring) else None
+
+    def power(self, on: bool) -> None:
+        """Display on or off; the RAM keeps the picture."""
+        self._require_open()
+        self._power(on)
 
     def _open_device(self) -> None:
         if self._wiring is None:

@@ -103,11 +103,6 @@ class MipiDcsDisplay(PanelDisplay):
         self.invert = bool(invert)
         self._command(INVON if self.invert else INVOFF)
 
-    def power(self, on: bool) -> None:
-        """Display on (DISPON) or off (DISPOFF); the RAM keeps the picture."""
-        self._require_open()
-        self._power(on)
-
 
 class ST7789Display(MipiDcsDisplay):
     """Sitronix ST7789 modules (240x240, 240x320, 135x240, 240x280, 170x320)."""

@@ -97,8 +97,18 @@ class SSD1306Display(PanelDisplay):
         if self.contrast is not None:
             self._command(SET_CONTRAST, self.contrast)
 
+    @property
+    def column_start(self) -> int:
+        """RAM column of the glass's left edge: the profile's at its own segment remap, mirrored over the RAM
+        width when the rotation flips the remap (a 96-wide glass on SEG32..127 is RAM 0..95 under A1h but
+        32..127 under A0h)."""
+        p = self.profile
+        if self.geometry.segment_remap == p.segment_remap:
+            return p.column_offset
+        return p.ram_size[0] - p.size[0] - p.column_offset
+
     def _write_window(self, window: Rect, pixels: bytes) -> None:
-        x = self.geometry.x_offset
+        x = self.column_start
         self._command(COLUMN_ADDRESS, window.x0 + x, window.x1 - 1 + x, PAGE_ADDRESS, window.y0 // 8,
                       (window.y1 - 1) // 8)
         self._data(pixels)
@@ -120,10 +130,6 @@ class SSD1306Display(PanelDisplay):
         self.invert = bool(invert)
         self._command(INVERSE if self.invert else NORMAL)
 
-    def power(self, on: bool) -> None:
-        """Display on (AFh) or sleep (AEh); the RAM keeps the picture."""
-        self._require_open()
-        self._power(on)
 
 
 class SSD1309Display(SSD1306Display):
@@ -138,7 +144,7 @@ class SH1106Display(SSD1306Display):
     controller: ClassVar[str] = "sh1106"
 
     def _write_window(self, window: Rect, pixels: bytes) -> None:
-        column = window.x0 + self.geometry.x_offset
+        column = window.x0 + self.column_start
         width = window.width
         for i, page in enumerate(range(window.y0 // 8, -(-window.y1 // 8))):
             self._command(PAGE_START | page, column & 0x0F, 0x10 | column >> 4)

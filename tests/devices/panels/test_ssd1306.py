@@ -165,3 +165,12 @@ def test_i2c_address_option(text: str, value: int) -> None:
 def test_bad_i2c_address(text: str) -> None:
     with pytest.raises(ValueError):
         i2c_address(text)
+
+
+def test_a_glass_off_centre_moves_its_columns_when_rotation_flips_the_segment_remap() -> None:
+    # luma's 96x16 is RAM columns 0..95 under A1h (SEG127..SEG32); under A0h the same SEG32..127 are RAM 32..127
+    display, bus = oled(SSD1306Display, "ssd1306_96x16", rotation=180, refresh="full")
+    bus.take()
+    display.canvas.lines([[0, 0, 0, 0]], 1)
+    display.flush()
+    assert bus.take()[0] == ("C", bytes.fromhex("21 20 7f 22 00 01"))
