@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 
+import numpy as np
 import pytest
 
 from pixelpen.clock import SimulatedClock
@@ -124,3 +125,57 @@ def test_a_recorded_ftdi_session_replays(wired):
     replay.command(0x36, 0x48)
     replay.data(bytes(70_000))
     replay.check_complete()
+
+
+def st7789_session(bus, clock) -> None:
+    """Reset, SWRESET, SLPOUT, COLMOD 16-bit, a window and a frame of two colour bands, DISPON (datasheet order)."""
+    bus.reset()
+    bus.command(0x01)
+    clock.sleep(0.150)
+    bus.command(0x11)
+    clock.sleep(0.120)
+    bus.command(0x3A)
+    bus.data(b"\x55")
+    bus.command(0x36)
+    bus.data(b"\x00")
+    bus.command(0x21)
+    bus.command(0x2A)
+    bus.data(b"\x00\x00\x00\xef")
+    bus.command(0x2B)
+    bus.data(b"\x00\x00\x00\xef")
+    bus.command(0x2C)
+    bus.data(b"\xf8\x00" * 240 * 100 + b"\x07\xe0" * 240 * 140)
+    bus.command(0x29)
+
+
+class DirectBus:
+    """The oracle: the same session sent straight to a simulator's command()/data()/reset()."""
+
+    def __init__(self, sim) -> None:
+        self.sim = sim
+
+    def reset(self) -> None:
+        self.sim.reset()
+        self.sim.clock.sleep(0.120)
+
+    def command(self, code: int) -> None:
+        self.sim.command(bytes((code,)))
+
+    def data(self, data: bytes) -> None:
+        self.sim.data(data)
+
+
+def test_an_st7789_simulator_behind_the_ft232h_shows_what_it_shows_when_driven_directly():
+    panels = pytest.importorskip("pixelpen.sim.panels")
+    through = panels.MipiDcsSim("st7789", 240, 240, clock=SimulatedClock(), clock_hz=30e6)
+    backend = Ft232hBackend(through)
+    bus = FtdiSpiBus.open(backend.find(), dc=4, rst=5, clock_hz=30e6, clock=through.clock)
+    st7789_session(bus, through.clock)
+    direct = panels.MipiDcsSim("st7789", 240, 240, clock=SimulatedClock(), clock_hz=30e6)
+    st7789_session(DirectBus(direct), direct.clock)
+    assert np.array_equal(np.asarray(through.glass()), np.asarray(direct.glass()))
+    glass = np.asarray(through.glass()).reshape(-1, 3)
+    colours, counts = np.unique(glass, axis=0, return_counts=True)
+    assert {tuple(c): n for c, n in zip(colours.tolist(), counts.tolist(), strict=True)} == {
+        (255, 0, 0): 240 * 100, (0, 255, 0): 240 * 140}  # every pixel arrived, whichever way the glass is held
+    assert not through.events
