@@ -1,24 +1,51 @@
-"""Core commands: ``devices`` (what pixelpen knows and what is plugged in), ``draw`` and ``demo``."""
+"""Core commands: ``devices`` (what pixelpen knows and what is plugged in), ``draw`` and ``demo``.
+
+``demo`` draws the reference scene on the file displays, plots it on the simulated plotters and shows it on
+each simulated panel whose simulator is registered (:data:`DEMO_PANELS`), then plays a short animation there
+(a cursor moving, a clock's digits changing: :class:`PanelAnimation`), in simulated time; it writes each
+panel's glass (``panel-MODEL.png``), the animation's glass frames (``panel-MODEL.gif``) and the frame
+statistics of all panels (``panels.json``).
+"""
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
+import logging
 import re
 import sys
 from collections.abc import Sequence
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+from PIL import Image, ImageDraw
+
 from pixelpen.commands.plot import plot_demo
+from pixelpen.commands.show import canvas_pixels
 from pixelpen.display.base import Display
+from pixelpen.display.kinds import RasterDisplay
 from pixelpen.display.pictfile import load_picture
 from pixelpen.display.registry import known_schemes, open_display
 from pixelpen.drivers.discovery import DiscoveredDevice, discover
 from pixelpen.options import OptionSpec, describe
+from pixelpen.raster.canvas import Canvas
 from pixelpen.scene import draw_reference
 from pixelpen.urls import format_url
+
+log = logging.getLogger(__name__)
+
+DEMO_PANELS: tuple[tuple[str, dict[str, str]], ...] = (
+    ("st7789", {"size": "240x240"}),
+    ("ili9341", {"size": "320x240", "rotation": "90"}),
+    ("st7735", {"size": "128x160"}),
+    ("ssd1306", {"size": "128x64"}),
+)
+"""The simulated panels the demo shows the scene and the animation on (those whose simulator is registered)."""
+ANIMATION_FRAMES = 30
+"""Frames of the panel demo's animation."""
 
 _ROLE = re.compile(r":[a-z]+(?::[a-z]+)?:`(?:([^`<]*?)\s*<[^`>]*>|~(?:[\w.]*\.)?([^`]*)|([^`]*))`")
 _LITERAL = re.compile(r"``(.+?)``|`([^`]+)`|\*\*(.+?)\*\*")
@@ -145,7 +172,114 @@ def cmd_demo(args: argparse.Namespace) -> int:
         print(f"  {url}", file=sys.stderr)
     for paper in plot_demo(out):
         print(f"  plotted on a simulated plotter: {paper}", file=sys.stderr)
+    for r in panel_demo(out):
+        print(f"  shown on a simulated panel: {r.url}: {r.glass}, {r.animation} ({r.frames} frames, "
+              f"{r.bytes_per_frame:,.0f} bytes and {r.windows_per_frame:.1f} windows a frame, "
+              f"{r.fps_at_bus_limit:,.0f} fps at the bus limit; full frames {r.full_frame_fps_at_bus_limit:.1f} fps)",
+              file=sys.stderr)
     print(f"pixelpen demo: the reference scene was drawn into {out.resolve()}/")
     for path in sorted(out.iterdir()):
         print(f"  {path}")
     return 0
+
+
+class PanelAnimation:
+    """A cursor (a square a twelfth of the panel's short side) moving over the picture and a clock ticking a
+    second a frame in the bottom-right corner: each frame changes two small areas, as a user interface does."""
+
+    def __init__(self, display: RasterDisplay) -> None:
+        self.display = display
+        canvas = display.canvas
+        self.background = canvas.array.copy()
+        self.side = max(4, min(canvas.width, canvas.height) // 12)
+        self.ink = canvas.colour_value((255, 255, 255) if canvas.mode == "1" else (255, 160, 0))
+        self.frame = 0
+        self._cursor: tuple[int, int] | None = None
+
+    def step(self) -> None:
+        """Draw the next frame and send it."""
+        canvas, side = self.display.canvas, self.side
+        if self._cursor is not None:
+            x, y = self._cursor
+            canvas.blit(self.background[y:y + side, x:x + side], x, y)
+        t = self.frame / max(ANIMATION_FRAMES - 1, 1)
+        x = round(t * (canvas.width - side))
+        y = round((canvas.height - side) * (0.25 + 0.5 * t * t))
+        clock = self._clock_patch(12 * 3600 + 34 * 60 + self.frame)
+        canvas.blit(clock, canvas.width - clock.shape[1], canvas.height - clock.shape[0])
+        patch = np.empty_like(self.background[y:y + side, x:x + side])
+        patch[...] = self.ink
+        canvas.blit(patch, x, y)
+        self._cursor = (x, y)
+        self.display.flush()
+        self.frame += 1
+
+    def _clock_patch(self, seconds: int) -> np.ndarray:
+        """``HH:MM:SS`` in the canvas's pixels (white on black, Pillow's default font)."""
+        h, rest = divmod(seconds, 3600)
+        text = f"{h:02d}:{rest // 60:02d}:{rest % 60:02d}"
+        image = Image.new("RGB", (6 * len(text) + 4, 14))
+        ImageDraw.Draw(image).text((2, 1), text, fill=(255, 255, 255))
+        canvas = self.display.canvas
+        scratch = Canvas(image.width, image.height, canvas.mode)
+        return canvas_pixels(scratch, image)
+
+
+@dataclass
+class PanelDemoResult:
+    """What the demo did on one panel: files written and the animation's frame statistics."""
+
+    url: str
+    glass: str
+    animation: str
+    frames: int
+    bytes_per_frame: float
+    windows_per_frame: float
+    bus_ms_per_frame: float
+    host_ms_per_frame: float
+    fps_at_bus_limit: float
+    """Animation frames a second the bus carries (its wire time per frame)."""
+    full_frame_fps_at_bus_limit: float
+    """Full frames a second the bus carries (the bandwidth estimator)."""
+
+
+def panel_demo(out: Path, panels: Sequence[tuple[str, dict[str, str]]] = DEMO_PANELS) -> list[PanelDemoResult]:
+    """Show the reference scene and :class:`PanelAnimation` on each simulated panel of ``panels``; write
+    ``OUT/panel-MODEL.png`` (the scene's glass), ``OUT/panel-MODEL.gif`` (the animation) and ``OUT/panels.json``."""
+    from pixelpen.devices.panels.base import PanelDisplay
+    from pixelpen.devices.panels.pacing import estimate_bandwidth
+    from pixelpen.raster.damage import Rect
+    from pixelpen.sim.base import simulator_models
+
+    results: list[PanelDemoResult] = []
+    for model, options in panels:
+        if model not in simulator_models():
+            log.info("demo: no %s simulator registered; skipped", model)
+            continue
+        url = format_url("sim", model, options)
+        with open_display(url) as display:
+            assert isinstance(display, PanelDisplay)
+            sim: Any = display.simulator
+            draw_reference(display)
+            display.flush()
+            glass = out / f"panel-{model}.png"
+            sim.glass().save(glass)
+            before = dataclasses.replace(display.stats)
+            animation = PanelAnimation(display)
+            images = []
+            for _ in range(ANIMATION_FRAMES):
+                animation.step()
+                images.append(sim.glass().convert("RGB"))
+            stats, n = display.stats, display.stats.frames - before.frames
+            bus = display.wiring.bus
+            full = display.cost.window(Rect(0, 0, display.canvas.width, display.canvas.height))
+            limit = estimate_bandwidth(bus.kind, bus.clock_hz, full.bytes, full.transfers).max_fps
+        gif = out / f"panel-{model}.gif"
+        images[0].save(gif, save_all=True, append_images=images[1:], duration=100, loop=0)
+        bus_s = (stats.bus_seconds - before.bus_seconds) / max(n, 1)
+        results.append(PanelDemoResult(
+            url, glass.name, gif.name, n, (stats.bytes - before.bytes) / max(n, 1),
+            (stats.windows - before.windows) / max(n, 1), 1000 * bus_s,
+            1000 * (stats.host_seconds - before.host_seconds) / max(n, 1), 1 / bus_s if bus_s else 0.0, limit))
+    (out / "panels.json").write_text(json.dumps([asdict(r) for r in results], indent=2) + "\n")
+    return results

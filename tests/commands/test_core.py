@@ -10,6 +10,7 @@ from PIL import Image as PILImage
 from pixelpen.cli import main
 from pixelpen.display.pictfile import save_picture
 from pixelpen.display.picture import Fill, Picture, Polyline, Rectangle, Style
+from pixelpen.sim.base import simulator_models
 
 
 @pytest.fixture(autouse=True)
@@ -39,6 +40,36 @@ def test_demo_writes_the_scene_as_png_svg_and_simulated_plotter_papers(tmp_path,
         assert (paper < 128).mean() > 0.005, model
     text = svg.read_text()
     assert 'width="260mm"' in text.replace(".0mm", "mm") and "<g" in text
+    # and on every registered simulated panel: its glass, the animation and the frame statistics
+    shown = [line for line in captured.err.splitlines() if "shown on a simulated panel" in line]
+    assert len(shown) == len(json.loads((tmp_path / "panels.json").read_text())) >= 1
+
+
+@pytest.mark.skipif("st7789" not in simulator_models(), reason="the ST7789 simulator is not registered")
+def test_panel_demo_writes_glass_animation_and_frame_statistics(tmp_path):
+    from pixelpen.commands.core import ANIMATION_FRAMES, panel_demo
+
+    results = {r.url.partition("?")[0]: r for r in panel_demo(tmp_path)}
+    st7789 = results["sim:st7789"]
+    glass = PILImage.open(tmp_path / st7789.glass).convert("RGB")
+    assert glass.size == (240, 240) and np.asarray(glass).max(axis=2).mean() > 5  # the scene, not a black glass
+    gif = PILImage.open(tmp_path / st7789.animation)
+    assert gif.n_frames == ANIMATION_FRAMES
+    gif.seek(ANIMATION_FRAMES - 1)
+    last = np.asarray(gif.convert("RGB")).astype(int)
+    # the cursor (20x20, a twelfth of 240) has reached the right-hand edge in the last frame, in orange
+    orange = (np.abs(last - (255, 160, 0)).sum(axis=2) < 60)
+    assert orange[:, 220:].sum() >= 300
+    # each frame: the cursor's old and new squares (a 20x20 RGB565 window is 811 bytes, panels.md 4) and the
+    # clock's changed digits; a full frame would be 115,211 bytes
+    assert st7789.frames == ANIMATION_FRAMES and st7789.bytes_per_frame < 4 * 811
+    # panels.md 4: full frames of ST7789 240x240 RGB565 at 62.5 MHz: 67.8 fps; ILI9341 320x240 at 10 MHz: 8.1
+    assert st7789.full_frame_fps_at_bus_limit == pytest.approx(67.8, abs=0.05)
+    if "sim:ili9341" in results:
+        assert results["sim:ili9341"].full_frame_fps_at_bus_limit == pytest.approx(8.1, abs=0.05)
+        assert PILImage.open(tmp_path / "panel-ili9341.png").size == (320, 240)
+    stats = json.loads((tmp_path / "panels.json").read_text())
+    assert [s["url"] for s in stats] == [r.url for r in results.values()]
 
 
 def test_draw_a_picture_file_on_png(tmp_path):
