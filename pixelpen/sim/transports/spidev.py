@@ -187,7 +187,7 @@ class SimSpiDev:
     ) -> list[int]:
         """Exchange any number of bytes, one frame per ``bufsiz`` block (CS drops between ioctls as spidev's do)."""
         data = _any(values)
-        if not data:
+        if not data:  # xfer3 reads its argument as a sequence even when it is a buffer
             raise InvalidArgumentType("Empty argument list.")
         miso = bytearray()
         for at in range(0, len(data), self._block):
@@ -214,8 +214,11 @@ def _small(values: Sequence[int]) -> bytes:
 
 
 def _any(values: object) -> bytes:
-    if isinstance(values, bytes | bytearray | memoryview):
-        return bytes(values)
+    """A writebytes2/xfer3 argument as spidev reads it: any buffer (even empty), else a non-empty integer sequence."""
+    try:
+        return memoryview(values).cast("B").tobytes()  # type: ignore[arg-type]
+    except TypeError:
+        pass
     if not isinstance(values, Iterable):
         raise InvalidArgumentType(f"expected a sequence or a buffer, got {type(values).__name__}")
     out = bytearray()
@@ -223,6 +226,8 @@ def _any(values: object) -> bytes:
         if not isinstance(value, int):
             raise InvalidArgumentType(f"Non-Int/Long value in arguments: {value!r}.")
         out.append(value & 0xFF)
+    if not out:
+        raise InvalidArgumentType("Empty argument list.")
     return bytes(out)
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import errno
 
+import numpy as np
 import pytest
 import spidev
 from hypothesis import given, settings
@@ -67,6 +68,17 @@ def test_writebytes2_splits_by_bufsiz_keeping_every_byte(length, bufsiz):
     block = min(bufsiz, 65535)  # py-spidev caps its block at 65535 whatever bufsiz says
     assert b"".join(f for _, f in chip.frames) == payload
     assert [len(f) for _, f in chip.frames] == [min(block, length - at) for at in range(0, length, block)]
+
+
+def test_writebytes2_takes_buffers_even_empty_ones_and_xfer3_does_not():
+    chip, wiring = wired()
+    wiring.spidev.writebytes2(b"")
+    wiring.spidev.writebytes2(np.array([0xF800], dtype=">u2"))
+    assert chip.frames == [(False, b"\xf8\x00")]
+    with pytest.raises(TypeError, match="Empty"):
+        wiring.spidev.writebytes2([])
+    with pytest.raises(TypeError, match="Empty"):
+        wiring.spidev.xfer3(b"")
 
 
 def test_xfer_returns_miso_and_readbytes_clamps_like_spidev():
@@ -232,3 +244,34 @@ def test_luma_lcd_st7789_full_frame_through_the_wiring():
     pixels = chip.frames[5:]
     assert all(dc for dc, _ in pixels) and max(len(f) for _, f in pixels) == 4096
     assert b"".join(f for _, f in pixels) == b"\xff\x00\x00" * 240 * 240  # luma sends 18-bit RGB as 3 bytes
+
+
+OPS = st.tuples(st.sampled_from(["writebytes", "writebytes2", "xfer", "xfer2", "xfer3", "close", "open"]),
+                st.integers(0, 9000))
+
+
+@settings(max_examples=200, deadline=None)
+@given(ops=st.lists(OPS, max_size=12), seed=st.integers(0, 2**16))
+def test_any_call_sequence_gives_spidevs_errors_or_frames_carrying_every_byte(ops, seed):
+    chip, wiring = wired()
+    dev, opened, expected = wiring.spidev, True, b""
+    for name, length in ops:
+        if name in ("close", "open"):
+            dev.close() if name == "close" else dev.open(0, 0)
+            opened = name == "open"
+            continue
+        payload = bytes((seed + i * 13) % 256 for i in range(length))
+        small = name in ("writebytes", "xfer", "xfer2")
+        try:
+            getattr(dev, name)(list(payload))  # a list: every call refuses an empty one, as spidev's do
+        except OverflowError:
+            assert small and length > 4096
+        except TypeError:
+            assert length == 0
+        except OSError as e:
+            assert e.errno == errno.EBADF and not opened
+        else:
+            assert opened and length > 0 and (length <= 4096 or not small)
+            expected += payload
+    assert b"".join(frame for _, frame in chip.frames) == expected
+    assert all(len(frame) <= 4096 for _, frame in chip.frames)
