@@ -428,9 +428,10 @@ def run_sim(args: argparse.Namespace) -> int:
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add ``pixelpen sim`` to the ``pixelpen`` parser."""
     p = subparsers.add_parser(
-        "sim", help="run a simulated device on a pty, or replay a byte file into it, and save its paper",
+        "sim", help="run a simulated device on a pty, replay a byte file into it, or watch it live; save its paper",
         description="Run the simulator of MODEL on a pseudo-terminal (--pty) for any program to open, or feed "
-                    "it a raw byte file (--replay), then write the paper as an image.")
+                    "it a raw byte file (--replay), and/or watch it live in a web browser (--view; a panel "
+                    "shows a demo drawn through its display), then write the paper or glass as an image.")
     p.add_argument("model", metavar="MODEL",
                    help="simulator model (hp7475a, hp7550a, hp7440a, grbl, axidraw, ebb; panels: ssd1306, st7789, ...)")
     p.add_argument("--pty", action="store_true", help="serve the device on a pty until Ctrl-C; prints the path")
