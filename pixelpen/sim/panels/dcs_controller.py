@@ -80,6 +80,11 @@ class DcsController:
         self._sleep_toggle = (t, cause)
         self._scan_start = t
 
+    def settle(self) -> None:
+        """Forget the waits still running: a panel powered long before the host program starts."""
+        self._ready = (-math.inf, 0.0, "power-on")
+        self._sleep_toggle = (-math.inf, "power-on")
+
     # ---- the bus side ------------------------------------------------------------------------------
     def command(self, code: int, t: float) -> None:
         """A D/CX=0 byte at time ``t``: ends the command in progress, then starts (or carries out) this one."""

@@ -93,6 +93,7 @@ class MipiDcsSim(PanelSim):
                          strict=strict, spi_limit_hz=spec.max_write_hz)
         self._power_ups = 0
         self._chip = self._power_up()
+        self._chip.settle()  # powered before the program started: only a RESX pulse or a power cut restarts waits
 
     def _power_up(self) -> DcsController:
         """A controller just powered: registers at their reset values, the frame memory seeded noise."""
@@ -110,9 +111,11 @@ class MipiDcsSim(PanelSim):
         self._chip.data(data, self._now)
 
     def _panel_reset(self) -> None:
+        self._catch_up()  # a fault is injected without the bus having moved the device's time on
         self._chip.hardware_reset(self._now)
 
     def _panel_power_loss(self) -> None:
+        self._catch_up()
         self._chip = self._power_up()
 
     # ---- what it shows ---------------------------------------------------------------------------

@@ -20,7 +20,7 @@ from pixelpen.clock import SimulatedClock
 from pixelpen.errors import ConfigError, ProtocolError, URLError
 from pixelpen.sim.base import Fault, create_simulator
 from pixelpen.sim.panels.mipidcs import MipiDcsSim
-from tests.fuzzing import QUICK_CASES, campaign
+from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
 
 
 def make(model: str = "st7789", width: int = 240, height: int = 240, **options: object) -> MipiDcsSim:
@@ -363,6 +363,23 @@ def test_commands_sooner_than_the_datasheet_wait_are_reported_with_the_gap(model
         assert len(sim.events) == 1 and sim.events[0].command == then and messages(sim)[0].startswith(flagged)
 
 
+def test_a_new_simulator_is_a_panel_powered_long_ago_and_a_power_cut_or_resx_restarts_the_waits():
+    clock = SimulatedClock()
+    sim = MipiDcsSim("st7789", 240, 240, clock=clock)
+    send(sim, 0x11)
+    assert sim.events == []
+    later(sim, 0.2)
+    sim.inject(Fault.POWER_LOSS)
+    send(sim, 0x11)
+    assert messages(sim) == ["SLPOUT 0.000 ms after RESX (datasheet: wait 5 ms; carried out)",
+                             "SLPOUT 0.000 ms after RESX (datasheet: wait 120 ms; carried out)"]
+    later(sim, 0.2)
+    sim.reset()
+    later(sim, 0.006)
+    send(sim, 0x11)
+    assert messages(sim)[2:] == ["SLPOUT 6.000 ms after RESX (datasheet: wait 120 ms; carried out)"]
+
+
 def test_slpin_within_120_ms_of_slpout_is_reported():
     sim = make("st7789", 240, 320)
     send(sim, 0x11)
@@ -592,6 +609,12 @@ SEEDS = [
     frames_of([*LUMA_ST7789, (0x2A, (0, 0, 0, 239)), (0x2B, (0, 0, 0, 239)), (0x2C, tuple(range(255)) * 3)]),
     frames_of([*LUMA_ILI9341, (0x33, (0, 0, 1, 0x40, 0, 0)), (0x37, (0, 5)), (0x3C, tuple(range(90)))]),
 ]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("model", ["st7789", "ili9341", "st7735"])
+def test_fuzz_campaign(model):
+    campaign(f"mipidcs-{model}", lambda data: replay(model, data), SEEDS, SLOW_CASES, seed=11).check()
 
 
 @pytest.mark.parametrize("model", ["st7789", "ili9341", "st7735"])
