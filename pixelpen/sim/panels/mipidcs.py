@@ -1,14 +1,15 @@
 """MipiDcsSim: an ST7789VW, ILI9341 or ST7735R/S panel module on 4-wire SPI, decoded from the wire to the glass.
 
 The controller (commands, waits, frame memory) is :mod:`dcs_controller`; the module's glass (offset,
-mirroring, colour filters, IPS) is :mod:`dcs_glass`. ``gram`` is the frame memory as stored:
+turn, mirroring, colour filters, IPS) is :mod:`dcs_glass`. ``gram`` is the frame memory as stored:
 (RAM rows, RAM columns, 3) uint8 of 6-bit components (0..63), indexed [row, column], the first
-component being the one sent first (red unless the host sends BGR); 320x240 for ST7789 and ILI9341,
-162x132 for ST7735 (GM 000). ``glass()`` is the module's width x height RGB image (8-bit components
-``v << 2 | v >> 4``). A landscape size (width > height) is the portrait module turned 90°: ILI9341
-320x240 shows luma's and Adafruit's rotation 1 (MADCTL 28h) upright. The TE output follows the frame
-timing of FRCTRL2/PORCTRL (ST7789), FRMCTR1/PRCTR (ILI9341) or FRMCTR1 (ST7735); TEM=1's H-blank pulses
-are not modelled.
+component being the one sent first (red unless the host sends BGR): (320, 240, 3) for ST7789 and
+ILI9341, (160, 128, 3) for an ST7735 128x160 "black tab" (GM 011), (162, 132, 3) for other ST7735
+modules. ``glass()`` is the module's width x height RGB image (8-bit components ``v << 2 | v >> 4``),
+upright as Adafruit's rotation 0 draws it; a landscape size (width > height) is the portrait module
+turned 90° (Adafruit's rotation 1 upright: MY|MV on ST77xx, MV on ILI9341, which is luma's ILI9341
+default). The TE output follows FRCTRL2/PORCTRL (ST7789), FRMCTR1/PRCTR (ILI9341) or FRMCTR1 (ST7735);
+TEM=1's H-blank pulses are not modelled.
 """
 
 from __future__ import annotations
