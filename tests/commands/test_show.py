@@ -241,3 +241,52 @@ def test_an_animation_on_a_simulated_panel_sends_only_what_changed(tmp_path, cap
         forget_simulator("show-test")
     want = np.asarray(images[-1].resize((240, 240), Image.Resampling.BILINEAR)).astype(int)
     assert np.abs(glass - want).mean() < 12
+
+
+class InterruptingBus:
+    """A panel bus passing calls on, that raises KeyboardInterrupt once in the middle of the ``at``-th data call."""
+
+    def __init__(self, bus, at):
+        self.bus, self.at, self.calls = bus, at, 0
+
+    def __getattr__(self, name):
+        return getattr(self.bus, name)
+
+    def data(self, data):
+        self.calls += 1
+        if self.calls == self.at:
+            self.interrupted = len(data)
+            self.bus.data(data[: len(data) // 2])
+            raise KeyboardInterrupt
+        self.bus.data(data)
+
+
+@pytest.mark.skipif("st7789" not in simulator_models(), reason="the ST7789 simulator is not registered yet")
+def test_ctrl_c_in_the_middle_of_a_frame_leaves_the_panel_showing_a_whole_one(tmp_path, monkeypatch, capsys):
+    from pixelpen.commands import show as show_module
+    from pixelpen.sim.base import forget_simulator, named_simulator
+
+    opened, buses = [], []
+
+    def open_and_interrupt(url):
+        display = pixelpen_open(url)
+        # data calls: CASET, RASET and the pixels of the first picture, then the second picture's
+        display.wiring.bus = InterruptingBus(display.wiring.bus, at=6)
+        opened.append(display)
+        buses.append(display.wiring.bus)
+        return display
+
+    pixelpen_open = show_module.open_display
+    monkeypatch.setattr(show_module, "open_display", open_and_interrupt)
+    src = tmp_path / "anim.gif"
+    moving_box_gif(src, frames=6)
+    try:
+        assert main(["show", str(src), "--to", "sim:st7789?size=240x240&id=show-interrupted"]) == 130
+        display = opened[0]
+        assert not display.is_open and buses[0].interrupted > 1000  # stopped inside a window's pixels
+        glass = np.asarray(named_simulator("show-interrupted").glass().convert("RGB")).astype(int)
+    finally:
+        forget_simulator("show-interrupted")
+    # the close sent the canvas whole: the glass is the canvas (RGB565 resolution: within 8 levels)
+    assert np.abs(glass - display.canvas.array.astype(int)).max() <= 8
+    assert "stopped" in capsys.readouterr().err
