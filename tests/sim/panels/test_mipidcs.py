@@ -153,6 +153,26 @@ def test_window_writes_match_the_scalar_reference(madctl, xs, w, ys, h, extra, p
     assert np.array_equal(sim.gram, expected)
 
 
+@pytest.mark.parametrize("model, code, params, cell", [
+    ("st7789", 0xC0, (0x2C ^ 0x08,), (0, 239)),        # LCMCTRL XMX (reset value 2Ch): MX exchanged
+    ("st7789", 0xC0, (0x2C ^ 0x40,), (319, 0)),        # XMY
+    ("ili9341", 0xF6, (0x01 | 0x80, 0, 0), (319, 0)),  # interface control MY_EOR
+    ("ili9341", 0xF6, (0x01 | 0x40, 0, 0), (0, 239)),  # MX_EOR
+])
+def test_lcmctrl_and_interface_control_exchange_madctl_bits(model, code, params, cell):
+    sim = awake(make(model, 240, 320))
+    send(sim, code, *params)
+    window(sim, 0, 0, 0, 0)
+    send(sim, 0x2C, *rgb666([[7, 7, 7]]))
+    assert sim.gram[cell][0] == 7 and sim.events == []
+
+
+def test_gamset_takes_only_the_four_curves():
+    sim = awake(make("st7789", 240, 320))
+    send(sim, 0x26, 0x03)
+    assert messages(sim) == ["GAMSET 0x03 is not a curve (01h, 02h, 04h, 08h): ignored"]
+
+
 def test_wrmemc_continues_after_the_last_pixel_written():
     sim = awake(make("st7789", 240, 320))
     window(sim, 10, 13, 20, 21)
