@@ -40,9 +40,13 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-TRIM_FRACTION = 0.25
-"""Damage covering more than this share of the panel is sent as it is, without the per-pixel trim (a video
-frame changes nearly everything; comparing it would only cost host time)."""
+EXACT_TRIM = 1 / 16
+"""Damage of at most this share of the panel is trimmed to exact runs of changed pixels; larger damage (a
+diagonal across the screen) to changed tiles of :data:`TRIM_TILE` pixels, which bounds the planning cost."""
+TRIM_TILE = 8
+"""Side of the tiles larger damage is trimmed to (rounded up to the controller's alignment)."""
+SEND_WHOLE = 0.5
+"""A damaged rectangle in which more than this share of the values changed is sent whole (a video frame)."""
 TE_TIMEOUT = 0.05
 """Seconds to wait for the tearing-effect pulse before sending anyway (three frames at 60 Hz)."""
 PIXEL_PITCH_MM = 0.2
@@ -524,19 +528,23 @@ class PanelDisplay(RasterDisplay):
         return pack(view, self.pixel_format)
 
     def _trim(self, rects: list[Rect], native: np.ndarray) -> list[Rect]:
-        """The damage shrunk to the pixels that differ from the shadow (rectangles of changed runs)."""
+        """The damage shrunk to the pixels that differ from the shadow: exact runs for small damage, changed
+        tiles for large, the rectangle itself where most of it changed."""
         assert self._shadow is not None
         height, width = native.shape[:2]
-        if sum(r.area for r in rects) > TRIM_FRACTION * width * height:
-            return rects
         cost = self.cost
         ax, ay = cost.align
+        if sum(r.area for r in rects) > EXACT_TRIM * width * height:
+            ax, ay = -(-TRIM_TILE // ax) * ax, -(-TRIM_TILE // ay) * ay
         out: list[Rect] = []
         for r in rects:
             a = r.aligned(ax, ay, width, height)
             rows, cols = a.slices
-            found = tile_damage(np.ascontiguousarray(native[rows, cols]), self._shadow[rows, cols], (ax, ay),
-                                cost.window_bytes, cost.bytes_per_pixel)
+            now, before = native[rows, cols], self._shadow[rows, cols]
+            if np.count_nonzero(now != before) > SEND_WHOLE * now.size:
+                out.append(a)
+                continue
+            found = tile_damage(np.ascontiguousarray(now), before, (ax, ay), cost.window_bytes, cost.bytes_per_pixel)
             out.extend(Rect(a.x0 + f.x0, a.y0 + f.y0, a.x0 + f.x1, a.y0 + f.y1) for f in found)
         return out
 
