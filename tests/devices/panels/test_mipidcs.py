@@ -139,3 +139,16 @@ def test_partial_windows_are_inside_the_module() -> None:
     display.flush()
     for xs, xe, ys, ye, _ in windows(bus.take()):
         assert 40 <= xs <= xe <= 279 and 52 <= ys <= ye <= 186
+
+
+def test_a_diagonal_across_the_screen_is_not_sent_as_its_bounding_box() -> None:
+    display, bus = tft("st7789_240x240")
+    bus.take()
+    display.canvas.lines([[0, 0, 239, 239]], (255, 255, 255))
+    display.flush()
+    sent = windows(bus.take())
+    assert sum(w[4] for w in sent) < 0.05 * 240 * 240 * 2
+    covered = np.zeros((240, 240), dtype=bool)
+    for xs, xe, ys, ye, _ in sent:
+        covered[ys - 80:ye - 80 + 1, xs:xe + 1] = True  # rotation 0: rows +80
+    assert covered[np.arange(240), np.arange(240)].all()  # every pixel of the line is in a window
