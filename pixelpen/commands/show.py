@@ -1,16 +1,18 @@
 """The ``show`` command: a still image, an animation or a video's frames on any raster display, at their pace.
 
 ``pixelpen show IMAGE --to URL``: IMAGE is anything Pillow reads (PNG, JPEG, BMP, ...; an animated GIF, APNG
-or WebP plays its frames for their durations) or, with ``ffmpeg`` on PATH, a video (decoded by ffmpeg through
-a pipe as raw RGB frames, at its frame rate).  Each frame is scaled to the display (``--fit``: contain, cover
-or stretch; ``--rotate`` turns it 90 degrees when that fills the display better), dithered for a mono panel,
-and only its changed tiles are drawn, so a panel sends just the pixels that differ.
+or WebP plays its frames for their durations) or, with ``ffmpeg`` on PATH, a video (known by its file name's
+ending; decoded by ffmpeg through a pipe as raw RGB frames, at its frame rate).  Each frame is scaled to the
+display (``--fit``: contain, cover or stretch; ``--rotate`` turns it 90 degrees when that fills the display
+better), dithered for a mono panel, and only its changed tiles are drawn, so a panel sends just the pixels
+that differ.
 
 Frames are paced on the display's clock (a ``sim:`` panel's SimulatedClock: simulated time, bus time
 included) by their presentation times, with the FramePacer's rule: frames never queue; a frame whose
 successor is already due when its turn comes is skipped and counted.  At the end the command prints frames
 shown and skipped, the achieved frame rate and the bytes the display put on its bus.  Ctrl-C or SIGTERM stop
-after the frame in progress; the display is closed normally, so the panel is left showing a whole frame.
+the show (exit status 130); the display is then closed normally, and a panel sends a frame that was cut
+short again whole, so it is left showing a whole frame.
 """
 
 from __future__ import annotations
@@ -20,9 +22,9 @@ import json
 import logging
 import math
 import shutil
-import signal
 import subprocess
 import sys
+import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -93,11 +95,6 @@ class ImageSource:
         except (UnidentifiedImageError, OSError, ValueError) as exc:
             raise ConfigError(f"cannot read {path} as an image: {_reason(exc)}") from None
 
-    @property
-    def rate(self) -> float | None:
-        """Frames per second of a constant-rate source (an image: None)."""
-        return None
-
     def frames(self) -> Iterator[Frame]:
         """Every frame once (a still: one frame of 0 s)."""
         with Image.open(self.path) as image:
@@ -115,11 +112,11 @@ class VideoSource:
     def __init__(self, path: Path) -> None:
         self.path = path
         self.animated = True
-        self.ffmpeg = shutil.which("ffmpeg")
-        ffprobe = shutil.which("ffprobe")
-        if self.ffmpeg is None or ffprobe is None:
+        ffmpeg, ffprobe = shutil.which("ffmpeg"), shutil.which("ffprobe")
+        if ffmpeg is None or ffprobe is None:
             raise ConfigError(f"{path} is a video: showing video needs ffmpeg and ffprobe on PATH "
                               "(Debian/Ubuntu: apt install ffmpeg; macOS: brew install ffmpeg)")
+        self.ffmpeg = ffmpeg
         probe = subprocess.run([ffprobe, "-v", "error", "-select_streams", "v:0", "-show_entries",
                                 "stream=width,height,avg_frame_rate,r_frame_rate", "-of", "json", str(path)],
                                capture_output=True, text=True, check=False)
@@ -131,33 +128,36 @@ class VideoSource:
                               f"{probe.stderr.strip() or 'no video stream'}") from None
         self._rate = _ratio(stream.get("avg_frame_rate")) or _ratio(stream.get("r_frame_rate")) or 25.0
 
-    @property
-    def rate(self) -> float:
-        """The video's frame rate (frames per second)."""
-        return self._rate
-
     def frames(self) -> Iterator[Frame]:
-        """Every frame once, read from ``ffmpeg -f rawvideo -pix_fmt rgb24``."""
-        assert self.ffmpeg is not None
+        """Every frame once, read from ``ffmpeg -f rawvideo -pix_fmt rgb24`` (its messages go to a temporary file,
+        so a chatty decoder never blocks on a full pipe); ConfigError when ffmpeg decodes no frame at all."""
         width, height = self.size
         size = width * height * 3
-        process = subprocess.Popen([self.ffmpeg, "-v", "error", "-nostdin", "-i", str(self.path), "-f", "rawvideo",
-                                    "-pix_fmt", "rgb24", "-"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        assert process.stdout is not None and process.stderr is not None
-        try:
-            while len(raw := process.stdout.read(size)) == size:
-                yield Frame(Image.frombuffer("RGB", (width, height), raw), 1.0 / self._rate)
-        finally:
-            process.stdout.close()
-            process.kill()
-            error = process.stderr.read().decode(errors="replace").strip()
-            process.stderr.close()
-            if process.wait() not in (0, -signal.SIGKILL) and error:
-                log.warning("ffmpeg: %s", error.splitlines()[-1])
+        decoded = 0
+        with tempfile.TemporaryFile() as messages:
+            process = subprocess.Popen([self.ffmpeg, "-v", "error", "-nostdin", "-i", str(self.path), "-f", "rawvideo",
+                                        "-pix_fmt", "rgb24", "-"], stdout=subprocess.PIPE, stderr=messages)
+            stdout = process.stdout
+            if stdout is None:  # pragma: no cover - PIPE always gives one
+                raise ConfigError("ffmpeg started without an output pipe")
+            try:
+                while len(raw := stdout.read(size)) == size:
+                    decoded += 1
+                    yield Frame(Image.frombuffer("RGB", (width, height), raw), 1.0 / self._rate)
+            finally:
+                stdout.close()
+                process.kill()
+                status = process.wait()
+            messages.seek(0)
+            error = messages.read().decode(errors="replace").strip()
+        if status != 0 and error:
+            if not decoded:
+                raise ConfigError(f"cannot decode {self.path}: ffmpeg says {error.splitlines()[-1]}")
+            log.warning("%s: ffmpeg: %s", self.path, error.splitlines()[-1])
 
 
 def open_source(path: str | Path) -> ImageSource | VideoSource:
-    """The frames of ``path``: an image Pillow reads, else (by its name or failing Pillow) a video for ffmpeg."""
+    """The frames of ``path``: a video for ffmpeg when its name says so (:data:`VIDEO_SUFFIXES`), else an image."""
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"cannot read {path}: no such file")

@@ -181,8 +181,9 @@ def test_a_video_without_ffmpeg_says_what_to_install(tmp_path, capsys, monkeypat
     assert "ffmpeg" in err and "apt install ffmpeg" in err and str(src) in err
 
 
-def fake_tools(folder, width, height, rate, count):
-    """ffprobe and ffmpeg stand-ins on PATH: the probe's JSON, then ``count`` raw RGB frames of grey levels."""
+def fake_tools(folder, width, height, rate, count, fail=""):
+    """ffprobe and ffmpeg stand-ins on PATH: the probe's JSON, then ``count`` raw RGB frames of grey levels
+    (then, with ``fail``, that message on stderr and exit status 1)."""
     folder.mkdir()
     probe = {"streams": [{"width": width, "height": height, "avg_frame_rate": rate, "r_frame_rate": rate}]}
     scripts = {
@@ -192,6 +193,9 @@ def fake_tools(folder, width, height, rate, count):
             assert sys.argv[-5:] == ["-f", "rawvideo", "-pix_fmt", "rgb24", "-"], sys.argv
             for i in range({count}):
                 sys.stdout.buffer.write(bytes([i * 20]) * {width * height * 3})
+            if {fail!r}:
+                sys.stderr.write({fail!r} + "\\n")
+                sys.exit(1)
             """),
     }
     for name, body in scripts.items():
@@ -208,6 +212,16 @@ def test_video_frames_come_from_ffmpeg_through_a_pipe_at_its_rate(tmp_path, caps
     assert main(["show", str(src), "--to", f"png:{out}?size=16x12"]) == 0
     assert "shown 5 frames, skipped 0, 25.0 fps achieved" in capsys.readouterr().out
     assert (pixels(out) == 80).all()  # the last frame: grey level 4 * 20
+
+
+def test_a_video_ffmpeg_cannot_decode_is_exit_2_with_its_message(tmp_path, capsys, monkeypatch):
+    fake_tools(tmp_path / "bin", 16, 12, "25/1", 0, fail="Invalid data found when processing input")
+    monkeypatch.setenv("PATH", str(tmp_path / "bin"))
+    src = tmp_path / "clip.mkv"
+    src.write_bytes(b"\x00")
+    assert main(["show", str(src), "--to", f"png:{tmp_path / 'o.png'}?size=16x12"]) == 2
+    err = capsys.readouterr().err
+    assert f"cannot decode {src}: ffmpeg says Invalid data found" in err
 
 
 @pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="ffmpeg is not installed")
