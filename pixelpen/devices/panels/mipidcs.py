@@ -14,6 +14,7 @@ import struct
 from typing import Any, ClassVar
 
 from pixelpen.devices.panels.base import PanelDisplay
+from pixelpen.display.registry import register_display
 from pixelpen.errors import ConfigError
 from pixelpen.options import OptionSpec, OptionValues, boolean, choice
 from pixelpen.profiles.panel import COLMOD, MADCTL_BGR, PanelGeometry, PanelProfile
@@ -104,6 +105,7 @@ class MipiDcsDisplay(PanelDisplay):
         self._command(INVON if self.invert else INVOFF)
 
 
+@register_display("st7789")
 class ST7789Display(MipiDcsDisplay):
     """Sitronix ST7789 modules (240x240, 240x320, 135x240, 240x280, 170x320)."""
 
@@ -111,6 +113,7 @@ class ST7789Display(MipiDcsDisplay):
     default_size: ClassVar[tuple[int, int]] = (240, 240)
 
 
+@register_display("ili9341")
 class ILI9341Display(MipiDcsDisplay):
     """ILITEK ILI9341 modules (240x320, often used as 320x240)."""
 
@@ -118,6 +121,7 @@ class ILI9341Display(MipiDcsDisplay):
     default_size: ClassVar[tuple[int, int]] = (240, 320)
 
 
+@register_display("st7735")
 class ST7735Display(MipiDcsDisplay):
     """Sitronix ST7735 modules (128x160, 80x160)."""
 

@@ -14,6 +14,7 @@ from typing import Any, ClassVar
 
 from pixelpen.devices.panels.base import PanelDisplay
 from pixelpen.devices.panels.wiring import Interface, Pins
+from pixelpen.display.registry import register_display
 from pixelpen.errors import ConfigError
 from pixelpen.options import OptionSpec, OptionValues, integer
 from pixelpen.profiles.panel import InitStep, PanelGeometry, PanelProfile
@@ -36,6 +37,7 @@ def i2c_address(value: str) -> int:
     return number
 
 
+@register_display("ssd1306")
 class SSD1306Display(PanelDisplay):
     """An SSD1306 OLED (``ssd1306:i2c:1?addr=0x3c``, ``ssd1306:spi:0.0?dc=24&rst=25``, ``sim:ssd1306?size=128x32``)."""
 
@@ -132,12 +134,14 @@ class SSD1306Display(PanelDisplay):
 
 
 
+@register_display("ssd1309")
 class SSD1309Display(SSD1306Display):
     """An SSD1309 OLED (the SSD1306 command set, external VCC: no charge pump)."""
 
     controller: ClassVar[str] = "ssd1309"
 
 
+@register_display("sh1106")
 class SH1106Display(SSD1306Display):
     """An SH1106 OLED: 132-column RAM, page addressing only (``B0+p``, column low/high nibbles per page)."""
 
