@@ -304,3 +304,28 @@ def test_ctrl_c_in_the_middle_of_a_frame_leaves_the_panel_showing_a_whole_one(tm
     # the close sent the canvas whole: the glass is the canvas (RGB565 resolution: within 8 levels)
     assert np.abs(glass - display.canvas.array.astype(int)).max() <= 8
     assert "stopped" in capsys.readouterr().err
+
+
+def test_sigterm_stops_a_show_that_loops_forever(tmp_path):
+    import os
+    import signal
+    import subprocess
+    import time
+
+    src, out = tmp_path / "anim.gif", tmp_path / "o.png"
+    moving_box_gif(src, frames=3)
+    env = {**os.environ, "PIXELPEN_CONFIG": ""}
+    process = subprocess.Popen([sys.executable, "-m", "pixelpen", "show", str(src), "--to", f"png:{out}?size=40x30",
+                                "--loop", "0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        for _ in range(600):  # the file appears with the first frame: the show is running
+            if out.exists() or process.poll() is not None:
+                break
+            time.sleep(0.05)
+        process.send_signal(signal.SIGTERM)
+        stdout, stderr = process.communicate(timeout=60)
+    finally:
+        process.kill()
+    assert process.returncode == 130, stderr
+    assert "shown" in stdout and "stopped" in stderr
+    assert Image.open(out).size == (40, 30)  # written whole at the close
