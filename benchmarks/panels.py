@@ -160,11 +160,15 @@ def _text_patch(text: str, size: tuple[int, int], font_px: int) -> np.ndarray:
 
 
 def cursor(panel: Panel, frames: int) -> tuple[np.ndarray, list[list[Patch]]]:
-    """A 20x20 cursor (a white frame, 3 pixels wide) moving 3 columns and 2 rows a frame over a gradient."""
-    background = _native(_gradient(panel), panel)
+    """A solid white 20x20 cursor moving 3 columns and 2 rows a frame over a gradient (mono: a grid of dots
+    every 4 pixels, so the cursor always changes what it covers), bouncing off the edges."""
+    if panel.mono:
+        background = np.zeros((panel.height, panel.width), np.uint8)
+        background[::4, ::4] = 1
+    else:
+        background = _gradient(panel)
     ink = np.zeros((CURSOR, CURSOR, *background.shape[2:]), np.uint8)
     ink[...] = 1 if panel.mono else (255, 255, 255)
-    ink[3:-3, 3:-3] = 0  # a hollow square: it shows over lit and dark pixels alike
     x, y, dx, dy = 5, 5, 3, 2
     out = []
     for _ in range(frames):
