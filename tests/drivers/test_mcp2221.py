@@ -5,6 +5,7 @@ from __future__ import annotations
 import errno
 import types
 
+import numpy as np
 import pytest
 from smbus2 import i2c_msg
 
@@ -228,3 +229,27 @@ def test_garbled_answers_never_hang_the_adapter():
     drive_with_replies(bytes(ok))
     campaign("mcp2221 answers", drive_with_replies, [bytes(ok)], QUICK_CASES, seed=8,
              allowed=(LinkError,)).check()
+
+
+SSD1306_INIT = bytes((0xAE, 0xD5, 0x80, 0xA8, 0x3F, 0xD3, 0x00, 0x40, 0x8D, 0x14, 0x20, 0x00, 0xA1, 0xC8, 0xDA, 0x12,
+                      0x81, 0xCF, 0xD9, 0xF1, 0xDB, 0x40, 0xA4, 0xA6, 0xAF))
+"""The SSD1306 datasheet's application-note init (charge pump on, horizontal addressing), then display on."""
+
+
+def test_an_ssd1306_simulator_behind_the_mcp2221_shows_what_it_shows_when_written_directly():
+    panels = pytest.importorskip("pixelpen.sim.panels")
+    clock = SimulatedClock()
+    through = panels.SSD1306Sim(128, 64, clock=clock)
+    fake = SimMCP2221(through)
+    fake.open()
+    bus = I2CBus(MCP2221(fake, clock=clock), 0x3C, clock_hz=400_000, clock=clock)
+    pixels = bytes((0x0F if (i // 128) % 2 else 0xF0) ^ (i % 3) for i in range(1024))
+    bus.command(SSD1306_INIT)
+    bus.command(0x21, 0x00, 0x7F, 0x22, 0x00, 0x07)
+    bus.data(pixels)
+    direct = panels.SSD1306Sim(128, 64, clock=SimulatedClock())
+    for payload in (b"\x00" + SSD1306_INIT, b"\x00\x21\x00\x7f\x22\x00\x07", b"\x40" + pixels):
+        assert direct.i2c_write(0x3C, payload)
+    assert np.array_equal(np.asarray(through.glass()), np.asarray(direct.glass()))
+    assert np.array_equal(through.gram, direct.gram)
+    assert int(np.count_nonzero(np.asarray(through.glass()))) == sum(bin(b).count("1") for b in pixels)
