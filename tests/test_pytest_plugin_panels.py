@@ -83,6 +83,16 @@ def test_factory_gives_several_panels(make_sim_panel):
         a.display
 
 
+@pytest.mark.parametrize("sim_panel", ["ssd1306?size=128x64"], indirect=True)
+def test_a_mono_oled(sim_panel):
+    with pixelpen.open(sim_panel.url) as oled:
+        oled.canvas.blit(np.ones((8, 16), np.uint8), 0, 0)   # 16 columns of page 0 lit
+        oled.flush()
+    lit = np.asarray(sim_panel.glass().convert("L")) > 0
+    assert lit.shape == (64, 128) and lit[:8, :16].all() and lit.sum() == 8 * 16
+    assert sim_panel.gram.shape[0] == 8                  # SSD1306 RAM: 8 pages of 128 column bytes
+
+
 def test_a_failing_test(sim_panel):
     paint_logo(sim_panel.url)
     assert False, "fails on purpose: its glass is saved"
@@ -99,7 +109,7 @@ def test_panel_fixtures_in_a_user_test_file(pytester, tmp_path):
     pytester.makepyfile(test_user=USER_TESTS)
     glass_dir = tmp_path / "glass"
     result = pytester.runpytest(*_plugin_args(), "--pixelpen-glass-dir", str(glass_dir))
-    result.assert_outcomes(passed=6, failed=1)
+    result.assert_outcomes(passed=7, failed=1)
     # only the failed test's glass is kept, named as the paper of the plotter fixtures
     assert sorted(p.name for p in glass_dir.iterdir()) == ["test_a_failing_test-st7789.png"]
     glass = Image.open(glass_dir / "test_a_failing_test-st7789.png").convert("RGB")
