@@ -15,6 +15,7 @@ import json
 import logging
 import re
 import sys
+import tempfile
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -225,6 +226,20 @@ class PanelAnimation:
         return canvas_pixels(scratch, image)
 
 
+def lit_reference(display: RasterDisplay) -> np.ndarray:
+    """The reference scene for a mono panel (HxW 0/1): drawn in colour on black at the panel's size and pitch,
+    every stroke lit (drawn on the mono canvas itself, its darker colours fall below the lit threshold)."""
+    canvas, unit_mm = display.canvas, display.capabilities.unit_mm
+    with tempfile.TemporaryDirectory() as folder:
+        size, dpi = f"{canvas.width}x{canvas.height}", f"{25.4 / unit_mm:g}"
+        url = format_url("png", str(Path(folder) / "scene.png"), {"size": size, "dpi": dpi, "background": "black"})
+        with open_display(url) as colour:
+            draw_reference(colour)
+            colour.flush()
+            rgb = colour.canvas.array.copy()  # type: ignore[attr-defined]
+    return (rgb.max(axis=2) >= 96).astype(np.uint8)
+
+
 @dataclass
 class PanelDemoResult:
     """What the demo did on one panel: files written and the animation's frame statistics."""
@@ -260,7 +275,10 @@ def panel_demo(out: Path, panels: Sequence[tuple[str, dict[str, str]]] = DEMO_PA
         with open_display(url) as display:
             assert isinstance(display, PanelDisplay)
             sim: Any = display.simulator
-            draw_reference(display)
+            if display.canvas.mode == "1":
+                display.canvas.blit(lit_reference(display), 0, 0)
+            else:
+                draw_reference(display)
             display.flush()
             glass = out / f"panel-{model}.png"
             sim.glass().save(glass)
