@@ -143,7 +143,9 @@ class SSD1306Sim(PanelSim):
         self.column, self.page = 0, 0
         self.scrolling = False
         self.scroll: tuple[int, bytes] | None = None
-        """The last scroll setup: (command, parameters)."""
+        """The last scroll setup (26h/27h/29h/2Ah): (command, parameters)."""
+        self.scroll_area = (0, 64)
+        """A3h: (top fixed rows, scrolling rows)."""
         self.locked = False
         self._pending: list[int] = []
         self._code: int | None = None
@@ -312,11 +314,14 @@ class SSD1306Sim(PanelSim):
         elif code in (0x26, 0x27, 0x29, 0x2A, 0xA3):
             if self.scrolling:
                 self._report(code, "scroll set up while scrolling is active (2Eh must come first)")
-            self.scroll = (code, params)
+            if code == 0xA3:
+                self.scroll_area = (params[0], params[1])
+            else:
+                self.scroll = (code, params)
         elif code == 0x2E:
             self.scrolling = False
         elif code == 0x2F:
-            if self.scroll is None or self.scroll[0] == 0xA3:
+            if self.scroll is None:
                 self._report(code, "activate scroll (2Fh) with no scroll set up (26h/27h/29h/2Ah)")
             else:
                 self.scrolling = True
@@ -390,7 +395,7 @@ def _byte(text: str) -> int:
 OPTIONS: tuple[OptionSpec[Any], ...] = (
     OptionSpec("size", _size, (128, 64), "glass size WxH"),
     OptionSpec("address", _byte, 0x3C, "I2C address (0x3c or 0x3d)"),
-    OptionSpec("clock", number(1, above=True), None, "bus clock in Hz for bus time (default: the datasheet's)"),
+    OptionSpec("hz", number(1, above=True), None, "bus clock in Hz for bus time (default: the datasheet's)"),
     OptionSpec("colstart", integer(0, 131), None, "RAM column of the glass's left edge (default: 64-wide 32, "
                                                   "SH1106 2, else 0)"),
     OptionSpec("compins", _byte, None, "the DAh value the module's rows are wired for (default 0x12, 32/16 rows 0x02)"),
@@ -405,7 +410,7 @@ def _factory(variant: str) -> Any:
         values = read_options(OPTIONS, options, f"sim:{variant}")
         width, height = values["size"]
         return SSD1306Sim(width, height, variant=variant, address=values["address"], clock=clock,
-                          clock_hz=values["clock"], colstart=values["colstart"], com_pins=values["compins"],
+                          clock_hz=values["hz"], colstart=values["colstart"], com_pins=values["compins"],
                           external_vcc=values["external_vcc"], strict=values["strict"])
     return create
 
