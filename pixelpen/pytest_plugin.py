@@ -143,8 +143,8 @@ class SimPanel:
         from pixelpen.urls import format_url
 
         model = model.lower()
-        panels = [name for name in scheme_names() if _is_panel_scheme(name)]
-        if model not in panels:
+        if not _is_simulated_panel(model):
+            panels = [name for name in scheme_names() if _is_simulated_panel(name)]
             raise pytest.UsageError(f"pixelpen: no simulated panel {model!r}; known: {', '.join(panels)}")
         options = dict(options or {})
         if "id" in options:
@@ -282,12 +282,17 @@ class SimPanel:
             self._display.close()
 
 
-def _is_panel_scheme(name: str) -> bool:
-    """True for the schemes of panels and framebuffers (their simulators are reached through ``sim:``)."""
-    from pixelpen.display.registry import BUILTIN_DISPLAYS
+def _is_simulated_panel(scheme: str) -> bool:
+    """True for a scheme whose display is raster and simulated (panels, framebuffers: ``sim:SCHEME``)."""
+    from pixelpen.display.kinds import RasterDisplay
+    from pixelpen.display.registry import display_class
+    from pixelpen.errors import URLError
 
-    target = BUILTIN_DISPLAYS.get(name, "")
-    return target.startswith("pixelpen.devices.panels.")
+    try:
+        cls = display_class(scheme)
+    except URLError:
+        return False
+    return issubclass(cls, RasterDisplay) and bool(cls.simulated)
 
 
 @functools.cache
