@@ -167,9 +167,11 @@ class SimPanel:
     # -- the display ---------------------------------------------------------------------------------
     def open(self, **options: Any) -> RasterDisplay:
         """Open the display of :attr:`url` (plus display ``options``, e.g. ``rotation=90``) and watch it:
-        its frames are counted in :attr:`frames` from the first (the full frame of the initialisation)."""
+        its frames are counted in :attr:`frames` from the first (the full frame of the initialisation) until the
+        display is opened again (``open()`` after ``close()`` starts new statistics)."""
         import pixelpen
         from pixelpen.display.kinds import RasterDisplay
+        from pixelpen.errors import ConfigError
         from pixelpen.urls import format_url, parse_url
 
         parsed = parse_url(self.url)
@@ -177,7 +179,7 @@ class SimPanel:
                                                                **{k: str(v) for k, v in options.items()}}))
         if not isinstance(display, RasterDisplay):  # pragma: no cover - every panel scheme is raster
             display.close()
-            raise TypeError(f"{self.url} did not open a raster display")
+            raise ConfigError(f"{self.url} did not open a raster display")
         self._display = display
         self._frames = []
         stats = getattr(display, "stats", None)
