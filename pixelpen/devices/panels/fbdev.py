@@ -9,10 +9,12 @@ The geometry is the device's, so the framebuffer is opened when the display is b
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from pixelpen.clock import Clock
+from pixelpen.clock import REAL_CLOCK, Clock
+from pixelpen.devices.panels.base import FrameStats, PanelStats
 from pixelpen.display.capabilities import Capabilities, ColourModel
 from pixelpen.display.kinds import RasterDisplay
 from pixelpen.display.registry import register_display
@@ -75,10 +77,11 @@ class FramebufferDisplay(RasterDisplay):
         self._previous: list[Rect] = []
         """What the last frame changed: the hidden page still lacks it (double buffering)."""
         self._full = True
-        self.frames = 0
-        """Frames written to the framebuffer."""
-        self.bytes_written = 0
-        """Pixel bytes written to the framebuffer memory (padding excluded)."""
+        self.clock = simulator.clock if simulator is not None else REAL_CLOCK
+        self.stats = PanelStats()
+        """Totals since open, as panels keep them: ``bytes`` are pixel bytes stored (padding excluded),
+        ``windows`` rectangles written, ``host_seconds`` packing and storing, ``bus_seconds`` clock time in the
+        vertical-blank wait and the pan."""
 
     @classmethod
     def from_url(cls, url: DeviceURL, **kwargs: object) -> FramebufferDisplay:
@@ -128,21 +131,29 @@ class FramebufferDisplay(RasterDisplay):
     # -- frames ------------------------------------------------------------------------------------
     def _show(self, canvas: Canvas) -> None:
         fb = self.framebuffer
-        rects = [Rect(0, 0, canvas.width, canvas.height)] if self._full else canvas.damage()
+        full = self._full
+        rects = [Rect(0, 0, canvas.width, canvas.height)] if full else canvas.damage()
         if not rects:
             return
-        bpp = fb.layout.bytes_per_pixel
         self._full = True  # until this frame is done: one cut short (a fault, Ctrl-C) is followed by a full one
-        if fb.double_buffered:
-            writes = merge_rects(rects + self._previous, DEFAULT_MERGE_COST, bpp)
-        else:
-            writes = rects
-            if self.vsync:
-                fb.wait_for_vsync()
+        bpp = fb.layout.bytes_per_pixel
+        started = time.perf_counter()
+        waits = [0.0, 0.0]  # clock seconds, wall seconds in the vertical-blank wait and the pan
+        writes = merge_rects(rects + self._previous, DEFAULT_MERGE_COST, bpp) if fb.double_buffered else rects
+        if self.vsync and not fb.double_buffered:
+            self._timed(fb.wait_for_vsync, waits)
         for r in writes:
             fb.write(canvas.array[r.y0:r.y1, r.x0:r.x1], r.x0, r.y0)
-            self.bytes_written += r.area * bpp
-        fb.flip(vsync=self.vsync)
+        self._timed(lambda: fb.flip(vsync=self.vsync), waits)
         self._previous = rects
         self._full = False
-        self.frames += 1
+        self.stats.add(FrameStats(bytes=sum(r.area for r in writes) * bpp, windows=len(writes), full=full,
+                                  host_seconds=max(time.perf_counter() - started - waits[1], 0.0),
+                                  bus_seconds=waits[0]))
+
+    def _timed(self, step: Callable[[], object], waits: list[float]) -> None:
+        """Run ``step``, adding the clock time (device time on a SimulatedClock) and wall time it took to ``waits``."""
+        t0, perf = self.clock.now(), time.perf_counter()
+        step()
+        waits[0] += self.clock.now() - t0
+        waits[1] += time.perf_counter() - perf

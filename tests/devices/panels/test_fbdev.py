@@ -78,16 +78,17 @@ def test_glass_equals_the_canvas_after_every_frame(bpp, bgr, double, pad, frames
 def test_only_damage_is_written_and_the_hidden_page_catches_up():
     sim = marked_sim(64, 48, 16)
     display = FramebufferDisplay(sim.open, simulator=sim).open()
-    assert display.framebuffer.double_buffered and display.bytes_written == 64 * 48 * 2  # the first frame: full
+    assert display.framebuffer.double_buffered and display.stats.bytes == 64 * 48 * 2  # the first frame: full
     assert (sim.stats.pans, sim.var["yoffset"]) == (2, 48)  # the set-up pan to page 0, then the first frame's
     display.canvas.blit(np.full((4, 5, 3), 200, dtype=np.uint8), 0, 0)
     display.flush()  # the hidden page lacks the first frame too: written whole again
-    assert display.bytes_written == 2 * 64 * 48 * 2 and sim.var["yoffset"] == 0
+    assert display.stats.bytes == 2 * 64 * 48 * 2 and sim.var["yoffset"] == 0
     display.canvas.blit(np.full((3, 6, 3), 90, dtype=np.uint8), 58, 45)
     display.flush()  # this frame's block and the last frame's, far apart: two rectangles
-    assert display.bytes_written == 2 * 64 * 48 * 2 + (4 * 5 + 3 * 6) * 2 and sim.var["yoffset"] == 48
+    assert display.stats.bytes == 2 * 64 * 48 * 2 + (4 * 5 + 3 * 6) * 2 and sim.var["yoffset"] == 48
     display.flush()  # nothing changed: nothing written, no pan
-    assert display.frames == 3 and sim.stats.pans == 4
+    assert display.stats.frames == 3 and display.stats.full_frames == 1 and sim.stats.pans == 4
+    assert display.stats.last.windows == 2 and display.stats.last.bytes == (4 * 5 + 3 * 6) * 2
     assert np.array_equal(np.asarray(sim.glass()), rgb565_seen(display.canvas.array))
 
 
@@ -95,10 +96,10 @@ def test_single_buffering_writes_just_the_damage():
     sim = marked_sim(64, 48, 32, virtual_height=48)
     display = FramebufferDisplay(sim.open, simulator=sim).open()
     assert not display.framebuffer.double_buffered and "yres_virtual = 48" in display.framebuffer.buffering
-    start = display.bytes_written
+    start = display.stats.bytes
     display.canvas.blit(np.full((4, 5, 3), 7, dtype=np.uint8), 10, 20)
     display.flush()
-    assert display.bytes_written - start == 4 * 5 * 4 and sim.stats.pans == 0
+    assert display.stats.bytes - start == 4 * 5 * 4 and sim.stats.pans == 0
     assert np.array_equal(np.asarray(sim.glass()), display.canvas.array)
 
 
@@ -112,9 +113,9 @@ def test_a_failed_pan_is_a_link_error_and_the_next_frame_is_full():
     with pytest.raises(LinkError, match="FBIOPAN_DISPLAY to yoffset 8 failed"):
         display.flush()
     sim.fix["ypanstep"] = 1
-    before = display.bytes_written
+    before = display.stats.bytes
     display.flush()  # the damage was kept, and the frame is sent whole
-    assert display.bytes_written - before == 16 * 8 * 4
+    assert display.stats.bytes - before == 16 * 8 * 4
     assert np.array_equal(np.asarray(sim.glass()), display.canvas.array)
 
 
@@ -124,6 +125,7 @@ def test_vsync_is_waited_for_when_the_driver_has_it():
         d.canvas.blit(np.full((2, 2, 3), 255, dtype=np.uint8), 0, 0)
         d.flush()
         assert d.simulator.stats.vsync_waits == 2 and clock.now() == pytest.approx(2 / 60)
+        assert d.stats.bus_seconds == pytest.approx(2 / 60)  # the waits, in simulated time
     with pixelpen.open("sim:fbdev?size=16x8&bpp=32&vsync=false&double=false") as d:
         assert not d.simulator.vsync and not d.framebuffer.double_buffered and d.simulator.stats.vsync_waits == 0
 
