@@ -23,6 +23,7 @@ import numpy as np
 from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
 from pixelpen.devices.panels.windows import WindowCost, window_cost
 from pixelpen.devices.panels.wiring import Interface, Pins, Wiring, open_wiring, parse_target, sim_wiring
+from pixelpen.display.base import Deferral
 from pixelpen.display.capabilities import Capabilities, ColourModel
 from pixelpen.display.kinds import RasterDisplay
 from pixelpen.drivers.bus import PanelBus
@@ -154,7 +155,7 @@ class PanelDisplay(RasterDisplay):
         refresh: str = "partial",
         clock: Clock = REAL_CLOCK,
         background: object = "black",
-        deferral: str = "asap",
+        deferral: Deferral = "asap",
     ) -> None:
         if profile.controller not in self.compatible_controllers():
             raise ConfigError(f"{type(self).__name__} drives {', '.join(self.compatible_controllers())}, "
@@ -178,8 +179,7 @@ class PanelDisplay(RasterDisplay):
         self._bus_perf = 0.0
         self._frame = FrameStats()
         self._cost: WindowCost | None = None
-        super().__init__(self._capabilities(), mode=self.canvas_mode, background=background,
-                         deferral=deferral)  # type: ignore[arg-type]
+        super().__init__(self._capabilities(), mode=self.canvas_mode, background=background, deferral=deferral)
 
     # -- construction from URLs -------------------------------------------------------------------
     @classmethod
