@@ -432,4 +432,4 @@ def create(clock: Clock | None = None, **options: str) -> FbdevSim:
         raise URLError(f"sim:fbdev: cannot create the memory file: {exc}") from None
 
 
-register_simulator("fbdev", create, OPTIONS)  # type: ignore[arg-type]  # a framebuffer, not a byte stream
+register_simulator("fbdev", create, OPTIONS)
