@@ -454,11 +454,11 @@ def test_a_simulated_display_is_viewed_through_the_demo(tmp_path, model, size):
 
 
 def test_a_real_time_replay_is_watched_and_stopped_with_ctrl_c(tmp_path):
-    plot = tmp_path / "zigzag.hpgl"
-    plot.write_bytes(b"IN;SP1;PU0,0;PD" + b",".join(b"%d,%d" % (i * 40, (i % 2) * 2000) for i in range(400)) + b";PU;")
+    plot = tmp_path / "zigzag.nc"  # the grbl profile's pen: M3 S50 down; 20 mm strokes at 50 mm/s take a while
+    plot.write_bytes(b"G21\nG90\nM3 S50\n" + b"".join(b"G1 X%d Y%d F3000\n" % (i, (i % 2) * 20) for i in range(400)))
     out = tmp_path / "paper.png"
     proc = subprocess.Popen(
-        [sys.executable, "-c", _SIM_MAIN, "sim", "hp7475a", "--replay", str(plot), "--speed", "real", "--view",
+        [sys.executable, "-c", _SIM_MAIN, "sim", "grbl", "--replay", str(plot), "--speed", "real", "--view",
          "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
     try:
