@@ -64,6 +64,10 @@ VARIANTS = {
 """SH1106: SPI clock cycle 250 ns (4 MHz); SSD1306/SSD1309: 100 ns (10 MHz)."""
 
 _COM_SPLIT = 32
+FOSC_HZ = 370e3
+"""The oscillator's typical frequency at the reset setting D5h[7:4] = 1000b (the only one the datasheet gives)."""
+SCROLL_FRAMES = {0: 5, 1: 64, 2: 128, 3: 256, 4: 3, 5: 4, 6: 25, 7: 2}
+"""Scroll step interval code (26h/27h/29h/2Ah parameter C) -> frames per step."""
 
 
 def com_pin_rows(config: int) -> NDArray[np.intp]:
@@ -146,6 +150,7 @@ class SSD1306Sim(PanelSim):
         """The last scroll setup (26h/27h/29h/2Ah): (command, parameters)."""
         self.scroll_area = (0, 64)
         """A3h: (top fixed rows, scrolling rows)."""
+        self._scroll_start = 0.0
         self.locked = False
         self._pending: list[int] = []
         self._code: int | None = None
@@ -315,16 +320,20 @@ class SSD1306Sim(PanelSim):
             if self.scrolling:
                 self._report(code, "scroll set up while scrolling is active (2Eh must come first)")
             if code == 0xA3:
-                self.scroll_area = (params[0], params[1])
+                self.scroll_area = (params[0] & 0x3F, params[1] & 0x7F)
             else:
                 self.scroll = (code, params)
+                if params[1] & 7 > params[3] & 7:
+                    self._report(code, f"scroll end page {params[3] & 7} is before its start page {params[1] & 7}")
         elif code == 0x2E:
+            if self.scrolling:
+                self._ram[:] = self._scrolled(self._ram, bits=False)  # horizontal scrolling moved RAM itself
             self.scrolling = False
         elif code == 0x2F:
             if self.scroll is None:
                 self._report(code, "activate scroll (2Fh) with no scroll set up (26h/27h/29h/2Ah)")
             else:
-                self.scrolling = True
+                self.scrolling, self._scroll_start = True, self._now
 
     # ---- what it shows -----------------------------------------------------------------------------
     @property
@@ -333,6 +342,37 @@ class SSD1306Sim(PanelSim):
         view = self._ram.view()
         view.flags.writeable = False
         return view
+
+    @property
+    def frame_rate(self) -> float:
+        """Frames per second: Fosc / (D x K x MUX), D = D5h[3:0] + 1, K = phase 1 + phase 2 + 50 (typical Fosc)."""
+        phases = (self.precharge & 0x0F) + (self.precharge >> 4)
+        return FOSC_HZ / (((self.clock_divide & 0x0F) + 1) * (phases + 50) * self.multiplex)
+
+    def scroll_steps(self) -> int:
+        """Scroll steps taken since 2Fh (0 when not scrolling)."""
+        if not self.scrolling or self.scroll is None:
+            return 0
+        frames = (self._now - self._scroll_start) * self.frame_rate
+        return int(frames // SCROLL_FRAMES[self.scroll[1][2] & 7])
+
+    def _scrolled(self, ram: NDArray[Any], *, bits: bool) -> NDArray[Any]:
+        """RAM (pages x columns bytes, or rows x columns pixels when ``bits``) as continuous scrolling shows it."""
+        steps = self.scroll_steps()
+        if not steps or self.scroll is None:
+            return ram
+        code, params = self.scroll
+        out = ram.copy()
+        first, last = params[1] & 7, params[3] & 7
+        rows = slice(8 * first, 8 * last + 8) if bits else slice(first, last + 1)
+        out[rows] = np.roll(ram[rows], steps if code in (0x26, 0x29) else -steps, axis=1)
+        if bits and code in (0x29, 0x2A):
+            top, count = self.scroll_area
+            count = min(count, 64 - top)
+            if count:
+                area = slice(top, top + count)
+                out[area] = np.roll(out[area], -(steps * (params[4] & 0x3F)) % count, axis=0)
+        return out
 
     def row_sources(self) -> NDArray[np.intp]:
         """The RAM row (0..63) each glass row shows, -1 for a row no COM drives (§10.1.12-19 scan-out)."""
@@ -360,7 +400,8 @@ class SSD1306Sim(PanelSim):
         if self.entire_on:
             pixels = np.ones((64, self.variant.ram_columns), dtype=bool)
         else:
-            pixels = np.unpackbits(self._ram, axis=0, bitorder="little").astype(bool) ^ self.inverse
+            ram = np.unpackbits(self._ram, axis=0, bitorder="little").astype(bool)
+            pixels = self._scrolled(ram, bits=True) ^ self.inverse
         rows = self.row_sources()
         out = pixels[np.maximum(rows, 0)][:, self.column_sources()]
         out[rows < 0] = False

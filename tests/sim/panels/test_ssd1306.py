@@ -351,6 +351,40 @@ def test_parameter_counts_of_scroll_commands():
     assert not sim.scrolling and sim.display_on
 
 
+def test_frame_rate_of_luma_settings_and_of_reset():
+    sim = luma_module()
+    assert round(sim.frame_rate, 1) == 87.6  # panels.md §1: D5 80, D9 F1 at the typical 370 kHz
+    sim.reset()
+    assert round(sim.frame_rate) == 107  # K = 54 at reset: within the 96-118 Hz of panels.md
+
+
+def scrolling(commands: bytes, steps: int) -> SSD1306Sim:
+    """A luma module showing ``picture()`` that ran ``commands`` then 2Fh, ``steps`` scroll steps of 2 frames."""
+    sim = luma_module()
+    show(sim, picture())
+    sim.command(commands + b"\x2f")
+    sim.clock.advance((steps * 2 + 0.5) / sim.frame_rate)  # type: ignore[attr-defined]
+    return sim
+
+
+@pytest.mark.parametrize(("code", "sign"), [(0x26, 1), (0x27, -1)])
+def test_continuous_horizontal_scroll_moves_the_pages_and_2e_leaves_ram_moved(code, sign):
+    sim = scrolling(bytes([code, 0x00, 0x02, 0x07, 0x05, 0x00, 0xFF]), 3)  # pages 2..5, a step every 2 frames
+    expected = bits(picture()).copy()
+    expected[16:48] = np.roll(expected[16:48], 3 * sign, axis=1)
+    assert np.array_equal(bits(sim.glass()), expected)
+    assert bytes(sim.gram.tobytes()) == pack(picture())
+    sim.command(b"\x2e")
+    assert np.array_equal(bits(sim.glass()), expected)
+    assert bytes(sim.gram.tobytes()) == pack(Image.fromarray(expected))
+
+
+def test_vertical_and_horizontal_scroll_in_the_a3_area():
+    sim = scrolling(bytes.fromhex("A3 00 40 29 00 00 07 07 01"), 2)
+    expected = np.roll(np.roll(bits(picture()), 2, axis=1), -2, axis=0)
+    assert np.array_equal(bits(sim.glass()), expected)
+
+
 def test_flagged_commands():
     sim = SSD1306Sim()
     sim.command(bytes([0x20, 0x03, 0xA8, 0x05, 0xD9, 0x00, 0x2F, 0xFF, 0x18]))
