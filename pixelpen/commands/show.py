@@ -34,7 +34,7 @@ from PIL import Image, ImageOps, ImageSequence, UnidentifiedImageError
 
 from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
 from pixelpen.commands import argtypes
-from pixelpen.commands.sim import _sigterm_stops  # shared with sim: SIGTERM stops like Ctrl-C
+from pixelpen.commands.sim import sigterm_stops
 from pixelpen.display.kinds import RasterDisplay
 from pixelpen.display.registry import display_class, open_display
 from pixelpen.errors import ConfigError
@@ -309,7 +309,7 @@ def show(path: str | Path, url: str, *, fps: float | None = None, loops: int = 1
     player = Player(display, display_clock(display), fit=fit, rotate=rotate, fps=fps)
     interrupted = False
     try:
-        with _sigterm_stops():
+        with sigterm_stops():
             try:
                 rounds = 0
                 while loops == 0 or rounds < loops:

@@ -216,7 +216,7 @@ def _stop_on_sigterm(signum: int, frame: object) -> None:
 
 
 @contextlib.contextmanager
-def _sigterm_stops() -> Iterator[None]:
+def sigterm_stops() -> Iterator[None]:
     """SIGTERM raises KeyboardInterrupt meanwhile (in the main thread), so a service manager stops it like Ctrl-C."""
     main = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _stop_on_sigterm) if main else None
@@ -230,7 +230,7 @@ def _sigterm_stops() -> Iterator[None]:
 def wait_for_stop(stop: threading.Event | None = None, check: Callable[[], None] | None = None) -> None:
     """Block until Ctrl-C, SIGTERM or ``stop`` is set; ``check`` runs every 0.2 s (it raises to end early)."""
     waiter = stop if stop is not None else threading.Event()
-    with _sigterm_stops():
+    with sigterm_stops():
         try:
             while not waiter.wait(0.2):
                 if check is not None:
@@ -394,7 +394,7 @@ def run_sim(args: argparse.Namespace) -> int:
             run_pty(device, transport, lock=lock, view=view)
         elif data is not None:
             try:
-                with _sigterm_stops():
+                with sigterm_stops():
                     result = replay(device, data, transport, lock)
             except KeyboardInterrupt:
                 print("pixelpen sim: replay stopped", file=sys.stderr)
