@@ -194,9 +194,8 @@ class SSD1306Sim(PanelSim):
             self._report(code, f"prohibited command byte 0x{code:02X} (not in the {self.model} command table)")
 
     def _set_column(self, column: int) -> None:
-        if column >= self.variant.ram_columns:
-            self._report(None, f"page-mode column {column} is past the {self.variant.ram_columns} RAM columns")
-        self.column = column % self.variant.ram_columns
+        """A nibble of the column address: the value may pass the RAM until the other nibble arrives."""
+        self.column = column
 
     def _panel_data(self, data: bytes) -> None:
         if self._code is not None:
@@ -212,6 +211,9 @@ class SSD1306Sim(PanelSim):
     def _write(self, data: NDArray[np.uint8]) -> None:
         """Store bytes at the pointer and move it by the datasheet's rules for the addressing mode (§10.1.3)."""
         ram_columns = self.variant.ram_columns
+        if self.column >= ram_columns:
+            self._report(None, f"column address {self.column} is past the {ram_columns} RAM columns: wraps")
+            self.column %= ram_columns
         cs, ce, ps, pe = self.window
         n = len(data)
         inside = cs <= self.column <= ce and ps <= self.page <= pe

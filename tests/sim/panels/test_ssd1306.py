@@ -229,6 +229,18 @@ def test_page_mode_nibbles_and_page_start():
     assert list(sim.gram[5, 0x7A:]) == [1, 2, 3, 4, 5, 6] and list(sim.gram[5, :2]) == [7, 8]
 
 
+def test_a_half_set_column_may_pass_the_ram_until_its_other_nibble_arrives():
+    sim = SSD1306Sim(variant="sh1106")
+    sim.command(bytes([0xB0, 0x03, 0x18]))  # column 0x83 = 131, the last one
+    sim.data(b"\x01")  # the pointer wraps to column 0
+    sim.command(bytes([0x18, 0x0F, 0x11]))  # 0x80, then 0x8F (past 131), then 0x1F
+    sim.data(b"\x02")
+    assert sim.gram[0, 131] == 1 and sim.gram[0, 0x1F] == 2 and sim.events == []
+    sim.command(bytes([0x0F, 0x18]))  # 0x8F
+    sim.data(b"\x03")
+    assert "past the 132 RAM columns" in sim.events[-1].message and sim.gram[0, 0x8F - 132] == 3
+
+
 # ---- SH1106 ---------------------------------------------------------------------------------------------------
 
 def test_sh1106_page_mode_with_column_offset_2():
