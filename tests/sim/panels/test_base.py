@@ -180,3 +180,12 @@ def test_reset_stats_and_close():
     sim.close()
     assert not sim.i2c_write(0x3C, b"\x00\xae")
     assert sim.spi_transfer(b"\x01", dc=False) == b"\x00" and sim.stats.bytes == 0
+
+
+def test_the_package_exports_the_simulators_lazily():
+    import pixelpen.sim.panels as panels
+    from pixelpen.sim.panels.ssd1306 import SSD1306Sim
+
+    assert panels.SSD1306Sim is SSD1306Sim and panels.PanelSim is PanelSim
+    with pytest.raises(AttributeError, match="no attribute 'Nope'"):
+        panels.Nope  # noqa: B018
