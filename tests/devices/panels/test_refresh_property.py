@@ -19,9 +19,7 @@ from pixelpen.errors import LinkError
 PANELS = [
     ("st7789", "240x240"), ("st7789", "135x240"), ("ili9341", "240x320"), ("st7735", "128x160"),
     ("st7735", "80x160"), ("ssd1306", "128x64"), ("ssd1306", "128x32"), ("ssd1306", "96x16"),
-    pytest.param("sh1106", "128x64", marks=pytest.mark.xfail(
-        reason="SSD1306Sim (sh1106) wraps the column to the RAM width while a page-mode address is half set "
-               "(low nibble sent first, as luma does), so the high nibble lands on the wrapped value", run=False)),
+    ("sh1106", "128x64"),
 ]
 ROTATIONS = [0, 90, 180, 270]
 
