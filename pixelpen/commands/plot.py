@@ -500,7 +500,7 @@ def plot_demo(out: Path, *, models: Sequence[str] = DEMO_MODELS) -> list[Path]:
             with open_display(format_url("sim", model, {"speed": "fast", "id": ident})) as display:
                 draw_reference(display)
             path = out / f"paper-{model}.png"
-            named_simulator(ident).save_paper(path)  # type: ignore[attr-defined]
+            named_simulator(ident).save_paper(path)
             written.append(path)
         finally:
             forget_simulator(ident)

@@ -99,8 +99,8 @@ class FtdiSpiBus:
         name = target if isinstance(target, str) else "ftdi"
         _check_options(name, dc, rst, clock_hz, mode, max_transfer, cs)
         try:
-            from pyftdi.spi import SpiController  # type: ignore[import-untyped]
-            from pyftdi.usbtools import UsbToolsError  # type: ignore[import-untyped]
+            from pyftdi.spi import SpiController
+            from pyftdi.usbtools import UsbToolsError
         except ImportError:
             raise ConfigError("the FT232H bus needs pyftdi: pip install pyftdi (or pixelpen[panels])") from None
         controller = SpiController(cs_count=cs + 1)

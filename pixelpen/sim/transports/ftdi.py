@@ -482,7 +482,7 @@ class Ft232hBackend(usb.backend.IBackend):
 @contextlib.contextmanager
 def use_for_urls(backend: Ft232hBackend) -> Iterator[None]:
     """Within the ``with``, pyftdi's ``ftdi://`` URLs find ``backend``'s FT232H (UsbTools.BACKENDS swapped)."""
-    from pyftdi.usbtools import UsbTools  # type: ignore[import-untyped]
+    from pyftdi.usbtools import UsbTools
 
     name = f"pixelpen_sim_ft232h_{id(backend):x}"
     module = types.ModuleType(name)
