@@ -19,7 +19,7 @@ from pixelpen.clock import SimulatedClock
 from pixelpen.errors import ConfigError, ProtocolError, URLError
 from pixelpen.sim.base import Fault, create_simulator
 from pixelpen.sim.panels.ssd1306 import SSD1306Sim
-from tests.fuzzing import QUICK_CASES, campaign
+from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
 
 LUMA_INIT = bytes.fromhex("AE D5 80 A8 3F D3 00 40 8D 14 20 00 A1 C8 DA 12 D9 F1 DB 40 A4 A6 81 CF AF")
 FRAME = bytes.fromhex("21 00 7F 22 00 07")
@@ -470,3 +470,9 @@ def test_fuzzed_streams_never_crash(variant):
     noise = bytes(rng.randrange(256) for _ in range(3000))
     sim = replay(variant, noise)
     assert sim.events and all(e.message and e.offset >= -1 for e in sim.events)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("variant", ["ssd1306", "sh1106", "ssd1309"])
+def test_fuzz_campaign(variant):
+    campaign(f"ssd1306-{variant}-slow", lambda data: replay(variant, data), SEEDS, SLOW_CASES, seed=11).check()
