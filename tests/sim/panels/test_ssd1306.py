@@ -197,10 +197,14 @@ def test_pointer_rules_match_the_datasheet_in_every_mode(steps):
             for b in value:
                 ref.data(b)
             continue
+        if kind in ("column", "page") and ref.mode != 2:
+            continue  # page-mode commands; outside page mode they may leave the window (undefined)
         if kind == "column":
             cmds = [[value & 0x0F], [0x10 | value >> 4]]
         elif kind == "page":
             cmds = [[0xB0 + value]]
+        elif kind == "mode" and value != 2:  # into horizontal/vertical: the window puts the pointer in it
+            cmds = [[0x20, value], [0x21, ref.cs, ref.ce], [0x22, ref.ps, ref.pe]]
         else:
             cmds = [[{"mode": 0x20, "cols": 0x21, "pages": 0x22}[kind], *([value] if kind == "mode" else value)]]
         for cmd in cmds:
