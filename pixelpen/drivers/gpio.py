@@ -14,6 +14,7 @@ from types import ModuleType
 from typing import Any, Final, Protocol, runtime_checkable
 
 from pixelpen.clock import REAL_CLOCK, Clock
+from pixelpen.drivers.devnode import node_open_error
 from pixelpen.errors import ConfigError, InvalidArgument, LinkError
 
 log = logging.getLogger(__name__)
@@ -65,14 +66,9 @@ def _request(chip: str, offset: int, settings: Any, consumer: str) -> Any:
     where = f"GPIO line {offset} of {chip}"
     try:
         return gpiod.request_lines(chip, consumer=consumer, config={offset: settings})
-    except FileNotFoundError:
-        raise LinkError(f"{where}: {chip} does not exist (gpiodetect lists the GPIO chips)") from None
-    except PermissionError:
-        raise LinkError(
-            f"{where}: permission denied on {chip}; add your user to the group owning it "
-            f"(Raspberry Pi OS: sudo usermod -aG gpio $USER, then log in again) or add a udev rule such as "
-            f'SUBSYSTEM=="gpio", KERNEL=="gpiochip*", GROUP="gpio", MODE="0660"'
-        ) from None
+    except (FileNotFoundError, PermissionError) as e:
+        raise node_open_error(chip, e, what=f"GPIO line {offset}", missing="gpiodetect lists the GPIO chips",
+                              group="gpio", udev='SUBSYSTEM=="gpio", KERNEL=="gpiochip*"') from e
     except ValueError as e:
         raise InvalidArgument(f"{where}: {e}") from None
     except OSError as e:

@@ -8,16 +8,18 @@ records it for the bandwidth estimate.
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import importlib
 import logging
 from pathlib import Path
-from typing import Any, Final
+from typing import Any, ClassVar, Final
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.drivers.bus import DEFAULT_MAX_TRANSFER, I2C_COMMAND, I2C_DATA, RESET_PULSE, RESET_RECOVERY, command_bytes
-from pixelpen.drivers.gpio import OutputLine, open_output_line, pulse_reset
-from pixelpen.errors import ConfigError, InvalidArgument, LinkError
+from pixelpen.drivers.bus import DEFAULT_MAX_TRANSFER, I2C_COMMAND, I2C_DATA, FramedBus
+from pixelpen.drivers.devnode import node_open_error
+from pixelpen.drivers.gpio import OutputLine, open_output_line
+from pixelpen.errors import ConfigError, LinkError
 
 log = logging.getLogger(__name__)
 
@@ -38,10 +40,11 @@ def adapter_clock_hz(bus_number: int, sysfs: Path | None = None) -> int | None:
     return int.from_bytes(raw[:4], "big") if len(raw) >= 4 else None
 
 
-class I2CBus:
+class I2CBus(FramedBus):
     """A PanelBus on I2C at 7-bit ``address``: control byte 0x00 before commands, 0x40 before each data chunk."""
 
-    kind: Final = "i2c"
+    kind: ClassVar[str] = "i2c"
+    control_bytes: ClassVar[int] = 1
 
     def __init__(
         self,
@@ -56,74 +59,28 @@ class I2CBus:
     ) -> None:
         if not isinstance(address, int) or not 0x03 <= address <= 0x77:
             raise ConfigError(f"{name}: I2C address must be a 7-bit address 0x03..0x77, got {address!r}")
-        if not clock_hz > 0:
-            raise ConfigError(f"{name}: the I2C clock must be positive, got {clock_hz!r}")
-        if max_transfer < 2:
-            raise ConfigError(f"{name}: max_transfer must leave room for the control byte (>= 2), got {max_transfer}")
+        super().__init__(name, clock_hz=clock_hz, max_transfer=max_transfer, reset=reset, clock=clock,
+                         closers=(adapter.close,))
         self.address = address
-        self.clock_hz = float(clock_hz)
-        self.max_transfer = max_transfer
-        self.name = name
-        self.bytes_sent = 0
-        self.transfers = 0
         self._adapter: Any = adapter
-        self._reset_line = reset
-        self._clock = clock
-        self._closed = False
         self._message = importlib.import_module("smbus2").i2c_msg.write
-
-    @property
-    def closed(self) -> bool:
-        """True once ``close`` has run."""
-        return self._closed
 
     def command(self, *cmd: int | bytes) -> None:
         """Send all of ``cmd`` in one transaction after control byte 0x00."""
-        payload = command_bytes(*cmd)
-        if not payload:
-            raise InvalidArgument(f"{self.name}: command() needs at least one byte")
-        if len(payload) + 1 > self.max_transfer:
-            raise InvalidArgument(f"{self.name}: a command of {len(payload)} bytes and its control byte exceed one "
-                                  f"transfer ({self.max_transfer} bytes)")
-        self._write(bytes([I2C_COMMAND]) + payload)
+        self._send(bytes([I2C_COMMAND]) + self._command_frame(*cmd))
 
     def data(self, data: bytes) -> None:
         """Send ``data`` in transactions of control byte 0x40 and at most ``max_transfer - 1`` data bytes."""
-        view = memoryview(data).cast("B")
-        self._check_open()
-        step = self.max_transfer - 1
-        for at in range(0, len(view), step):
-            self._write(bytes([I2C_DATA]) + view[at : at + step])
+        for chunk in self._data_chunks(data):
+            self._send(bytes([I2C_DATA]) + chunk)
 
-    def reset(self, recovery: float = RESET_RECOVERY) -> None:
-        """Pulse the reset line where one is wired (many I2C modules have none: then nothing)."""
-        self._check_open()
-        if self._reset_line is not None:
-            pulse_reset(self._reset_line, self._clock, pulse=RESET_PULSE, recovery=recovery)
+    def _transfer(self, frame: bytes | memoryview) -> None:
+        self._adapter.i2c_rdwr(self._message(self.address, frame))
 
-    def close(self) -> None:
-        """Close the adapter and release the reset line."""
-        if self._closed:
-            return
-        self._closed = True
-        self._adapter.close()
-        if self._reset_line is not None:
-            self._reset_line.close()
-
-    def _check_open(self) -> None:
-        if self._closed:
-            raise LinkError(f"{self.name}: the bus is closed")
-
-    def _write(self, payload: bytes) -> None:
-        self._check_open()
-        try:
-            self._adapter.i2c_rdwr(self._message(self.address, payload))
-        except OSError as e:
-            if e.errno in NAK_ERRNOS:
-                raise LinkError(f"{self.name}: no device acknowledged address 0x{self.address:02x}") from e
-            raise LinkError(f"{self.name}: write of {len(payload)} bytes to 0x{self.address:02x} failed: {e}") from e
-        self.bytes_sent += len(payload)
-        self.transfers += 1
+    def _fault(self, nbytes: int, error: Exception) -> LinkError:
+        if isinstance(error, OSError) and error.errno in NAK_ERRNOS:
+            return LinkError(f"{self.name}: no device acknowledged address 0x{self.address:02x}")
+        return LinkError(f"{self.name}: write of {nbytes} bytes to 0x{self.address:02x} failed: {error}")
 
     @classmethod
     def open(
@@ -140,29 +97,24 @@ class I2CBus:
         """Open ``/dev/i2c-<bus_number>`` with smbus2; ``clock_hz`` defaults to the adapter's (else 400 kHz)."""
         node = f"/dev/i2c-{bus_number}"
         try:
-            adapter = importlib.import_module("smbus2").SMBus(bus_number)
+            smbus2 = importlib.import_module("smbus2")
         except ImportError:
             raise ConfigError("I2C panels need the smbus2 package: pip install smbus2") from None
-        except FileNotFoundError:
-            raise LinkError(f"{node} does not exist: enable I2C (Raspberry Pi: dtparam=i2c_arm=on in config.txt, "
-                            f"or raspi-config) or load the i2c-dev module (sudo modprobe i2c-dev)") from None
-        except PermissionError:
-            raise LinkError(f"permission denied on {node}: add your user to the 'i2c' group "
-                            f"(sudo usermod -aG i2c $USER, then log in again) or add a udev rule "
-                            f'SUBSYSTEM=="i2c-dev", GROUP="i2c", MODE="0660"') from None
-        except OSError as e:
-            raise LinkError(f"{node}: cannot open: {e}") from e
-        hz = clock_hz if clock_hz is not None else adapter_clock_hz(bus_number) or DEFAULT_CLOCK_HZ
-        reset: OutputLine | None = None
         try:
+            adapter = smbus2.SMBus(bus_number)
+        except OSError as e:
+            raise node_open_error(node, e, group="i2c", udev='SUBSYSTEM=="i2c-dev"',
+                                  missing="enable I2C (Raspberry Pi: dtparam=i2c_arm=on in config.txt, or "
+                                          "raspi-config) or load the i2c-dev module (sudo modprobe i2c-dev)") from e
+        hz = clock_hz if clock_hz is not None else adapter_clock_hz(bus_number) or DEFAULT_CLOCK_HZ
+        with contextlib.ExitStack() as undo:  # released again unless the bus is made
+            undo.callback(adapter.close)
+            reset = None
             if rst is not None:
                 reset = open_output_line(gpiochip, rst, initial=True)
+                undo.callback(reset.close)
             bus = cls(adapter, address, clock_hz=hz, max_transfer=max_transfer, reset=reset, clock=clock,
                       name=f"i2c-{bus_number}")
-        except BaseException:
-            if reset is not None:
-                reset.close()
-            adapter.close()
-            raise
+            undo.pop_all()
         log.info("%s opened for address 0x%02x at %g Hz", node, address, hz)
         return bus

@@ -8,15 +8,17 @@ changes (a GPIO write costs microseconds on real hardware); each ``writebytes2``
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import logging
 from pathlib import Path
-from typing import Any, Final
+from typing import Any, ClassVar, Final
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.drivers.bus import RESET_PULSE, RESET_RECOVERY, command_bytes
-from pixelpen.drivers.gpio import OutputLine, open_output_line, pulse_reset
-from pixelpen.errors import ConfigError, InvalidArgument, LinkError
+from pixelpen.drivers.bus import FramedBus
+from pixelpen.drivers.devnode import node_open_error
+from pixelpen.drivers.gpio import OutputLine, open_output_line
+from pixelpen.errors import ConfigError, LinkError
 
 log = logging.getLogger(__name__)
 
@@ -37,10 +39,10 @@ def spidev_bufsiz(path: Path | None = None) -> int:
     return min(value, SPIDEV_MAX_BLOCK) if value > 0 else SPIDEV_DEFAULT_BUFSIZ
 
 
-class SpiBus:
+class SpiBus(FramedBus):
     """A PanelBus on 4-wire SPI: ``command`` is one D/C-low frame, ``data`` D/C-high frames of <= ``max_transfer``."""
 
-    kind: Final = "spi"
+    kind: ClassVar[str] = "spi"
 
     def __init__(
         self,
@@ -54,23 +56,14 @@ class SpiBus:
         clock: Clock = REAL_CLOCK,
         name: str = "spi",
     ) -> None:
-        if not clock_hz >= 1:
-            raise ConfigError(f"{name}: the SPI clock must be at least 1 Hz, got {clock_hz!r}")
         if mode is not None and mode not in (0, 1, 2, 3):
             raise ConfigError(f"{name}: SPI mode must be 0, 1, 2 or 3, got {mode!r}")
-        self.max_transfer = spidev_bufsiz() if max_transfer is None else max_transfer
-        if self.max_transfer < 1:
-            raise ConfigError(f"{name}: max_transfer must be at least 1, got {self.max_transfer}")
-        self.name = name
-        self.clock_hz = float(clock_hz)
-        self.bytes_sent = 0
-        self.transfers = 0
+        limit = spidev_bufsiz() if max_transfer is None else max_transfer
+        super().__init__(name, clock_hz=clock_hz, max_transfer=limit, reset=reset, clock=clock,
+                         closers=(spi.close, dc.close))
         self._spi: Any = spi
         self._dc = dc
-        self._reset_line = reset
-        self._clock = clock
         self._dc_level: bool | None = None
-        self._closed = False
         try:
             if mode is not None:
                 spi.mode = mode
@@ -78,66 +71,28 @@ class SpiBus:
         except OSError as e:
             raise LinkError(f"{name}: setting mode {mode} and clock {int(clock_hz)} Hz failed: {e}") from e
 
-    @property
-    def closed(self) -> bool:
-        """True once ``close`` has run."""
-        return self._closed
-
     def command(self, *cmd: int | bytes) -> None:
         """Send all of ``cmd`` as one frame with D/C low."""
-        frame = command_bytes(*cmd)
-        if not frame:
-            raise InvalidArgument(f"{self.name}: command() needs at least one byte")
-        if len(frame) > self.max_transfer:
-            raise InvalidArgument(f"{self.name}: a command of {len(frame)} bytes exceeds one transfer "
-                                  f"({self.max_transfer} bytes)")
+        frame = self._command_frame(*cmd)
         self._set_dc(False)
-        self._write(frame)
+        self._send(frame)
 
     def data(self, data: bytes) -> None:
         """Send ``data`` (any bytes-like) with D/C high, in frames of at most ``max_transfer`` bytes."""
-        view = memoryview(data).cast("B")
-        if not len(view):
-            self._check_open()
-            return
-        self._set_dc(True)
-        for at in range(0, len(view), self.max_transfer):
-            self._write(view[at : at + self.max_transfer])
-
-    def reset(self, recovery: float = RESET_RECOVERY) -> None:
-        """Pulse the reset line low for RESET_PULSE and wait ``recovery`` s (nothing without a reset line)."""
-        self._check_open()
-        if self._reset_line is not None:
-            pulse_reset(self._reset_line, self._clock, pulse=RESET_PULSE, recovery=recovery)
-
-    def close(self) -> None:
-        """Close spidev and release the D/C and reset lines (the panel keeps its picture)."""
-        if self._closed:
-            return
-        self._closed = True
-        self._spi.close()
-        self._dc.close()
-        if self._reset_line is not None:
-            self._reset_line.close()
-
-    def _check_open(self) -> None:
-        if self._closed:
-            raise LinkError(f"{self.name}: the bus is closed")
+        chunks = self._data_chunks(data)
+        if chunks:
+            self._set_dc(True)
+        for chunk in chunks:
+            self._send(chunk)
 
     def _set_dc(self, level: bool) -> None:
-        self._check_open()
         if self._dc_level is not level:
             self._dc_level = None  # unknown until the write succeeds
             self._dc.set(level)
             self._dc_level = level
 
-    def _write(self, frame: bytes | memoryview) -> None:
-        try:
-            self._spi.writebytes2(frame)
-        except OSError as e:
-            raise LinkError(f"{self.name}: write of {len(frame)} bytes failed: {e}") from e
-        self.bytes_sent += len(frame)
-        self.transfers += 1
+    def _transfer(self, frame: bytes | memoryview) -> None:
+        self._spi.writebytes2(frame)
 
     @classmethod
     def open(
@@ -162,27 +117,21 @@ class SpiBus:
         spi = spidev.SpiDev()
         try:
             spi.open(bus, device)
-        except FileNotFoundError:
-            raise LinkError(f"{node} does not exist: enable SPI (Raspberry Pi: dtparam=spi=on in config.txt, "
-                            f"or raspi-config) and check the bus and chip-select numbers") from None
-        except PermissionError:
-            raise LinkError(f"permission denied on {node}: add your user to the 'spi' group "
-                            f"(sudo usermod -aG spi $USER, then log in again) or add a udev rule "
-                            f'SUBSYSTEM=="spidev", GROUP="spi", MODE="0660"') from None
         except OSError as e:
-            raise LinkError(f"{node}: cannot open: {e}") from e
-        lines: list[OutputLine] = []
-        try:
-            lines.append(open_output_line(gpiochip, dc, initial=False))
+            raise node_open_error(node, e, group="spi", udev='SUBSYSTEM=="spidev"',
+                                  missing="enable SPI (Raspberry Pi: dtparam=spi=on in config.txt, or raspi-config) "
+                                          "and check the bus and chip-select numbers") from e
+        with contextlib.ExitStack() as undo:  # released again unless the bus is made
+            undo.callback(spi.close)
+            dc_line = open_output_line(gpiochip, dc, initial=False)
+            undo.callback(dc_line.close)
+            reset = None
             if rst is not None:
-                lines.append(open_output_line(gpiochip, rst, initial=True))
-            bus_ = cls(spi, dc=lines[0], reset=lines[1] if rst is not None else None, clock_hz=clock_hz,
-                       max_transfer=max_transfer, mode=mode, clock=clock, name=f"spi {bus}.{device}")
-        except BaseException:
-            for line in lines:
-                line.close()
-            spi.close()
-            raise
+                reset = open_output_line(gpiochip, rst, initial=True)
+                undo.callback(reset.close)
+            opened = cls(spi, dc=dc_line, reset=reset, clock_hz=clock_hz, max_transfer=max_transfer, mode=mode,
+                         clock=clock, name=f"spi {bus}.{device}")
+            undo.pop_all()
         log.info("%s opened: %g Hz, mode %d, %d-byte transfers, D/C %s:%d", node, clock_hz, mode,
-                 bus_.max_transfer, gpiochip, dc)
-        return bus_
+                 opened.max_transfer, gpiochip, dc)
+        return opened

@@ -107,7 +107,7 @@ def test_bad_arguments_are_refused():
     with pytest.raises(ConfigError, match="control byte"):
         wired(max_transfer=1)
     _, bus = wired(max_transfer=4)
-    with pytest.raises(InvalidArgument, match="exceed one transfer"):
+    with pytest.raises(InvalidArgument, match="do not fit in one transfer"):
         bus.command(1, 2, 3, 4)
     with pytest.raises(InvalidArgument, match="at least one byte"):
         bus.command()
@@ -171,7 +171,8 @@ def test_the_adapter_clock_comes_from_the_device_tree(tmp_path, monkeypatch):
     ("error", "words"),
     [
         (FileNotFoundError(errno.ENOENT, "No such file"), ["/dev/i2c-1 does not exist", "modprobe i2c-dev"]),
-        (PermissionError(errno.EACCES, "Permission denied"), ["permission denied on /dev/i2c-1", "'i2c' group"]),
+        (PermissionError(errno.EACCES, "Permission denied"),
+         ["permission denied on /dev/i2c-1", "'i2c' group", 'SUBSYSTEM=="i2c-dev", GROUP="i2c", MODE="0660"']),
     ],
 )
 def test_open_failures_say_which_node_and_what_to_do(monkeypatch, error, words):
@@ -214,3 +215,26 @@ def test_end_to_end_an_ssd1306_simulator_shows_what_the_bus_sent():
     assert lit.sum() == 64 * 64 and np.all(lit.all(axis=0) | ~lit.any(axis=0))  # half the glass, whole columns
     assert sim.stats.transfers == bus.transfers == 3
     assert sim.stats.bytes == bus.bytes_sent + bus.transfers  # the simulator also counts each address byte
+
+
+def test_a_failing_adapter_close_still_releases_the_reset_line_and_is_a_link_error():
+    released = []
+
+    class Adapter:
+        def i2c_rdwr(self, *msgs):
+            pass
+
+        def close(self):
+            raise OSError(errno.EBADF, "Bad file descriptor")
+
+    class Line:
+        def set(self, level):
+            pass
+
+        def close(self):
+            released.append("reset")
+
+    bus = I2CBus(Adapter(), 0x3C, reset=Line(), name="i2c-1")
+    with pytest.raises(LinkError, match=r"i2c-1: closing failed: \[Errno 9\]"):
+        bus.close()
+    assert released == ["reset"] and bus.closed

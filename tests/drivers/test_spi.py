@@ -120,7 +120,7 @@ def test_bad_commands_and_settings_are_refused():
         bus.command("2A")
     with pytest.raises(InvalidArgument, match="at least one byte"):
         bus.command()
-    with pytest.raises(InvalidArgument, match="exceeds one transfer"):
+    with pytest.raises(InvalidArgument, match="do not fit in one transfer"):
         bus.command(1, 2, 3, 4, 5)
     chip = RecordingChip()
     wiring = SimSpiWiring(chip)
@@ -313,3 +313,28 @@ def test_end_to_end_an_st7789_simulator_shows_what_the_bus_sent():
     assert blue.sum() == red.sum() == 120 * 240
     assert np.all(blue.all(axis=0) | red.all(axis=0))
     assert (sim.stats.bytes, sim.stats.transfers) == (bus.bytes_sent, bus.transfers)
+
+
+def test_a_failing_spidev_close_still_releases_the_lines_and_is_a_link_error():
+    released = []
+
+    class Spi(FailingSpi):
+        def close(self):
+            raise OSError(errno.EIO, "Input/output error")
+
+    class Line:
+        def __init__(self, name):
+            self.name = name
+
+        def set(self, level):
+            pass
+
+        def close(self):
+            released.append(self.name)
+
+    bus = SpiBus(Spi(), dc=Line("dc"), reset=Line("reset"), clock_hz=1e6, max_transfer=4096, name="spi 0.0")
+    with pytest.raises(LinkError, match=r"spi 0\.0: closing failed: \[Errno 5\]"):
+        bus.close()
+    assert released == ["dc", "reset"] and bus.closed
+    bus.close()
+    assert released == ["dc", "reset"]
