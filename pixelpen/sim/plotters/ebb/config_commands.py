@@ -102,13 +102,12 @@ class ConfigCommands(EbbParser):
 
     def cmd_PI(self, name: str, v: list[Any]) -> None:
         port, pin = v
-        self._motors_enabled(self._now)
-        value = self._ports.pin(port, pin)
+        value = self._pins_at(self._now).pin(port, pin)
         self._reply(name, str(value), legacy=f"PI,{value}\r\n")
 
     def cmd_I(self, name: str, v: list[Any]) -> None:
-        self._motors_enabled(self._now)
-        data = ",".join(f"{self._ports.read(p):03d}" for p in PORT_NAMES)
+        ports = self._pins_at(self._now)
+        data = ",".join(f"{ports.read(p):03d}" for p in PORT_NAMES)
         self._reply(name, data, legacy=f"I,{data}\r\n")
 
     def cmd_O(self, name: str, v: list[Any]) -> None:

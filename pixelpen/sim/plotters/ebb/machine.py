@@ -23,7 +23,7 @@ from pixelpen.sim.base import SimulatedDevice
 from pixelpen.sim.plotters.ebb.motion import TICK, AccumulatorAxis
 from pixelpen.sim.plotters.ebb.params import parse_version
 from pixelpen.sim.plotters.ebb.pen import CONTACT_DEFAULT, SERVO_BOOT, SERVO_BOOT_OLD, PenServo
-from pixelpen.sim.plotters.ebb.ports import Ports
+from pixelpen.sim.plotters.ebb.ports import SERVO_POWER_PIN, Ports
 from pixelpen.sim.plotters.sheet import Sheet, WireStats, clamp_path
 
 if TYPE_CHECKING:
@@ -154,7 +154,7 @@ class EbbMachine(SimulatedDevice):
         self._vars = [0] * 32
         self._ports = Ports()
         self._ram = bytearray(4096)
-        self._analog: set[int] = set()
+        self._analog: set[int] = {0, 11} if self._fw3 else set()  # 3.x EBB_Init: AnalogConfigure RA0, V+
         self._engraver = (0, 0)
         self._s2: dict[int, int] = {}
         self._last_motion_end = self._now
@@ -168,6 +168,12 @@ class EbbMachine(SimulatedDevice):
 
     def _steps_per_mm(self) -> float:
         return STEPS_PER_MM_16 * self._ports.microsteps() / 16
+
+    def _pins_at(self, t: float) -> Ports:
+        """The port pins as they read at ``t``: after the stepper timeout, with RA3 showing servo power."""
+        self._motors_enabled(t)
+        self._ports.set_latch(*SERVO_POWER_PIN, int(self._pen.powered(t)))
+        return self._ports
 
     def _motors_enabled(self, t: float) -> list[bool]:
         """Motor enables as the pins read, after the CU,61 stepper timeout has had its say."""

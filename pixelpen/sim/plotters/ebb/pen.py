@@ -2,17 +2,20 @@
 
 The pen is mechanical: the servo pulse slews at the SC,11/12 or S2 rate and the pen touches the paper
 while the pulse is below the contact position (on an AxiDraw a larger pulse raises the pen), whatever
-SC,4/SC,5 say.  SC,4 / SC,5 boot at 22565 / 15302 (firmware >= 2.6.0, RCServo2_Init) or 12000 / 16000
-(older).  Servo power (RB1) is off at boot and after ``R`` (SR: "On boot, the power to the RC Servo ...
-will be off"), so the pen rests up until a command moves the servo; that first move starts from the
-pen-up position, SC,4.
+SC,4/SC,5 say.  Power-on state (EggBot ``EBB_firmware/app.X/source/RCServo2.c``, RCServo2_Init, lines
+214-222 at 3.0.3): SC,4 / SC,5 = 22565 / 15302 (firmware >= 2.6.0; 12000 / 16000 before), SC,11 / SC,12
+rates 400 / 400, and a queued pen-up that parks the pulse at the boot SC,4 while servo power (RA3,
+RCServoPowerIO) stays off.  So the pen rests up until a command powers the servo, and that first move
+slews from the boot SC,4 (whatever SC,4 has been set to since) at the commanded rate.
 """
 
 from __future__ import annotations
 
 from pixelpen.sim.plotters.ebb.motion import ServoTrack
 
-__all__ = ["CONTACT_DEFAULT", "SERVO_BOOT", "SERVO_BOOT_OLD", "SERVO_RANGE", "SERVO_TIMEOUT_MS", "PenServo"]
+__all__ = [
+    "CONTACT_DEFAULT", "SERVO_BOOT", "SERVO_BOOT_OLD", "SERVO_RANGE", "SERVO_RATE_BOOT", "SERVO_TIMEOUT_MS", "PenServo",
+]
 
 SERVO_BOOT = (22565, 15302)
 """SC,4 (up) / SC,5 (down) at boot since firmware 2.6.0 (RCServo2_Init; ebb.html still says 12000 / 16000)."""
@@ -23,8 +26,10 @@ SERVO_RANGE = (9855, 27831)
 CONTACT_DEFAULT = round(SERVO_RANGE[0] + 0.45 * (SERVO_RANGE[1] - SERVO_RANGE[0]))
 """Pulse width at which the pen meets the paper (17944): 45 % of SERVO_RANGE, midway between pyaxidraw's
 30 % (down, 15248) and 60 % (up, 20641) defaults, and between saxi's 15700 (down) and 28000 (up)."""
+SERVO_RATE_BOOT = 400
+"""SC,11 / SC,12 at boot: pulse units per 24 ms frame (RCServo2_Init: g_servo2_rate_up = g_servo2_rate_down = 400)."""
 SERVO_TIMEOUT_MS = 60000
-"""SR's default servo power timeout."""
+"""SR's default servo power timeout (UBW.c: RCSERVO_POWEROFF_DEFAULT_MS = 60 s)."""
 
 
 class PenServo:
@@ -33,7 +38,9 @@ class PenServo:
     def __init__(self, positions: tuple[int, int], contact: int) -> None:
         self.up_position, self.down_position = positions
         """SC,4 (pen up) and SC,5 (pen down) pulse widths, units of 83.3 ns."""
-        self.rate_up = self.rate_down = 0
+        self.boot_pulse = positions[0]
+        """The pulse RCServo2_Init parks the channel at (the boot SC,4): where the first move starts."""
+        self.rate_up = self.rate_down = SERVO_RATE_BOOT
         """SC,11 / SC,12 slew rates (0: move at once)."""
         self.track: ServoTrack | None = None
         """The pulse over time; None while servo power has been off since boot (the pen rests up)."""
@@ -56,9 +63,9 @@ class PenServo:
         return tc if tc is not None and t0 < tc < t1 else None
 
     def slew(self, t: float, target: float, rate: float) -> None:
-        """Power the servo and slew it to ``target`` (its first move starts from the pen-up position)."""
+        """Power the servo and slew it to ``target`` (its first move starts from the boot pulse)."""
         if self.track is None:
-            self.track = ServoTrack(self.up_position, t)
+            self.track = ServoTrack(self.boot_pulse, t)
         self.track.move(t, target, rate)
         self.power_until = None if self.timeout_ms == 0 else t + self.timeout_ms / 1000.0
         self.always_on = self.timeout_ms == 0

@@ -1,13 +1,15 @@
 """The EBB's PIC port pins: PORTA..E latches and directions, the motor enables and the microstep selects.
 
 From ``HardwareProfile_EBB_V13_and_above.h`` and ebb.c: UserInit makes every pin an input with its latch
-low; EBB_Init then drives MS1..MS3 and both motor enables high (1/16 stepping, drivers disabled).  EM
-writes the microstep selects and enables, PO/PD/O/C write latches and directions, PI/I and QE read them.
+low; EBB_Init then drives MS1..MS3 and both motor enables high (1/16 stepping, drivers disabled), and
+step/dir (RD4..7), pen (RB4), servo power (RA3) and engraver (RB3) low; RCServo2_Init makes the servo
+pulse pin RB1 a low output.  EM writes the microstep selects and enables, PO/PD/O/C write latches and
+directions, PI/I and QE read them.
 """
 
 from __future__ import annotations
 
-__all__ = ["ENABLE_PINS", "MS_LEVELS", "MS_MICROSTEPS", "MS_PINS", "PORT_NAMES", "Ports"]
+__all__ = ["ENABLE_PINS", "MS_LEVELS", "MS_MICROSTEPS", "MS_PINS", "PORT_NAMES", "SERVO_POWER_PIN", "Ports"]
 
 PORT_NAMES = "ABCDE"
 """The ports I, O and C read and write, in their order."""
@@ -19,7 +21,9 @@ MS_LEVELS = {1: (1, 1, 1), 2: (1, 1, 0), 3: (0, 1, 0), 4: (1, 0, 0), 5: (0, 0, 0
 """EM mode -> MS1..MS3 levels (ebb.c, COMMAND_EM): 1 = 1/16 ... 5 = full step."""
 MS_MICROSTEPS = {(0, 0, 0): 1, (1, 0, 0): 2, (0, 1, 0): 4, (1, 1, 0): 8}
 """MS1..MS3 levels -> microsteps as QE decodes them (parse_QE_packet); anything else reads 16."""
-_TRIS_AT_BOOT = {"A": 0xFF, "B": 0xED, "C": 0xFF, "D": 0x03, "E": 0xFF}
+SERVO_POWER_PIN = ("A", 3)
+"""RCServoPowerIO (LATA3): high while the pen servo is powered."""
+_TRIS_AT_BOOT = {"A": 0xF7, "B": 0xE5, "C": 0xFF, "D": 0x03, "E": 0xFF}
 
 
 class Ports:

@@ -240,8 +240,8 @@ def test_es_aborts_and_reports():
 
 
 def test_pen_strokes_on_the_paper():
-    rig = Rig()
-    rig.send("EM,1,1\rXM,500,800,800\rSP,0,100\rXM,1000,1600,0\rSP,1,100\rXM,500,0,800\r")
+    rig = Rig()  # the SP delays cover the slew at the boot rate 400: 22565 -> 17944 in 277 ms, 15302 -> 17944 in 159
+    rig.send("EM,1,1\rXM,500,800,800\rSP,0,300\rXM,1000,1600,0\rSP,1,200\rXM,500,0,800\r")
     rig.until_idle()
     strokes = rig.dev.paper.strokes()
     assert len(strokes) == 1
@@ -250,18 +250,20 @@ def test_pen_strokes_on_the_paper():
 
 
 def test_unpowered_servo_leaves_no_ink_until_a_servo_command():
-    rig = Rig()  # SR: servo power (RB1) is off at boot; SC,4/SC,5 only configure it
+    rig = Rig()  # SR: servo power (RA3) is off at boot; SC,4/SC,5 only configure it
     rig.send("EM,1,1\rSC,4,20641\rSC,5,15248\rSM,500,800,800\r")
     rig.until_idle()
     assert rig.dev.paper.strokes() == [] and rig.send("QR\r") == b"0\n\rOK\r\n"
-    rig.send("SP,1,120\rSM,500,800,0\r")  # the first servo move starts at the pen-up position: no touch
+    rig.send("SP,1,120\rSM,500,800,0\r")  # the first servo move starts at the boot SC,4 (22565): no touch
     rig.until_idle()
     assert rig.dev.paper.strokes() == [] and rig.send("QR\r") == b"1\n\rOK\r\n"
-    rig.send("SP,0,150\rSM,500,800,0\rSP,1,150\r")
+    rig.send("SP,0,200\rSM,500,800,0\rSP,1,200\r")  # 20641 <-> 17944 at rate 400: 162 ms
     rig.until_idle()
     (_, ink), = rig.dev.paper.strokes()
     assert np.allclose(ink, [[15, 5], [20, 10]])
-    rig.send("SP,0,150\rR\rSM,500,800,0\r")  # R stops the servo output: the pen rests up again
+    rig.send("SP,0,200\r")  # a dot where the pen lands
+    rig.until_idle()
+    rig.send("R\rSM,500,800,0\r")  # R stops the servo output: the pen rests up again
     rig.until_idle()
     assert len(rig.dev.paper.strokes()) == 2 and rig.dev.paper.strokes()[1][1].shape == (1, 2)
 
@@ -270,7 +272,7 @@ def test_ink_is_one_point_per_move_however_the_bytes_arrive():
     moves = "".join(f"SM,20,{40 * (k % 3)},{-30 * (k % 2)}\r" for k in range(40))
     at_once, by_byte = Rig(), Rig()
     for rig in (at_once, by_byte):
-        rig.send("CU,4,8\rSP,0\r")
+        rig.send("SC,10,0\rCU,4,8\rSP,0\r")  # an instant servo: every move inks from its start
     at_once.send(moves)
     for b in moves.encode():
         by_byte.run(0.0005)
@@ -285,24 +287,24 @@ def test_ink_is_one_point_per_move_however_the_bytes_arrive():
 
 def test_paper_read_mid_move_shows_the_ink_so_far():
     rig = Rig()
-    rig.send("SP,0\rXM,1000,800,0\r")  # 10 mm along x in 1 s
+    rig.send("SC,10,0\rSP,0\rXM,1000,800,0\r")  # an instant servo; 10 mm along x in 1 s
     rig.run(0.25)
     (_, ink), = rig.dev.paper.strokes()
-    assert np.allclose(ink, [[0, 0], [2.5, 0]])
+    assert np.allclose(ink, [[0.0, 0.0], [2.5, 0.0]])
     rig.until_idle()
     (_, ink), = rig.dev.paper.strokes()
-    assert np.allclose(ink, [[0, 0], [2.5, 0], [10, 0]])
+    assert np.allclose(ink, [[0.0, 0.0], [2.5, 0.0], [10.0, 0.0]])
 
 
 def test_pen_contact_follows_the_servo_slew():
     # SC,4,20000 -> SC,5,14000 at rate 100: the FAQ's |delta| x 24 ms / rate = 1.44 s slew; the pen meets
     # the paper when the pulse passes the contact position 17944: (20000 - 17944) x 0.024 / 100 = 0.49344 s
     rig = Rig()
-    rig.send("SC,4,20000\rSC,5,14000\rSC,12,100\rSP,1\rSP,0\rXM,1440,1440,0\r")  # 18 mm in 1.44 s
+    rig.send("SC,4,20000\rSC,5,14000\rSC,11,0\rSC,12,100\rSP,1\rSP,0\rXM,1440,1440,0\r")  # 18 mm in 1.44 s
     rig.until_idle()
     strokes = rig.dev.paper.strokes()
     assert len(strokes) == 1
-    assert np.allclose(strokes[0][1][[0, -1]], [[0.49344 * 12.5, 0], [18, 0]], atol=0.02)
+    assert np.allclose(strokes[0][1][[0, -1]], [[0.49344 * 12.5, 0.0], [18.0, 0.0]], atol=0.02)
 
 
 def test_saxi_style_s2_pen_moves_lift_the_pen():
@@ -333,10 +335,55 @@ def test_boot_servo_positions_follow_the_firmware_version():
     # the AxiDraw's contact position, so an old board without SC,4/SC,5 inks its pen-up moves too
     for firmware, inked in (("3.0.2", [[0, 0], [10, 0]]), ("2.5.3", [[0, 0], [10, 0], [10, 10]])):
         rig = Rig(firmware=firmware)
-        rig.send("SP,0\rXM,500,800,0\rSP,1\rXM,500,0,800\r")
+        rig.send("SP,0,500\rXM,500,800,0\rSP,1,500\rXM,500,0,800\r")  # delays cover the slews at rate 400
         rig.until_idle()
         (_, ink), = rig.dev.paper.strokes()
         assert np.allclose(ink, inked), firmware
+
+
+def test_power_on_servo_slews_at_the_firmwares_rate_400_also_after_r():
+    # RCServo2.c RCServo2_Init: rates 400; the pulse falls from SC,4 22565 to 15302 and meets the paper
+    # (contact 17944) after (22565 - 17944) x 24 ms / 400 = 277.26 ms, 2.77 mm into a 10 mm/s move
+    for setup in ("", "SC,10,0\rR\r"):  # R runs UserInit, RCServo2_Init included: the rates are 400 again
+        rig = Rig()
+        rig.send(setup + "SP,0\rXM,1000,800,0\r")
+        rig.until_idle()
+        (_, ink), = rig.dev.paper.strokes()
+        assert np.allclose(ink[[0, -1]], [[2.7726, 0.0], [10.0, 0.0]], atol=0.02), setup
+
+
+def test_power_on_defaults_of_ebb_init_and_userinit():
+    # ebb.c EBB_Init (fw 3.0.3): PenState = PEN_UP (l. 1698), NodeCount = 0, gSL_Storage[] = 0,
+    # gCurrentFIFOLength = 1 (l. 1710), enables and MS1..3 high (l. 1633-1644); UserInit: servo power timeout
+    # RCSERVO_POWEROFF_DEFAULT_MS, counter 0 (off)
+    rig = Rig()
+    assert rig.send("QG\r") == b"10\r\n"  # bit 4 pen up; nothing moving, no power drop, no limit switch
+    assert rig.send("QE\r") == b"0,0\r\nOK\r\n"  # drivers disabled (the microstep pins are 1/16)
+    assert rig.send("QN\r") == b"0\r\nOK\r\n" and rig.send("QL,31\r") == b"0\r\nOK\r\n"
+    assert rig.send("QU,3\r") == b"QU,1\r\nOK\r\n" and rig.send("QR\r") == b"0\n\rOK\r\n"
+
+
+def test_analog_channels_ra0_and_vplus_are_enabled_at_boot_on_3x():
+    # ebb.c EBB_Init (3.x, l. 1629-1631): AnalogConfigure(RA0_CUR_ADJ_ADC_CHANNEL, 1) and
+    # AnalogConfigure(RA11_VPLUS_POWER_ADC_CHANNEL, 1); 2.x firmware boots with none (2.6.5's EBB_Init has no call)
+    # V+ 9 V: (9 - 0.3) / 9.2 / 3.3 x 1023 = 293.2 through the divider; RA0 reads 394 (the current-set pot)
+    assert Rig().send("A\r") == b"A,00:0394,11:0293\r\n"
+    assert Rig(firmware="2.6.5").send("A\r") == b"A,\r\n"
+    rig = Rig()
+    assert rig.send("AC,11,0\rA\r") == b"OK\r\nA,00:0394\r\n"
+    rig.send("R\r")
+    assert rig.send("A\r") == b"A,00:0394,11:0293\r\n"
+
+
+def test_pi_reads_servo_power_on_ra3_and_the_engraver_low_on_rb3():
+    # HardwareProfile_EBB_V13_and_above.h: RCServoPowerIO = LATA3 (RCSERVO_POWER_ON 1); EBB_Init: RA3 a low
+    # output (l. 1693-1694), TRISB3 = 0 / RB3 = 0 (the engraver output starts off)
+    rig = Rig()
+    assert rig.send("PI,A,3\rPI,B,3\r") == b"PI,0\r\nPI,0\r\n"
+    rig.send("SP,1\r")  # process_SP: RCServoPowerIO = RCSERVO_POWER_ON
+    assert rig.send("PI,A,3\r") == b"PI,1\r\n"
+    rig.send("SR,60000,0\r")
+    assert rig.send("PI,A,3\r") == b"PI,0\r\n"
 
 
 def test_pi_reads_the_motor_enable_and_microstep_pins():
@@ -357,7 +404,7 @@ def test_pi_reads_the_motor_enable_and_microstep_pins():
     assert read() == (0, 0, 0, 0, 0)
     assert rig.send("EM,0,0\rQE\r") == b"OK\r\n0,0\r\nOK\r\n"
     assert read() == (1, 1, 0, 0, 0)  # EM,0 leaves the microstep pins alone
-    assert rig.send("I\r") == b"I,000,237,002,000,001\r\n"  # port B: pulled-up inputs; RC1 and RE0 high
+    assert rig.send("I\r") == b"I,000,229,002,000,001\r\n"  # port B: pulled-up inputs but RB1, RB3, RB4; RC1, RE0 high
     rig.send("EM,2,2\r")
     assert rig.send("ES,1\r") == b"0\n\rOK\r\n"
     assert read() == (1, 1, 1, 1, 0)  # ES,1 disables both drivers
@@ -508,7 +555,7 @@ def test_pushing_the_carriage_home_needs_unpowered_motors_and_leaves_the_counter
     rig.dev.push_carriage_home()
     assert np.allclose(rig.dev.position_mm, [0, 0]) and rig.dev.paper.strokes() == before
     assert rig.send("QS\r") == b"1600,0\n\rOK\r\n"  # XM,500,800,800: motor 1 = A + B, motor 2 = A - B
-    rig.send("EM,0,0\rSP,0,100\r")
+    rig.send("EM,0,0\rSP,0,300\r")  # the pen lands 277 ms after SP,0 (22565 -> 17944 at rate 400)
     rig.until_idle()
     with pytest.raises(ConfigError, match="lift the pen"):
         rig.dev.push_carriage_home()

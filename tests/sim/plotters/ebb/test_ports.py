@@ -9,7 +9,9 @@ def test_boot_state_is_sixteenth_steps_with_both_drivers_off():
     ports = Ports()
     assert ports.microsteps() == 16 and ports.enables() == [False, False]
     assert all(ports.pin(port, pin) == 1 for port, pin in ENABLE_PINS)
-    assert ports.read("B") == 0xED  # RB1 and RB4 are low outputs; the inputs read high (pull-ups)
+    assert ports.read("B") == 0xE5  # RB1 (servo pulse), RB3 (engraver), RB4 (pen) are low outputs; inputs pulled up
+    # EBB_Init: RCServoPowerIO (RA3) a low output, MS3 (RA6) a high one; the rest of port A inputs without pull-ups
+    assert ports.tris["A"] == 0xB7 and ports.read("A") == 0x40
 
 
 def test_em_modes_select_the_microsteps_qe_decodes():
