@@ -15,6 +15,7 @@ from pixelpen.drivers.i2c import I2CBus, adapter_clock_hz
 from pixelpen.errors import ConfigError, InvalidArgument, LinkError
 from pixelpen.sim.transports.i2cdev import SimSMBus
 from tests.sim.transports.chips import RecordingChip
+from tests.sim.transports.test_i2cdev import smbus_opens
 
 
 def wired(**kw) -> tuple[RecordingChip, I2CBus]:
@@ -153,14 +154,7 @@ def test_the_adapter_clock_comes_from_the_device_tree(tmp_path, monkeypatch):
     (node / "clock-frequency").write_bytes((100_000).to_bytes(4, "big"))  # Raspberry Pi's default i2c_arm rate
     assert adapter_clock_hz(1, tmp_path) == 100_000 and adapter_clock_hz(2, tmp_path) is None
     monkeypatch.setattr(i2c_module, "I2C_SYSFS", tmp_path)
-    chip = RecordingChip()
-    opened = []
-
-    def smbus(number):
-        opened.append(number)
-        return SimSMBus(chip)
-
-    monkeypatch.setattr(smbus2, "SMBus", smbus)
+    opened = smbus_opens(monkeypatch, RecordingChip())
     bus = I2CBus.open(1, 0x3C)
     assert opened == [1] and bus.clock_hz == 100_000 and bus.name == "i2c-1"
     assert I2CBus.open(1, 0x3C, clock_hz=1e6).clock_hz == 1e6
@@ -238,3 +232,17 @@ def test_a_failing_adapter_close_still_releases_the_reset_line_and_is_a_link_err
     with pytest.raises(LinkError, match=r"i2c-1: closing failed: \[Errno 9\]"):
         bus.close()
     assert released == ["reset"] and bus.closed
+
+
+def test_open_closes_the_adapter_when_the_reset_line_cannot_be_had(monkeypatch):
+    adapter = SimSMBus(RecordingChip())
+    monkeypatch.setattr(smbus2, "SMBus", lambda number: adapter)
+
+    def no_line(chip, offset, *, initial):
+        raise LinkError(f"GPIO line {offset}: permission denied on {chip}")
+
+    monkeypatch.setattr(i2c_module, "open_output_line", no_line)
+    with pytest.raises(LinkError, match="GPIO line 4"):
+        I2CBus.open(1, 0x3C, rst=4)
+    with pytest.raises(OSError, match="Bad file descriptor"):
+        adapter.write_byte(0x3C, 0)  # closed again

@@ -1,8 +1,8 @@
 """Frame pacing (frames coalesce, never queue) and the bus bandwidth limit of a panel refresh.
 
-Wire time: SPI moves a byte in 8 clocks; I2C in 9 (8 bits and the ACK) plus :data:`I2C_TRANSACTION_CLOCKS`
-per transaction (START, the address byte with its ACK, STOP).  Gaps between transfers (chip select, D/C
-changes, the host's own time) are not counted: the estimate is the bus's upper limit, panels.md §4.
+Wire time is :mod:`pixelpen.drivers.bus`'s model (``spi_wire_seconds``, ``i2c_wire_seconds``: 8 SPI clocks
+a byte; 9 I2C clocks a byte plus 11 a transaction).  Gaps between transfers (chip select, D/C changes, the
+host's own time) are not counted: the estimate is the bus's upper limit, panels.md §4.
 """
 
 from __future__ import annotations
@@ -12,18 +12,15 @@ import math
 from typing import NamedTuple
 
 from pixelpen.clock import Clock
+from pixelpen.drivers.bus import SPI_CLOCKS_PER_BYTE, i2c_wire_seconds, spi_wire_seconds
 from pixelpen.errors import ConfigError
 
-SPI_CLOCKS_PER_BYTE = 8
-"""SPI clocks per byte."""
-I2C_CLOCKS_PER_BYTE = 9
-"""I2C clocks per byte: 8 data bits and the acknowledge."""
-I2C_TRANSACTION_CLOCKS = 11
-"""I2C clocks per transaction beyond its bytes: START, the address byte and its ACK, STOP."""
 FPS_WINDOW = 60
 """Frames the achieved frame rate is measured over."""
 
-__all__ = ["BandwidthEstimate", "FramePacer", "bus_limit_fps", "check_fps", "estimate_bandwidth"]
+__all__ = [  # SPI_CLOCKS_PER_BYTE: drivers.bus's, named here for benchmarks/panels.py
+    "SPI_CLOCKS_PER_BYTE", "BandwidthEstimate", "FramePacer", "bus_limit_fps", "check_fps", "estimate_bandwidth",
+]
 
 
 class BandwidthEstimate(NamedTuple):
@@ -50,10 +47,9 @@ def estimate_bandwidth(kind: str, clock_hz: float, frame_bytes: int, transfers: 
     """Wire time and frame-rate limit of ``frame_bytes`` in ``transfers`` transfers on a ``kind`` bus."""
     _check_bus(kind, clock_hz, frame_bytes, transfers)
     if kind == "spi":
-        clocks = SPI_CLOCKS_PER_BYTE * frame_bytes
+        seconds = spi_wire_seconds(frame_bytes, clock_hz)
     else:
-        clocks = I2C_CLOCKS_PER_BYTE * frame_bytes + I2C_TRANSACTION_CLOCKS * transfers
-    seconds = clocks / clock_hz
+        seconds = i2c_wire_seconds(frame_bytes, clock_hz, transfers)
     return BandwidthEstimate(frame_bytes, transfers, seconds, math.inf if seconds == 0 else 1.0 / seconds)
 
 

@@ -3,8 +3,9 @@
 Each message is one addressed write (``device.i2c_write``) or read (``device.i2c_read``), offered to the
 devices in turn until one acknowledges; no acknowledgement raises ``OSError(EREMOTEIO)`` as Linux i2c-dev
 does, and the I2C_RDWR limits are the kernel's (at most 42 messages, 8192 bytes each: EINVAL).  With a
-SimulatedClock each transaction advances the clock by its wire time: 9 SCL periods per byte (8 bits + ACK,
-the address byte included) plus one for each START or repeated START and one for the STOP.
+SimulatedClock each transaction advances the clock by its wire time, ``drivers.bus.i2c_wire_seconds``:
+9 SCL periods per byte (8 bits + ACK, the address bytes included) plus one for each START or repeated
+START and one for the STOP.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from types import TracebackType
 from typing import Final, Protocol
 
 from pixelpen.clock import Clock, SimulatedClock
+from pixelpen.drivers.bus import i2c_wire_seconds
 from pixelpen.errors import InvalidArgument
 from pixelpen.sim.base import BusDevice
 
@@ -99,10 +101,10 @@ class SimSMBus:
         """Run one START ... STOP: each message a write of its bytes, or a read into the i2c_msg given."""
         if not self._open:
             raise OSError(errno.EBADF, "Bad file descriptor")
-        clocks = 1  # the STOP
+        payload_bytes = sum(read_into.len if read_into is not None else len(payload)
+                            for _, payload, read_into in messages)
         try:
             for address, payload, read_into in messages:
-                clocks += 1 + 9 * (1 + (read_into.len if read_into is not None else len(payload)))
                 if read_into is not None:
                     self._read(address, read_into)
                 else:
@@ -110,7 +112,7 @@ class SimSMBus:
         finally:
             self.transactions += 1
             if isinstance(self.clock, SimulatedClock):
-                self.clock.advance(clocks / self.clock_hz)
+                self.clock.advance(i2c_wire_seconds(payload_bytes, self.clock_hz, restarts=len(messages) - 1))
 
     def _deliver(self, address: int, payload: bytes) -> None:
         for device in self.devices:

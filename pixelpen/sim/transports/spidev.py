@@ -2,8 +2,8 @@
 
 Every SpiDev call that moves bytes is one chip-select frame handed to ``device.spi_transfer(chunk, dc=...)``
 with D/C at the D/C line's level, chunked as py-spidev 3.8 chunks (``writebytes2``/``xfer3`` by ``bufsiz``).
-With a SimulatedClock each frame advances the clock by its wire time (8 SCLK periods per byte at the
-frame's speed), so simulated frame rates are the bus's.
+With a SimulatedClock each frame advances the clock by its wire time (``drivers.bus.spi_wire_seconds``:
+8 SCLK periods per byte at the frame's speed), so simulated frame rates are the bus's.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from typing import Final
 
 from pixelpen.clock import Clock, SimulatedClock
+from pixelpen.drivers.bus import spi_wire_seconds
 from pixelpen.errors import InvalidArgument, InvalidArgumentType
 from pixelpen.sim.base import BusDevice
 
@@ -42,7 +43,7 @@ class _Frames:
         self.device.advance_to(self.clock.now())
         miso = self.device.spi_transfer(data, dc=self.dc)
         if isinstance(self.clock, SimulatedClock) and speed_hz > 0:
-            self.clock.advance(8 * len(data) / speed_hz)
+            self.clock.advance(spi_wire_seconds(len(data), speed_hz))
         return miso
 
 

@@ -110,15 +110,21 @@ def test_luma_i2c_with_a_bus_object_sends_32_byte_smbus_blocks():
     assert b"".join(p[1:] for _, p in chip.writes[1:]) == bytes(range(100))
 
 
-def test_luma_i2c_managed_sends_one_i2c_rdwr_per_4096_bytes(monkeypatch):
-    chip = RecordingChip()
-    opened = []
+def smbus_opens(monkeypatch: pytest.MonkeyPatch, chip: RecordingChip) -> list[int]:
+    """Make ``smbus2.SMBus(n)`` a SimSMBus on ``chip``; the list collects the bus numbers opened."""
+    opened: list[int] = []
 
-    def smbus(port):
+    def smbus(port: int) -> SimSMBus:
         opened.append(port)
         return SimSMBus(chip)
 
     monkeypatch.setattr(smbus2, "SMBus", smbus)
+    return opened
+
+
+def test_luma_i2c_managed_sends_one_i2c_rdwr_per_4096_bytes(monkeypatch):
+    chip = RecordingChip()
+    opened = smbus_opens(monkeypatch, chip)
     serial = luma_i2c(port=1, address=0x3C)
     serial.data(bytes(5000))
     assert opened == [1]
