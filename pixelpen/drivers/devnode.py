@@ -1,16 +1,27 @@
-"""Why a Linux device node (``/dev/spidev0.0``, ``/dev/i2c-1``, ``/dev/gpiochip0``) would not open, in words.
+"""What a driver needs from the host (its Python library, an openable device node), and errors saying how to get it.
 
-:func:`node_open_error` turns the OSError of opening a node into a LinkError that names the node and
-says what to do: how to make it exist, or which group may open it (the node's own group when a
-non-root group owns it, else the conventional one) and the udev rule that grants it.
+:func:`require_module` imports a driver's optional library or says what to install; :func:`node_open_error`
+turns the OSError of opening a node (``/dev/spidev0.0``, ``/dev/i2c-1``, ``/dev/gpiochip0``) into a
+LinkError that names the node and says what to do: how to make it exist, or which group may open it
+(the node's own group when a non-root group owns it, else the conventional one) and the udev rule.
 """
 
 from __future__ import annotations
 
 import grp
+import importlib
 import os
+from types import ModuleType
 
-from pixelpen.errors import LinkError
+from pixelpen.errors import ConfigError, LinkError
+
+
+def require_module(name: str, *, needed_by: str, install: str, package: str = "") -> ModuleType:
+    """``import name``, or ConfigError "<needed_by> need <package>: pip install <install>" when it is missing."""
+    try:
+        return importlib.import_module(name)
+    except ImportError:
+        raise ConfigError(f"{needed_by} need {package or f'the {name} package'}: pip install {install}") from None
 
 
 def node_group(node: str, default: str) -> str:

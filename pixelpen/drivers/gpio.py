@@ -8,13 +8,12 @@ simulators share, so a simulated line (``sim.transports.spidev``) stands in for 
 from __future__ import annotations
 
 import errno
-import importlib
 import logging
 from types import ModuleType
 from typing import Any, Final, Protocol, runtime_checkable
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.drivers.devnode import node_open_error
+from pixelpen.drivers.devnode import node_open_error, require_module
 from pixelpen.errors import ConfigError, InvalidArgument, LinkError
 
 log = logging.getLogger(__name__)
@@ -49,13 +48,8 @@ class InputLine(Protocol):
 
 
 def _gpiod() -> ModuleType:
-    try:
-        return importlib.import_module("gpiod")
-    except ImportError:
-        raise ConfigError(
-            "GPIO lines need the gpiod package (libgpiod v2 bindings): pip install 'gpiod>=2.1' "
-            "(or pip install 'pixelpen[panels]')"
-        ) from None
+    return require_module("gpiod", needed_by="GPIO lines", package="the gpiod package (libgpiod v2 bindings)",
+                          install="'gpiod>=2.1' (or pip install 'pixelpen[panels]')")
 
 
 def _request(chip: str, offset: int, settings: Any, consumer: str) -> Any:

@@ -17,7 +17,7 @@ from typing import Any, ClassVar, Final
 
 from pixelpen.clock import REAL_CLOCK, Clock
 from pixelpen.drivers.bus import DEFAULT_MAX_TRANSFER, I2C_COMMAND, I2C_DATA, FramedBus
-from pixelpen.drivers.devnode import node_open_error
+from pixelpen.drivers.devnode import node_open_error, require_module
 from pixelpen.drivers.gpio import OutputLine, open_output_line
 from pixelpen.errors import ConfigError, LinkError
 
@@ -96,10 +96,7 @@ class I2CBus(FramedBus):
     ) -> I2CBus:
         """Open ``/dev/i2c-<bus_number>`` with smbus2; ``clock_hz`` defaults to the adapter's (else 400 kHz)."""
         node = f"/dev/i2c-{bus_number}"
-        try:
-            smbus2 = importlib.import_module("smbus2")
-        except ImportError:
-            raise ConfigError("I2C panels need the smbus2 package: pip install smbus2") from None
+        smbus2 = require_module("smbus2", needed_by="I2C panels", install="smbus2")
         try:
             adapter = smbus2.SMBus(bus_number)
         except OSError as e:

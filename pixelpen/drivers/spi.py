@@ -9,14 +9,13 @@ changes (a GPIO write costs microseconds on real hardware); each ``writebytes2``
 from __future__ import annotations
 
 import contextlib
-import importlib
 import logging
 from pathlib import Path
 from typing import Any, ClassVar, Final
 
 from pixelpen.clock import REAL_CLOCK, Clock
 from pixelpen.drivers.bus import FramedBus
-from pixelpen.drivers.devnode import node_open_error
+from pixelpen.drivers.devnode import node_open_error, require_module
 from pixelpen.drivers.gpio import OutputLine, open_output_line
 from pixelpen.errors import ConfigError, LinkError
 
@@ -110,11 +109,7 @@ class SpiBus(FramedBus):
     ) -> SpiBus:
         """Open ``/dev/spidev<bus>.<device>`` with the spidev package and D/C (and reset) lines of ``gpiochip``."""
         node = f"/dev/spidev{bus}.{device}"
-        try:
-            spidev = importlib.import_module("spidev")
-        except ImportError:
-            raise ConfigError("SPI panels need the spidev package: pip install spidev ('pixelpen[panels]')") from None
-        spi = spidev.SpiDev()
+        spi = require_module("spidev", needed_by="SPI panels", install="spidev ('pixelpen[panels]')").SpiDev()
         try:
             spi.open(bus, device)
         except OSError as e:

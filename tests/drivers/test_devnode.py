@@ -8,8 +8,8 @@ import os
 
 import pytest
 
-from pixelpen.drivers.devnode import node_group, node_open_error
-from pixelpen.errors import LinkError
+from pixelpen.drivers.devnode import node_group, node_open_error, require_module
+from pixelpen.errors import ConfigError, LinkError
 
 SPI = {"group": "spi", "udev": 'SUBSYSTEM=="spidev"', "missing": "enable SPI (dtparam=spi=on)"}
 
@@ -49,3 +49,13 @@ def test_other_errors_keep_the_os_words_and_what_prefixes_every_message():
     assert str(busy) == "/dev/i2c-1: cannot open: [Errno 16] Device or resource busy"
     missing = node_open_error("/dev/gpiochip3", FileNotFoundError(2, "x"), what="GPIO line 5", **SPI)
     assert str(missing).startswith("GPIO line 5: /dev/gpiochip3 does not exist: ")
+
+
+def test_a_missing_library_says_what_to_install(monkeypatch):
+    assert require_module("errno", needed_by="x", install="x") is errno
+    monkeypatch.setitem(__import__("sys").modules, "spidev", None)  # what an absent package looks like to import
+    with pytest.raises(ConfigError) as caught:
+        require_module("spidev", needed_by="SPI panels", install="spidev")
+    assert str(caught.value) == "SPI panels need the spidev package: pip install spidev"
+    with pytest.raises(ConfigError, match=r"^GPIO lines need gpiod 2: pip install 'gpiod>=2\.1'$"):
+        require_module("no_such_module_here", needed_by="GPIO lines", package="gpiod 2", install="'gpiod>=2.1'")
