@@ -141,7 +141,6 @@ class PanelDisplay(RasterDisplay):
         OptionSpec("persist", boolean, True, "leave the picture on the glass at close (false: display off)"),
         OptionSpec("refresh", choice("partial", "full"), "partial", "send only what changed, or every frame whole"),
     )
-    SIM_SHARED: ClassVar[frozenset[str]] = frozenset({"size"})
 
     def __init__(
         self,
@@ -156,6 +155,7 @@ class PanelDisplay(RasterDisplay):
         clock: Clock = REAL_CLOCK,
         background: object = "black",
         deferral: Deferral = "asap",
+        simulator: BusDevice | None = None,
     ) -> None:
         if profile.controller not in self.compatible_controllers():
             raise ConfigError(f"{type(self).__name__} drives {', '.join(self.compatible_controllers())}, "
@@ -172,6 +172,7 @@ class PanelDisplay(RasterDisplay):
         self.stats = PanelStats()
         self._wiring_source = wiring
         self._wiring: Wiring | None = wiring if isinstance(wiring, Wiring) else None
+        self._simulator = simulator if simulator is not None or not isinstance(wiring, Wiring) else wiring.simulator
         self._shadow: np.ndarray | None = None
         self._full = True
         self._pacer: FramePacer | None = None
@@ -198,27 +199,34 @@ class PanelDisplay(RasterDisplay):
         model = url.scheme
         try:
             profile = cls._profile(opts)
+            rotation = cls._rotation(opts, profile, given="rotation" in url.options)
             keywords = cls.controller_options(opts, profile)
         except URLError:
             raise
         except ConfigError as exc:
             raise ConfigError(f"{where}: {exc}") from None
         clock: Clock = kwargs.pop("clock", None) or (SimulatedClock() if sim_options is not None else REAL_CLOCK)
+        device: BusDevice | None = None
         if sim_options is not None:
             interface: Interface = "spi" if opts["dc"] is not None and "spi" in cls.interfaces else cls.interfaces[0]
             pins = cls._pins(opts, profile, interface)
-            options = cls.simulator_options(model, sim_options, opts, profile, pins)
-            device = create_simulator(model, clock=clock, **options)
-            wiring: Wiring | Callable[[], Wiring] = sim_wiring(_bus_device(device, where), interface, pins,
-                                                                clock=clock)
+            held = rotation if _turned(opts["size"], profile) else 0
+            try:
+                options = cls.simulator_options(model, sim_options, opts, profile, pins, held=held)
+            except ConfigError as exc:
+                raise ConfigError(f"{where}: {exc}") from None
+            sim = _bus_device(create_simulator(model, clock=clock, **options), where)
+            device = sim
+            wiring: Wiring | Callable[[], Wiring] = lambda: sim_wiring(sim, interface, pins, clock=clock)
         else:
             target = parse_target(url.target, where)
             if target.interface not in cls.interfaces:
                 raise URLError(f"{where}: a {cls.controller} is not driven over {target.interface}")
             pins = cls._pins(opts, profile, target.interface)
             wiring = lambda: open_wiring(target, pins, clock=clock, where=where)  # opened by open()
-        return cls(wiring, profile=profile, rotation=opts["rotation"], fps=opts["fps"], invert=opts["invert"],
-                   persist=opts["persist"], refresh=opts["refresh"], clock=clock, **keywords, **kwargs)
+        return cls(wiring, profile=profile, rotation=rotation, fps=opts["fps"], invert=opts["invert"],
+                   persist=opts["persist"], refresh=opts["refresh"], clock=clock, simulator=device, **keywords,
+                   **kwargs)
 
     @classmethod
     def _profile(cls, opts: OptionValues) -> PanelProfile:
@@ -230,6 +238,21 @@ class PanelDisplay(RasterDisplay):
                                   f"({profile.size[0]}x{profile.size[1]})")
             return profile
         return panel_profile_for(cls.controller, opts["size"] or cls.default_size)
+
+    @classmethod
+    def _rotation(cls, opts: OptionValues, profile: PanelProfile, *, given: bool) -> int:
+        """``rotation=``; a ``size`` turned from the module's (320x240 on a 240x320) means rotation 90, and
+        with ``rotation=`` given too the two must agree (90 or 270)."""
+        rotation = int(opts["rotation"])
+        if not _turned(opts["size"], profile):
+            return rotation
+        if not given:
+            return 90
+        if rotation % 180 == 0:
+            w, h = opts["size"]
+            raise ConfigError(f"size={w}x{h} is the {h}x{w} module turned (rotation 90 or 270), "
+                              f"but rotation={rotation}")
+        return rotation
 
     @classmethod
     def _pins(cls, opts: OptionValues, profile: PanelProfile, interface: Interface) -> Pins:
@@ -245,12 +268,18 @@ class PanelDisplay(RasterDisplay):
 
     @classmethod
     def simulator_options(cls, model: str, sim_options: dict[str, str], opts: OptionValues, profile: PanelProfile,
-                          pins: Pins) -> dict[str, str]:
-        """Options for the simulator of a ``sim:`` URL: as given, with the module's size and the bus clock
-        (when the simulator counts bus time at a clock of its own: its ``hz`` option)."""
+                          pins: Pins, *, held: int = 0) -> dict[str, str]:
+        """Options for the simulator of a ``sim:`` URL: as given, with the module's own (rotation 0) size held
+        turned by ``held`` degrees (a turned ``size``: the glass is as big as the canvas) and the bus clock (when
+        the simulator counts bus time at a clock of its own: its ``hz`` option)."""
         out = dict(sim_options)
-        out.setdefault("size", f"{profile.size[0]}x{profile.size[1]}")
-        if "hz" in {spec.name for spec in simulator_specs(model)}:
+        names = {spec.name for spec in simulator_specs(model)}
+        w, h = profile.size
+        if held % 180 and "turn" in names:
+            w, h = h, w
+            out.setdefault("turn", str(held))
+        out["size"] = f"{w}x{h}"
+        if "hz" in names:
             out.setdefault("hz", f"{pins.hz:g}")
         return out
 
@@ -296,8 +325,7 @@ class PanelDisplay(RasterDisplay):
     @property
     def simulator(self) -> BusDevice | None:
         """The simulated chip of a ``sim:`` display (None on hardware); it stays readable after close."""
-        source = self._wiring_source
-        return source.simulator if isinstance(source, Wiring) else None
+        return self._simulator
 
     def power(self, on: bool) -> None:
         """Display on or off; the RAM keeps the picture."""
@@ -577,6 +605,11 @@ class PanelDisplay(RasterDisplay):
         finally:
             self._bus_perf += time.perf_counter() - perf
             self._frame.bus_seconds += self.clock.now() - now
+
+
+def _turned(size: tuple[int, int] | None, profile: PanelProfile) -> bool:
+    """True when ``size`` is the profile's module turned a quarter (320x240 for a 240x320; never a square)."""
+    return size is not None and size != profile.size and size == profile.size[::-1]
 
 
 def _bus_device(device: object, where: str) -> BusDevice:

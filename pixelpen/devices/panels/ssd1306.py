@@ -37,6 +37,14 @@ def i2c_address(value: str) -> int:
     return number
 
 
+def _same_address(text: str) -> int | None:
+    """``text`` as an address for comparison (None when it is no number: the simulator then names the error)."""
+    try:
+        return int(text.strip(), 0)
+    except ValueError:
+        return None
+
+
 @register_display("ssd1306")
 class SSD1306Display(PanelDisplay):
     """An SSD1306 OLED (``ssd1306:i2c:1?addr=0x3c``, ``ssd1306:spi:0.0?dc=24&rst=25``, ``sim:ssd1306?size=128x32``)."""
@@ -65,11 +73,16 @@ class SSD1306Display(PanelDisplay):
 
     @classmethod
     def simulator_options(cls, model: str, sim_options: dict[str, str], opts: OptionValues, profile: PanelProfile,
-                          pins: Pins) -> dict[str, str]:
-        """The module's size, the bus clock, and the I2C address the display talks to."""
-        out = super().simulator_options(model, sim_options, opts, profile, pins)
+                          pins: Pins, *, held: int = 0) -> dict[str, str]:
+        """The base's, with the display's I2C address (``addr``) as the simulator's ``address``: one chip, one
+        address (an ``address=`` for the simulator that disagrees is a ConfigError)."""
+        out = super().simulator_options(model, sim_options, opts, profile, pins, held=held)
         if "address" in {spec.name for spec in simulator_specs(model)}:
-            out.setdefault("address", hex(pins.addr))
+            given = out.get("address")
+            if given is not None and _same_address(given) != pins.addr:
+                raise ConfigError(f"address={given} (the simulator's) disagrees with the display's "
+                                  f"addr=0x{pins.addr:02x}; give addr= alone")
+            out["address"] = f"0x{pins.addr:02x}"
         return out
 
     @property

@@ -231,3 +231,85 @@ def test_close_releases_the_bus_even_when_display_off_fails() -> None:
     bus.command = broken  # type: ignore[method-assign]
     display.close()
     assert bus.log[-1] == ("X", b"") and not display.is_open
+
+
+# -- sim: URLs: a turned size is a rotation, the address reaches the chip, a closed display opens again ------------
+def _glass_equals_canvas(display: object) -> None:
+    """The simulated glass shows the canvas as it is (RGB565 depth), pixel for pixel and of the same size."""
+    from tests.devices.panels.test_refresh_property import glass, reduce_depth
+
+    canvas = reduce_depth(np.asarray(display.canvas.to_image().convert("RGB")), display)  # type: ignore[attr-defined]
+    assert glass(display).shape == canvas.shape  # type: ignore[arg-type]
+    assert np.array_equal(glass(display), canvas)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(("url", "canvas_size"), [
+    ("sim:ili9341?size=320x240", (320, 240)),
+    ("sim:st7789?size=240x135", (240, 135)),
+    ("sim:st7735?size=160x128", (160, 128)),
+    ("sim:ili9341?size=320x240&rotation=270", (320, 240)),
+])
+def test_a_size_turned_from_the_module_is_a_quarter_rotation_and_the_glass_is_the_canvas(
+        url: str, canvas_size: tuple[int, int]) -> None:
+    import pixelpen
+
+    with pixelpen.open(url) as display:
+        assert display.rotation == (270 if "rotation=270" in url else 90)
+        assert display.canvas.size == canvas_size
+        w, h = canvas_size
+        display.canvas.array[: h // 3, : w // 4] = (255, 0, 0)  # a red block at the top left, a green one lower right
+        display.canvas.array[h // 2:, w // 2:] = (0, 255, 0)
+        display.canvas.mark_damaged()
+        display.flush()
+        _glass_equals_canvas(display)
+
+
+def test_a_turned_size_with_rotation_0_or_180_is_refused() -> None:
+    import pixelpen
+
+    with pytest.raises(ConfigError, match=r"size=320x240 is the 240x320 module turned.*rotation=180"):
+        pixelpen.open("sim:ili9341?size=320x240&rotation=180")
+
+
+def test_the_module_size_with_a_rotation_turns_the_picture_on_the_upright_glass() -> None:
+    import pixelpen
+
+    with pixelpen.open("sim:ili9341?size=240x320&rotation=90") as display:
+        assert display.canvas.size == (320, 240)
+        assert display.simulator.glass().size == (240, 320)  # type: ignore[union-attr]
+
+
+@pytest.mark.parametrize("address", [0x3C, 0x3D])
+def test_the_displays_i2c_address_is_the_simulators(address: int) -> None:
+    import pixelpen
+
+    with pixelpen.open(f"sim:ssd1306?addr=0x{address:02x}") as display:
+        sim = display.simulator
+        assert sim is not None
+        assert sim.i2c_write(address, b"\x00\xa5")  # the chip acknowledges the display's address
+        assert not sim.i2c_write(0x3C + 0x3D - address, b"\x00\xa5")
+
+
+def test_a_simulator_address_disagreeing_with_addr_is_refused() -> None:
+    import pixelpen
+
+    with pytest.raises(ConfigError, match=r"address=0x3c .*disagrees with the display's addr=0x3d"):
+        pixelpen.open("sim:ssd1306?addr=0x3d&address=0x3c")
+
+
+@pytest.mark.parametrize("url", ["sim:st7789", "sim:ssd1306"])
+def test_a_closed_sim_display_opens_again_and_draws_on_the_same_simulator(url: str) -> None:
+    import pixelpen
+
+    display = pixelpen.open(url)
+    sim = display.simulator
+    display.close()
+    display.open()
+    assert display.simulator is sim
+    h = display.canvas.height
+    display.canvas.array[: h // 2] = 1 if display.canvas_mode == "1" else (255, 255, 255)
+    display.canvas.mark_damaged()
+    display.flush()
+    display.close()
+    picture = np.asarray(sim.glass().convert("L"))  # type: ignore[union-attr]
+    assert picture[: h // 2].min() > 200 and picture[h // 2:].max() == 0
