@@ -17,28 +17,29 @@ D/C level as a stream, so a program may cut its calls differently from the recor
 
 from __future__ import annotations
 
-import os
 import re
 from bisect import bisect_right
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import IO, Final
+from typing import Final
 
 from pixelpen.clock import REAL_CLOCK, Clock
 from pixelpen.drivers.bus import RESET_RECOVERY, PanelBus, command_bytes
 from pixelpen.drivers.trace import (
     DEFAULT_MAX_BYTES,
     MAX_CHUNK,
-    MAX_LINE,
-    MAX_STAMP_DIGITS,
     TRACE_MAGIC,
     TRACE_VERSION,
     PathOrFile,
+    PayloadBudget,
     TraceWriter,
-    parse_trace,
+    parse_header,
+    parse_hex,
+    parse_stamp,
+    read_trace_text,
+    trace_lines,
 )
-from pixelpen.errors import ConfigError, InvalidArgument, LinkError, ParseError, TraceMismatch
-from pixelpen.urls import check_path
+from pixelpen.errors import InvalidArgument, LinkError, ParseError, TraceMismatch
 
 COMMAND: Final = "C"
 """A frame of command bytes (D/C low)."""
@@ -49,7 +50,6 @@ MORE: Final = "+"
 RESET: Final = "R"
 """A pulse on the reset line."""
 BUS_KINDS: Final = ("spi", "i2c")
-_SECONDS = re.compile(r"([0-9]+)(\.[0-9]*)?")
 _LEVEL_NAMES: Final = {COMMAND: "command (D/C low)", DATA: "data (D/C high)"}
 
 
@@ -121,45 +121,26 @@ def format_frame(time: float, level: str, data: bytes) -> list[str]:
 def parse_bus_trace(lines: Iterable[str], source: str = "<trace>", max_bytes: int = DEFAULT_MAX_BYTES) -> BusTrace:
     """Parse bus-trace lines (each with its ``\\n``); ParseError naming the line and token on anything malformed."""
     trace = BusTrace(source=source)
-    total = 0
+    budget = PayloadBudget(max_bytes, source)
     last_time = 0.0
-    line_no = 0
-    ended_cleanly = True
     previous = ""  # op of the last event line, for '+'
-    for line_no, raw in enumerate(lines, start=1):
-        if len(raw) > MAX_LINE:
-            raise ParseError(
-                f"line longer than {MAX_LINE} characters", source=source, line=line_no, token=raw[:40] + "..."
-            )
-        ended_cleanly = raw.endswith("\n")
+    for line_no, text in trace_lines(lines, source, f"'{TRACE_MAGIC} {TRACE_VERSION} kind=bus ...'"):
         if line_no == 1:
-            _parse_bus_header(trace, raw if ended_cleanly else raw + "\n", source)
+            _parse_bus_header(trace, text, source)
             continue
-        body = raw.rstrip("\r\n").partition("#")[0].strip()
-        if not body:
-            continue
-        event = _parse_event(body, source, line_no, last_time)
+        event = _parse_event(text, source, line_no, last_time)
         if event.op == MORE and previous not in (COMMAND, DATA, MORE):
             raise ParseError("'+' continues a frame, but no C or D frame is open", source=source, line=line_no,
                              token=MORE)
-        total += len(event.data)
-        if total > max_bytes:
-            raise ParseError(
-                f"trace holds more than {max_bytes} bytes (raise max_bytes to read it)", source=source, line=line_no
-            )
+        budget.take(len(event.data), line_no)
         previous, last_time = event.op, event.time
         trace.events.append(event)
-    if line_no == 0:
-        raise ParseError(f"empty file: expected a '{TRACE_MAGIC} {TRACE_VERSION} kind=bus ...' header",
-                         source=source, line=1)
-    if not ended_cleanly:
-        raise ParseError("last line has no newline: the trace looks truncated", source=source, line=line_no)
     return trace
 
 
 def _parse_bus_header(trace: BusTrace, header: str, source: str) -> None:
-    """The stream reader parses the header line; then the bus settings are checked."""
-    parsed = parse_trace([header], source)
+    """The stream trace's header parser reads the line; then the bus settings are checked."""
+    parsed = parse_header(header, source)
     trace.url, trace.settings = parsed.url, parsed.settings
     settings = parsed.settings
     if settings.get("kind") != "bus":
@@ -202,16 +183,7 @@ def _parse_event(body: str, source: str, line_no: int, last_time: float) -> BusE
         raise ParseError("expected 'SECONDS C|D|+|R [HEX...]' (line cut short?)", source=source, line=line_no,
                          token=body[:40])
     stamp, op, hex_fields = fields[0], fields[1], fields[2:]
-    seconds = _SECONDS.fullmatch(stamp)
-    if not seconds or len(seconds[1]) > MAX_STAMP_DIGITS:
-        raise ParseError(
-            f"timestamp must be non-negative decimal seconds like 0.000012 (at most {MAX_STAMP_DIGITS} digits "
-            "before the point)", source=source, line=line_no, column=1, token=stamp,
-        )
-    t = float(stamp)
-    if t < last_time:
-        raise ParseError(f"timestamp goes backwards (previous {last_time:.6f})", source=source, line=line_no,
-                         column=1, token=stamp)
+    t = parse_stamp(stamp, source, line_no, last_time)
     if op not in (COMMAND, DATA, MORE, RESET):
         raise ParseError("event must be C (command), D (data), + (more of the frame) or R (reset)", source=source,
                          line=line_no, token=op)
@@ -221,58 +193,15 @@ def _parse_event(body: str, source: str, line_no: int, last_time: float) -> BusE
         return BusEvent(t, op, b"", line_no)
     if not hex_fields:
         raise ParseError(f"a {op} line needs at least one byte", source=source, line=line_no, token=body[:40])
-    data = bytearray()
-    for token in hex_fields:
-        if len(token) % 2:
-            raise ParseError("odd number of hex digits (truncated byte?)", source=source, line=line_no, token=token)
-        try:
-            data += bytes.fromhex(token)
-        except ValueError:
-            raise ParseError("not hexadecimal bytes", source=source, line=line_no, token=token) from None
-        if len(data) > MAX_CHUNK:
-            raise ParseError(f"a line carries at most {MAX_CHUNK} bytes (continue the frame on a '+' line)",
-                             source=source, line=line_no, token=token)
-    return BusEvent(t, op, bytes(data), line_no)
-
-
-def _read_lines(f: IO[str]) -> Iterable[str]:
-    """Lines of ``f``, each cut at MAX_LINE + 1 characters so an endless line cannot exhaust memory."""
-    while True:
-        line = f.readline(MAX_LINE + 1)
-        if not line:
-            return
-        yield line
+    return BusEvent(t, op, parse_hex(hex_fields, source, line_no, limit=MAX_CHUNK), line_no)
 
 
 def read_bus_trace(source: PathOrFile, max_bytes: int = DEFAULT_MAX_BYTES) -> BusTrace:
     """Read a bus trace from a path or an open text file (ParseError on malformed content or an unreadable file)."""
-    if not isinstance(source, (str, os.PathLike)):
-        name = str(getattr(source, "name", "<trace>"))
-        try:
-            return parse_bus_trace(_read_lines(source), name, max_bytes)
-        except UnicodeDecodeError as exc:
-            raise ParseError(f"not UTF-8 text: {exc.reason}", source=name) from None
-    name = os.fspath(source)
-    try:
-        with open(check_path(name, "trace file"), encoding="utf-8", newline="") as f:
-            return parse_bus_trace(_read_lines(f), name, max_bytes)
-    except UnicodeDecodeError as exc:
-        raise ParseError(f"not UTF-8 text: {exc.reason}", source=name, offset=exc.start) from None
-    except ConfigError as exc:
-        raise ParseError(str(exc), source="<trace>") from None
-    except OSError as exc:
-        raise ParseError(f"cannot read trace: {exc.strerror or exc}", source=name) from None
+    return read_trace_text(source, lambda lines, name: parse_bus_trace(lines, name, max_bytes))
 
 
 # -- recording ----------------------------------------------------------------------------------------
-
-
-class _BusTraceWriter(TraceWriter):
-    """The stream trace writer (header, comments, flush per line, ownership) with a line method for bus events."""
-
-    def line(self, text: str) -> None:
-        """Append one event line."""
-        self._emit(text)
 
 
 class RecordingBus:
@@ -283,7 +212,7 @@ class RecordingBus:
         inner_clock = getattr(bus, "clock", None)
         self.clock = clock if clock is not None else inner_clock if isinstance(inner_clock, Clock) else REAL_CLOCK
         self._start = self.clock.now()
-        self._writer = _BusTraceWriter(dest, url, bus_settings(bus))
+        self._writer = TraceWriter(dest, url, bus_settings(bus))
         self._closed = False
 
     @property

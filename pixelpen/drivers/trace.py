@@ -36,9 +36,9 @@ import math
 import os
 import re
 from bisect import bisect_right
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import IO, Final
+from typing import IO, Final, TypeVar
 from urllib.parse import quote, unquote
 
 from pixelpen.clock import Clock, SimulatedClock
@@ -62,6 +62,7 @@ HOST_TO_DEVICE: Final = ">"
 DEVICE_TO_HOST: Final = "<"
 
 PathOrFile = str | os.PathLike[str] | IO[str]
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -116,8 +117,32 @@ def format_chunk(time: float, direction: str, data: bytes) -> list[str]:
 def parse_trace(lines: Iterable[str], source: str = "<trace>", max_bytes: int = DEFAULT_MAX_BYTES) -> Trace:
     """Parse trace lines (each with its ``\\n``); ParseError with the line number on anything malformed."""
     trace = Trace(source=source)
-    total = 0
+    budget = PayloadBudget(max_bytes, source)
     last_time = 0.0
+    for line_no, text in trace_lines(lines, source, f"'{TRACE_MAGIC} {TRACE_VERSION} url=...'"):
+        if line_no == 1:
+            trace = parse_header(text, source)
+            if trace.settings.get("kind") == "bus":
+                raise ParseError(
+                    "a bus trace (kind=bus): read it with pixelpen.drivers.bustrace.read_bus_trace",
+                    source=source,
+                    line=1,
+                    token="kind=bus",
+                )
+            continue
+        chunk = _parse_chunk(text, source, line_no, last_time)
+        budget.take(len(chunk.data), line_no)
+        last_time = chunk.time
+        trace.chunks.append(chunk)
+    return trace
+
+
+def trace_lines(lines: Iterable[str], source: str, header: str) -> Iterator[tuple[int, str]]:
+    """(line number, text): the header line, then every later line's body without comment or blank lines.
+
+    ParseError on a line longer than MAX_LINE, an empty file (``header`` names the header it wanted) or a last
+    line without its newline.
+    """
     line_no = 0
     ended_cleanly = True
     for line_no, raw in enumerate(lines, start=1):
@@ -127,30 +152,37 @@ def parse_trace(lines: Iterable[str], source: str = "<trace>", max_bytes: int = 
             )
         ended_cleanly = raw.endswith("\n")
         text = raw.rstrip("\r\n")
-        if line_no == 1:
-            _parse_header(trace, text, source)
-            continue
-        body = text.partition("#")[0].strip()
-        if not body:
-            continue
-        chunk = _parse_chunk(body, source, line_no, last_time)
-        total += len(chunk.data)
-        if total > max_bytes:
-            raise ParseError(
-                f"trace holds more than {max_bytes} bytes (raise max_bytes to read it)", source=source, line=line_no
-            )
-        last_time = chunk.time
-        trace.chunks.append(chunk)
+        body = text if line_no == 1 else text.partition("#")[0].strip()
+        if body or line_no == 1:
+            yield line_no, body
     if line_no == 0:
-        raise ParseError(
-            f"empty file: expected a '{TRACE_MAGIC} {TRACE_VERSION} url=...' header", source=source, line=1
-        )
+        raise ParseError(f"empty file: expected a {header} header", source=source, line=1)
     if not ended_cleanly:
         raise ParseError("last line has no newline: the trace looks truncated", source=source, line=line_no)
-    return trace
 
 
-def _parse_header(trace: Trace, text: str, source: str) -> None:
+class PayloadBudget:
+    """Counts the payload bytes a reader took; ParseError once they pass ``max_bytes``."""
+
+    def __init__(self, max_bytes: int, source: str) -> None:
+        self.max_bytes = max_bytes
+        self.source = source
+        self.total = 0
+
+    def take(self, count: int, line_no: int) -> None:
+        """Count ``count`` more bytes, read on line ``line_no``."""
+        self.total += count
+        if self.total > self.max_bytes:
+            raise ParseError(
+                f"trace holds more than {self.max_bytes} bytes (raise max_bytes to read it)",
+                source=self.source,
+                line=line_no,
+            )
+
+
+def parse_header(text: str, source: str = "<trace>") -> Trace:
+    """The header line (without newline) as an empty Trace holding its version, URL and settings."""
+    trace = Trace(source=source)
     fields = text.split()
     if not fields or fields[0] != TRACE_MAGIC:
         raise ParseError(
@@ -178,15 +210,11 @@ def _parse_header(trace: Trace, text: str, source: str) -> None:
             trace.settings[key] = unquote(value)
     if not seen_url:
         raise ParseError("header lacks url=... (it may be empty: 'url=')", source=source, line=1, token=text[:40])
+    return trace
 
 
-def _parse_chunk(body: str, source: str, line_no: int, last_time: float) -> TraceChunk:
-    fields = body.split()
-    if len(fields) < 3:
-        raise ParseError(
-            "expected 'SECONDS >|< HEX...' (line cut short?)", source=source, line=line_no, token=body[:40]
-        )
-    stamp, direction, hex_fields = fields[0], fields[1], fields[2:]
+def parse_stamp(stamp: str, source: str, line_no: int, last_time: float) -> float:
+    """A line's SECONDS field: non-negative decimal, at most MAX_STAMP_DIGITS before the point, not going back."""
     seconds = _SECONDS.fullmatch(stamp)
     if not seconds or len(seconds[1]) > MAX_STAMP_DIGITS:
         raise ParseError(
@@ -202,6 +230,34 @@ def _parse_chunk(body: str, source: str, line_no: int, last_time: float) -> Trac
         raise ParseError(
             f"timestamp goes backwards (previous {last_time:.6f})", source=source, line=line_no, column=1, token=stamp
         )
+    return t
+
+
+def parse_hex(tokens: Iterable[str], source: str, line_no: int, limit: int | None = None) -> bytes:
+    """The bytes of a line's HEX tokens (digit pairs); ParseError naming the token, also past ``limit`` bytes."""
+    data = bytearray()
+    for token in tokens:
+        if len(token) % 2:
+            raise ParseError("odd number of hex digits (truncated byte?)", source=source, line=line_no, token=token)
+        try:
+            data += bytes.fromhex(token)
+        except ValueError:
+            raise ParseError("not hexadecimal bytes", source=source, line=line_no, token=token) from None
+        if limit is not None and len(data) > limit:
+            raise ParseError(
+                f"a line carries at most {limit} bytes", source=source, line=line_no, token=token
+            )
+    return bytes(data)
+
+
+def _parse_chunk(body: str, source: str, line_no: int, last_time: float) -> TraceChunk:
+    fields = body.split()
+    if len(fields) < 3:
+        raise ParseError(
+            "expected 'SECONDS >|< HEX...' (line cut short?)", source=source, line=line_no, token=body[:40]
+        )
+    stamp, direction, hex_fields = fields[0], fields[1], fields[2:]
+    t = parse_stamp(stamp, source, line_no, last_time)
     if direction not in (HOST_TO_DEVICE, DEVICE_TO_HOST):
         raise ParseError(
             "direction must be '>' (host to device) or '<' (device to host)",
@@ -209,18 +265,10 @@ def _parse_chunk(body: str, source: str, line_no: int, last_time: float) -> Trac
             line=line_no,
             token=direction,
         )
-    data = bytearray()
-    for token in hex_fields:
-        if len(token) % 2:
-            raise ParseError("odd number of hex digits (truncated byte?)", source=source, line=line_no, token=token)
-        try:
-            data += bytes.fromhex(token)
-        except ValueError:
-            raise ParseError("not hexadecimal bytes", source=source, line=line_no, token=token) from None
-    return TraceChunk(t, direction, bytes(data), line_no)
+    return TraceChunk(t, direction, parse_hex(hex_fields, source, line_no), line_no)
 
 
-def _read_lines(f: IO[str]) -> Iterable[str]:
+def _cut_lines(f: IO[str]) -> Iterator[str]:
     """Lines of ``f``, each cut at MAX_LINE + 1 characters so an endless line cannot exhaust memory."""
     while True:
         line = f.readline(MAX_LINE + 1)
@@ -229,24 +277,29 @@ def _read_lines(f: IO[str]) -> Iterable[str]:
         yield line
 
 
-def read_trace(source: PathOrFile, max_bytes: int = DEFAULT_MAX_BYTES) -> Trace:
-    """Read a trace from a path or an open text file (ParseError on malformed content or an unreadable file)."""
+def read_trace_text(source: PathOrFile, parse: Callable[[Iterable[str], str], T]) -> T:
+    """``parse(lines, name)`` over the lines of a path or an open text file; ParseError when unreadable or not UTF-8."""
     if not isinstance(source, (str, os.PathLike)):
         name = str(getattr(source, "name", "<trace>"))
         try:
-            return parse_trace(_read_lines(source), name, max_bytes)
+            return parse(_cut_lines(source), name)
         except UnicodeDecodeError as exc:
             raise ParseError(f"not UTF-8 text: {exc.reason}", source=name) from None
     name = os.fspath(source)
     try:
         with open(check_path(name, "trace file"), encoding="utf-8", newline="") as f:
-            return parse_trace(_read_lines(f), name, max_bytes)
+            return parse(_cut_lines(f), name)
     except UnicodeDecodeError as exc:
         raise ParseError(f"not UTF-8 text: {exc.reason}", source=name, offset=exc.start) from None
     except ConfigError as exc:
         raise ParseError(str(exc), source="<trace>") from None
     except OSError as exc:
         raise ParseError(f"cannot read trace: {exc.strerror or exc}", source=name) from None
+
+
+def read_trace(source: PathOrFile, max_bytes: int = DEFAULT_MAX_BYTES) -> Trace:
+    """Read a trace from a path or an open text file (ParseError on malformed content or an unreadable file)."""
+    return read_trace_text(source, lambda lines, name: parse_trace(lines, name, max_bytes))
 
 
 class TraceWriter:
@@ -262,17 +315,17 @@ class TraceWriter:
         else:
             self._file, self._owns = dest, False
         self._closed = False
-        self._emit(format_header(url, settings))
+        self.line(format_header(url, settings))
 
     def chunk(self, time: float, direction: str, data: bytes) -> None:
         """Append ``data`` moved in ``direction`` at ``time`` seconds since the start."""
         if data:
             for line in format_chunk(time, direction, data):
-                self._emit(line)
+                self.line(line)
 
     def comment(self, text: str) -> None:
         """Append a comment line (one line: newlines become spaces)."""
-        self._emit("# " + " ".join(text.splitlines()))
+        self.line("# " + " ".join(text.splitlines()))
 
     def close(self) -> None:
         """Flush, and close the file if this writer opened it; idempotent."""
@@ -283,10 +336,13 @@ class TraceWriter:
         if self._owns:
             self._file.close()
 
-    def _emit(self, line: str) -> None:
+    def line(self, text: str) -> None:
+        """Append one line as it is (``text`` holds no newline) and flush it."""
         if self._closed:
             raise LinkError("trace writer is closed")
-        self._file.write(line + "\n")
+        if "\n" in text or "\r" in text:
+            raise InvalidArgument(f"a trace line holds no newline, got {text[:40]!r}")
+        self._file.write(text + "\n")
         self._file.flush()
 
 

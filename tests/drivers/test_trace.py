@@ -17,12 +17,15 @@ from pixelpen.drivers.trace import (
     ReplayLink,
     Trace,
     TraceChunk,
+    TraceWriter,
     format_header,
+    parse_header,
     parse_trace,
     read_trace,
+    read_trace_text,
     write_trace,
 )
-from pixelpen.errors import Disconnected, LinkTimeout, ParseError, TraceMismatch
+from pixelpen.errors import Disconnected, InvalidArgument, LinkError, LinkTimeout, ParseError, TraceMismatch
 from tests.sim.fakes import EchoDevice
 
 HAND_WRITTEN = (
@@ -258,10 +261,50 @@ def test_unreadable_trace_files_are_parse_errors(tmp_path):
 
 
 def test_a_trace_file_name_no_file_system_takes_is_refused_before_opening(tmp_path):
-    from pixelpen.drivers.trace import TraceWriter
     from pixelpen.errors import ConfigError
 
     with pytest.raises(ConfigError, match=r"trace file.*NUL"):
         TraceWriter(str(tmp_path / "a\x00b"), "sim://x")
     with pytest.raises(ConfigError, match=r"trace file.*255"):
         TraceWriter(tmp_path / ("x" * 300), "sim://x")
+
+
+BUS_TRACE = "#pixelpen-trace 1 url=st7789%3Aspi%3A0.0 kind=bus bus=spi clock_hz=62500000\n0.000000 R\n0.1 C 01\n"
+
+
+def test_a_bus_trace_is_refused_with_a_pointer_to_the_bus_reader(tmp_path):
+    path = tmp_path / "panel.trace"
+    path.write_text(BUS_TRACE)
+    for source in (path, io.StringIO(BUS_TRACE)):
+        with pytest.raises(ParseError, match=r"kind=bus.*pixelpen\.drivers\.bustrace\.read_bus_trace") as info:
+            read_trace(source)
+        assert info.value.line == 1  # refused at the header, not at the first 'R' line
+    with pytest.raises(ParseError, match="read_bus_trace"):
+        parse_trace(lines(BUS_TRACE))
+
+
+def test_parse_header_reads_the_settings_of_any_kind():
+    header = parse_header("#pixelpen-trace 1 url=st7789%3Aspi%3A0.0 kind=bus bus=spi", "h.trace")
+    assert header.url == "st7789:spi:0.0" and header.settings == {"kind": "bus", "bus": "spi"}
+    assert header.chunks == [] and header.source == "h.trace"
+
+
+def test_read_trace_text_hands_the_lines_and_the_name_to_the_parser(tmp_path):
+    path = tmp_path / "any.txt"
+    path.write_text("one\ntwo\n")
+    assert read_trace_text(path, lambda got, name: (list(got), name)) == (["one\n", "two\n"], str(path))
+    assert read_trace_text(io.StringIO("x" * (MAX_LINE + 5)), lambda got, _: [len(t) for t in got]) == [MAX_LINE + 1, 4]
+    with pytest.raises(ParseError, match="cannot read trace"):
+        read_trace_text(tmp_path / "missing", lambda got, _: list(got))
+
+
+def test_trace_writer_line_appends_lines_as_they_are_and_refuses_newlines():
+    out = io.StringIO()
+    writer = TraceWriter(out, "sim://x")
+    writer.line("0.000000 R")
+    with pytest.raises(InvalidArgument, match="no newline"):
+        writer.line("0.1 C 01\n0.2 C 02")
+    writer.close()
+    assert out.getvalue() == "#pixelpen-trace 1 url=sim%3A%2F%2Fx\n0.000000 R\n"
+    with pytest.raises(LinkError, match="closed"):
+        writer.line("0.2 R")
