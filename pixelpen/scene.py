@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import tempfile
+from pathlib import Path
+
 import numpy as np
 
 from pixelpen import geometry as geo
 from pixelpen.display.base import Display
+from pixelpen.display.kinds import RasterDisplay
 from pixelpen.display.picture import (
     Arc,
     Bezier,
@@ -24,6 +28,8 @@ from pixelpen.display.picture import (
     Style,
     Text,
 )
+from pixelpen.display.registry import open_display
+from pixelpen.urls import format_url
 
 WORLD = (0.0, 0.0, 200.0, 140.0)
 """The scene's world window, in millimetres: a 200 x 140 area, y up."""
@@ -31,6 +37,8 @@ PAGE = (0.0, 0.0, 260.0, 140.0)
 """The demo page: the scene on the left, two magnified insets in a 60 mm strip on the right."""
 GREEN = "#00a000"
 """The scene's green, lighter than CSS ``green`` (#008000): the one the picture layer named green before colour.py."""
+LIT_LEVEL = 96
+"""A mono raster lights a pixel of the colour scene (on black) whose brightest channel reaches this."""
 INSETS = (
     # (world window, window angle, page rectangle of the inset's viewport)
     ((15.0, 60.0, 55.0, 90.0), np.pi / 10, (205.0, 73.0, 255.0, 135.0)),
@@ -98,11 +106,8 @@ def reference_scene() -> Picture:
 
 
 def draw_reference(display: Display) -> None:
-    """Draw the scene on the left of the page, and two insets through other windows on the right.
-
-    The first inset looks at the star through a rotated window, the second magnifies the curves;
-    both are clipped to their viewports, which are framed in page coordinates.
-    """
+    """Draw the scene on the left of the page and, framed on the right, two insets: the star through a rotated
+    window and the curves magnified, each clipped to its viewport."""
     scene = reference_scene()
     pw, ph = PAGE[2], PAGE[3]
     display.window(*WORLD)
@@ -117,6 +122,29 @@ def draw_reference(display: Display) -> None:
     display.window(*PAGE)
     display.viewport(0.0, 0.0, 1.0, 1.0)
     display.draw(frames)
+
+
+def lit_reference(display: RasterDisplay) -> np.ndarray:
+    """The reference scene for a mono raster (HxW 0/1): drawn in colour on black at its size and pitch, every stroke
+    lit (drawn on the mono canvas itself, its darker colours would fall below the lit threshold)."""
+    canvas, unit_mm = display.canvas, display.capabilities.unit_mm
+    with tempfile.TemporaryDirectory() as folder:
+        size, dpi = f"{canvas.width}x{canvas.height}", f"{25.4 / unit_mm:g}"
+        url = format_url("png", str(Path(folder) / "scene.png"), {"size": size, "dpi": dpi, "background": "black"})
+        with open_display(url) as colour:
+            draw_reference(colour)
+            colour.flush()
+            rgb = colour.canvas.array.copy()  # type: ignore[attr-defined]
+    return (rgb.max(axis=2) >= LIT_LEVEL).astype(np.uint8)
+
+
+def show_reference(display: RasterDisplay) -> None:
+    """Draw the reference scene on an open raster display (a mono one: :func:`lit_reference`) and send it."""
+    if display.canvas.mode == "1":
+        display.canvas.blit(lit_reference(display), 0, 0)
+    else:
+        draw_reference(display)
+    display.flush()
 
 
 def _regular(centre: tuple[float, float], r: float, n: int) -> np.ndarray:

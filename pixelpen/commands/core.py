@@ -2,9 +2,9 @@
 
 ``demo`` draws the reference scene on the file displays, plots it on the simulated plotters and shows it on
 each simulated panel whose simulator is registered (:data:`DEMO_PANELS`), then plays a short animation there
-(a cursor moving, a clock's digits changing: :class:`PanelAnimation`), in simulated time; it writes each
-panel's glass (``panel-MODEL.png``), the animation's glass frames (``panel-MODEL.gif``) and the frame
-statistics of all panels (``panels.json``).
+(a cursor moving, a clock's digits changing: :class:`pixelpen.animation.PanelAnimation`), in simulated time;
+it writes each panel's glass (``panel-MODEL.png``), the animation's glass frames (``panel-MODEL.gif``) and
+the frame statistics of all panels (``panels.json``).
 """
 
 from __future__ import annotations
@@ -15,25 +15,20 @@ import json
 import logging
 import re
 import sys
-import tempfile
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-from PIL import Image, ImageDraw
-
+from pixelpen.animation import PanelAnimation
 from pixelpen.commands.plot import plot_demo
-from pixelpen.commands.show import canvas_pixels
 from pixelpen.display.base import Display
-from pixelpen.display.kinds import RasterDisplay
 from pixelpen.display.pictfile import load_picture
 from pixelpen.display.registry import known_schemes, open_display
 from pixelpen.drivers.discovery import DiscoveredDevice, discover
+from pixelpen.errors import ConfigError
 from pixelpen.options import OptionSpec, describe
-from pixelpen.raster.canvas import Canvas
-from pixelpen.scene import draw_reference
+from pixelpen.scene import draw_reference, show_reference
 from pixelpen.urls import format_url
 
 log = logging.getLogger(__name__)
@@ -184,62 +179,6 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
-class PanelAnimation:
-    """A cursor (a square a twelfth of the panel's short side) moving over the picture and a clock ticking a
-    second a frame in the bottom-right corner: each frame changes two small areas, as a user interface does."""
-
-    def __init__(self, display: RasterDisplay) -> None:
-        self.display = display
-        canvas = display.canvas
-        self.background = canvas.array.copy()
-        self.side = max(4, min(canvas.width, canvas.height) // 12)
-        self.ink = canvas.colour_value((255, 255, 255) if canvas.mode == "1" else (255, 160, 0))
-        self.frame = 0
-        self._cursor: tuple[int, int] | None = None
-
-    def step(self) -> None:
-        """Draw the next frame and send it."""
-        canvas, side = self.display.canvas, self.side
-        if self._cursor is not None:
-            x, y = self._cursor
-            canvas.blit(self.background[y:y + side, x:x + side], x, y)
-        t = self.frame / max(ANIMATION_FRAMES - 1, 1)
-        x = round(t * (canvas.width - side))
-        y = round((canvas.height - side) * (0.25 + 0.5 * t * t))
-        clock = self._clock_patch(12 * 3600 + 34 * 60 + self.frame)
-        canvas.blit(clock, canvas.width - clock.shape[1], canvas.height - clock.shape[0])
-        patch = np.empty_like(self.background[y:y + side, x:x + side])
-        patch[...] = self.ink
-        canvas.blit(patch, x, y)
-        self._cursor = (x, y)
-        self.display.flush()
-        self.frame += 1
-
-    def _clock_patch(self, seconds: int) -> np.ndarray:
-        """``HH:MM:SS`` in the canvas's pixels (white on black, Pillow's default font)."""
-        h, rest = divmod(seconds, 3600)
-        text = f"{h:02d}:{rest // 60:02d}:{rest % 60:02d}"
-        image = Image.new("RGB", (6 * len(text) + 4, 14))
-        ImageDraw.Draw(image).text((2, 1), text, fill=(255, 255, 255))
-        canvas = self.display.canvas
-        scratch = Canvas(image.width, image.height, canvas.mode)
-        return canvas_pixels(scratch, image)
-
-
-def lit_reference(display: RasterDisplay) -> np.ndarray:
-    """The reference scene for a mono panel (HxW 0/1): drawn in colour on black at the panel's size and pitch,
-    every stroke lit (drawn on the mono canvas itself, its darker colours fall below the lit threshold)."""
-    canvas, unit_mm = display.canvas, display.capabilities.unit_mm
-    with tempfile.TemporaryDirectory() as folder:
-        size, dpi = f"{canvas.width}x{canvas.height}", f"{25.4 / unit_mm:g}"
-        url = format_url("png", str(Path(folder) / "scene.png"), {"size": size, "dpi": dpi, "background": "black"})
-        with open_display(url) as colour:
-            draw_reference(colour)
-            colour.flush()
-            rgb = colour.canvas.array.copy()  # type: ignore[attr-defined]
-    return (rgb.max(axis=2) >= 96).astype(np.uint8)
-
-
 @dataclass
 class PanelDemoResult:
     """What the demo did on one panel: files written and the animation's frame statistics."""
@@ -259,7 +198,7 @@ class PanelDemoResult:
 
 
 def panel_demo(out: Path, panels: Sequence[tuple[str, dict[str, str]]] = DEMO_PANELS) -> list[PanelDemoResult]:
-    """Show the reference scene and :class:`PanelAnimation` on each simulated panel of ``panels``; write
+    """Show the reference scene and the PanelAnimation on each simulated panel of ``panels``; write
     ``OUT/panel-MODEL.png`` (the scene's glass), ``OUT/panel-MODEL.gif`` (the animation) and ``OUT/panels.json``."""
     from pixelpen.devices.panels.base import PanelDisplay
     from pixelpen.devices.panels.pacing import estimate_bandwidth
@@ -273,13 +212,11 @@ def panel_demo(out: Path, panels: Sequence[tuple[str, dict[str, str]]] = DEMO_PA
             continue
         url = format_url("sim", model, options)
         with open_display(url) as display:
-            assert isinstance(display, PanelDisplay)
+            if not isinstance(display, PanelDisplay):
+                raise ConfigError(f"demo panel {model!r} ({url}): opened a {type(display).__name__}, "
+                                  "not a panel display")
             sim: Any = display.simulator
-            if display.canvas.mode == "1":
-                display.canvas.blit(lit_reference(display), 0, 0)
-            else:
-                draw_reference(display)
-            display.flush()
+            show_reference(display)
             glass = out / f"panel-{model}.png"
             sim.glass().save(glass)
             before = dataclasses.replace(display.stats)

@@ -18,9 +18,9 @@ never overrun, whatever the file holds.
 counters, on 127.0.0.1 (``--host``/``--port``; another host only when given explicitly) and prints its URL
 on stdout (after the pty path with ``--pty``); with ``--replay`` the page stays up after the replay until
 Ctrl-C.  A panel simulator (``pixelpen sim st7789 --view``, also ``sim fbdev``) has no byte stream: when
-its model is a display scheme, a demo (:class:`PanelDemo`: the reference scene and a bouncing ball) is drawn
-through the real display ``sim:MODEL`` (the ``--option`` values go into that URL) and the page shows the
-glass of the simulator behind it; a panel simulator without a display is shown as it is.  The glass is
+its model is a display scheme, a demo (the reference scene, then :class:`~pixelpen.animation.PanelAnimation`)
+is drawn through the real display ``sim:MODEL`` (the ``--option`` values go into that URL) and the page shows
+the glass of the simulator behind it; a panel simulator without a display is shown as it is.  The glass is
 written at the end (``glass.png``).  The pty bridge, the replay, the demo and the page share one lock
 around the device (:class:`GuardedDevice`).
 
@@ -41,15 +41,14 @@ from dataclasses import asdict, dataclass, field, is_dataclass, replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
+from pixelpen.animation import PanelAnimation
 from pixelpen.clock import REAL_CLOCK, SimulatedClock
 from pixelpen.commands import argtypes
 from pixelpen.display.kinds import RasterDisplay
 from pixelpen.display.registry import open_display, scheme_names
 from pixelpen.errors import ConfigError, PixelpenError, URLError
 from pixelpen.options import integer
-from pixelpen.scene import draw_reference
+from pixelpen.scene import show_reference
 from pixelpen.sim.base import Fault, StreamDevice, create_simulator, simulator_models
 from pixelpen.sim.transports.options import TransportOptions, line_baud, split_options
 from pixelpen.sim.transports.port import LinkStats, SimPort
@@ -184,10 +183,7 @@ def device_errors(device: StreamDevice, replies: bytes) -> list[str]:
 
 def replay(device: StreamDevice, data: bytes, transport: TransportOptions,
            lock: threading.Lock | None = None) -> ReplayResult:
-    """Feed ``data`` to ``device`` through a SimPort paced by the device's readiness, then let it finish.
-
-    ``lock`` is held around every call into the device (a live view looks at it meanwhile).
-    """
+    """Feed ``data`` to ``device`` through a SimPort paced by its readiness (``lock`` held per call); let it finish."""
     port = SimPort(PacedDevice(device, lock), baud=transport.baud, flow="rtscts", faults=transport.faults,
                    tx_buffer=transport.tx_buffer, clock=device.clock)
     clock = port.clock
@@ -241,10 +237,7 @@ def wait_for_stop(stop: threading.Event | None = None, check: Callable[[], None]
 
 def run_pty(device: StreamDevice, transport: TransportOptions, stop: threading.Event | None = None,
             lock: threading.Lock | None = None, view: ViewServer | None = None) -> None:
-    """Serve ``device`` on a pty (path printed on stdout, then the live view's URL) until Ctrl-C, SIGTERM or ``stop``.
-
-    ``lock`` is held around every call the pty bridge makes into the device (the live view's lock).
-    """
+    """Serve ``device`` on a pty (``lock`` held per call), printing its path, until Ctrl-C, SIGTERM or ``stop``."""
     from pixelpen.sim.transports.pty import PtyBridge
 
     with PtyBridge(GuardedDevice(device, lock), flow=transport.flow, baud=transport.baud, faults=transport.faults,
@@ -278,44 +271,11 @@ def _counters(device: StreamDevice) -> str:
     return ", ".join(f"{k}={v:.3f}" if isinstance(v, float) else f"{k}={v}" for k, v in asdict(stats).items())
 
 
-class PanelDemo:
-    """The panel demo of ``pixelpen sim PANEL --view``: the reference scene, and a ball bouncing over it.
-
-    Drawn through the real display (``pixelpen.open("sim:MODEL")``: a panel or a framebuffer), so each frame
-    is the driver's partial refresh: the ball's old and new squares, on the simulator's bus.
-    """
-
-    def __init__(self, display: RasterDisplay) -> None:
-        self.display = display
-        draw_reference(display)
-        display.flush()
-        canvas = display.canvas
-        self._background = canvas.array.copy()
-        self.radius = max(2, min(canvas.width, canvas.height) // 10)
-        self._position = np.array([self.radius + 1.0, self.radius + 1.0])
-        self._velocity = np.array([0.031, 0.023]) * max(canvas.width, canvas.height)
-        self._ink = canvas.colour_value((255, 96, 0))
-        self.frames = 0
-
-    def step(self) -> None:
-        """Move the ball one frame and send the frame."""
-        canvas, r = self.display.canvas, self.radius
-        x, y = np.rint(self._position).astype(int)
-        canvas.blit(self._background[max(0, y - r):y + r + 1, max(0, x - r):x + r + 1], max(0, x - r), max(0, y - r))
-        low, high = np.array([r, r], dtype=float), np.array([canvas.width - 1 - r, canvas.height - 1 - r], dtype=float)
-        self._position += self._velocity
-        bounced = (self._position < low) | (self._position > high)
-        self._velocity[bounced] *= -1
-        self._position = np.clip(self._position, low, high)
-        canvas.circles(np.rint(self._position).astype(int)[None, :], [r], self._ink, fill=True)
-        self.display.flush()
-        self.frames += 1
-
-
 def run_panel_demo(display: RasterDisplay, lock: threading.Lock, stop: threading.Event, fps: float = DEMO_FPS) -> None:
-    """Animate ``display`` (a PanelDemo) at ``fps`` frames a second of wall time until ``stop``; ``lock`` per frame."""
+    """The reference scene, then the PanelAnimation at ``fps`` frames a second of wall time until ``stop``."""
     with lock:
-        demo = PanelDemo(display)
+        show_reference(display)
+        demo = PanelAnimation(display)
     while not stop.wait(1.0 / fps):
         with lock:
             demo.step()

@@ -57,9 +57,12 @@ def test_panel_demo_writes_glass_animation_and_frame_statistics(tmp_path):
     assert gif.n_frames == ANIMATION_FRAMES
     gif.seek(ANIMATION_FRAMES - 1)
     last = np.asarray(gif.convert("RGB")).astype(int)
-    # the cursor (20x20, a twelfth of 240) has reached the right-hand edge in the last frame, in orange
+    # the cursor (20x20, a twelfth of 240, orange) started at (5, 5) and moved (6, 4) a frame (a fortieth of the
+    # width, a sixtieth of the height): in the last frame it is at (5 + 29 * 6, 5 + 29 * 4) = (179, 121)
     orange = (np.abs(last - (255, 160, 0)).sum(axis=2) < 60)
-    assert orange[:, 220:].sum() >= 300
+    assert orange[121:141, 179:199].all() and not orange[5:25, 5:25].all()
+    gif.seek(0)
+    assert (np.abs(np.asarray(gif.convert("RGB")).astype(int)[5:25, 5:25] - (255, 160, 0)).sum(axis=2) < 60).all()
     # each frame: the cursor's old and new squares (a 20x20 RGB565 window is 811 bytes, panels.md 4) and the
     # clock's changed digits; a full frame would be 115,211 bytes
     assert st7789.frames == ANIMATION_FRAMES and st7789.bytes_per_frame < 4 * 811
@@ -77,6 +80,16 @@ def test_panel_demo_writes_glass_animation_and_frame_statistics(tmp_path):
         assert ssd1306.full_frame_fps_at_bus_limit == pytest.approx(43, abs=0.5)
     stats = json.loads((tmp_path / "panels.json").read_text())
     assert [s["url"] for s in stats] == [r.url for r in results.values()]
+
+
+def test_a_demo_panel_that_is_not_a_panel_display_is_a_config_error_naming_it(tmp_path):
+    from pixelpen.commands.core import panel_demo
+    from pixelpen.errors import ConfigError
+
+    if "grbl" not in simulator_models():
+        pytest.skip("the grbl simulator is not registered")
+    with pytest.raises(ConfigError, match=r"demo panel 'grbl' \(sim:grbl\): opened a \w+, not a panel display"):
+        panel_demo(tmp_path, [("grbl", {})])
 
 
 def test_draw_a_picture_file_on_png(tmp_path):

@@ -19,6 +19,7 @@ from pixelpen.commands import sim as simcmd
 from pixelpen.display.capabilities import Capabilities
 from pixelpen.display.kinds import RasterDisplay
 from pixelpen.errors import URLError
+from pixelpen.scene import show_reference
 from pixelpen.sim.transports.port import SimPort, TransportOptions
 
 
@@ -355,13 +356,17 @@ def test_a_panel_has_no_pty():
 
 
 class RecordingPanel(RasterDisplay):
-    """A raster display standing in for a panel display: it keeps each frame's damage rectangles."""
+    """A raster display standing in for a panel display: it keeps each frame's damage rectangles and sets
+    ``stop`` (when given) once it has sent ``frames_to_stop`` frames."""
 
-    def __init__(self, width: int = 64, height: int = 48) -> None:
+    def __init__(self, width: int = 64, height: int = 48, mode: str = "RGB", stop: threading.Event | None = None,
+                 frames_to_stop: int = 0) -> None:
         caps = Capabilities(model="recording", category="panel", kind="raster", size=(width, height),
-                            unit_mm=0.2, colour_model="rgb565", y_down=True)
-        super().__init__(caps, mode="RGB", background="black")
+                            unit_mm=0.2, colour_model="mono" if mode == "1" else "rgb565", y_down=True)
+        super().__init__(caps, mode=mode, background="black")
         self.frames: list[list] = []
+        self.pictures: list[np.ndarray] = []
+        self.stop, self.frames_to_stop = stop, frames_to_stop
         self.open()
 
     @classmethod
@@ -376,33 +381,66 @@ class RecordingPanel(RasterDisplay):
 
     def _show(self, canvas) -> None:
         self.frames.append(list(canvas.damage()))
+        self.pictures.append(canvas.array.copy())
+        if self.stop is not None and len(self.frames) >= self.frames_to_stop:
+            self.stop.set()
 
 
-def test_the_panel_demo_draws_the_scene_then_moves_a_ball_in_small_frames():
-    panel = RecordingPanel(64, 48)
-    demo = simcmd.PanelDemo(panel)
-    scene = panel.canvas.array.copy()
+def _run_demo(panel: RecordingPanel) -> None:
+    runner = threading.Thread(target=simcmd.run_panel_demo, args=(panel, threading.Lock(), panel.stop, 500.0))
+    runner.start()
+    runner.join(30)
+    assert not runner.is_alive()
+
+
+def _scene(width: int, height: int, mode: str = "RGB") -> RecordingPanel:
+    """A panel showing only the reference scene, and the frames it took."""
+    panel = RecordingPanel(width, height, mode)
+    show_reference(panel)
+    return panel
+
+
+def test_the_panel_demo_draws_the_scene_then_a_cursor_and_a_clock_in_small_frames():
+    stop = threading.Event()
+    reference = _scene(96, 64)
+    panel = RecordingPanel(96, 64, stop=stop, frames_to_stop=len(reference.frames) + 40)
+    _run_demo(panel)
+    scene = reference.pictures[-1]
     assert (scene != 0).any(axis=2).mean() > 0.02  # the reference scene is on the glass
-    r = demo.radius
-    assert r == 4  # a tenth of the short side
-    box = (2 * r + 1) ** 2
-    ink = np.array([255, 96, 0], np.uint8)
-    for _ in range(60):  # long enough to bounce off an edge
-        before = panel.canvas.array.copy()
-        demo.step()
-        after = panel.canvas.array
+    start = len(reference.frames) - 1
+    np.testing.assert_array_equal(panel.pictures[start], scene)
+    side, clock_box = 64 // 12, 50 * 13  # a twelfth of the short side; the clock: 10 px digits, bottom right
+    orange = np.array([255, 160, 0], np.uint8)
+    positions = []
+    for damage, before, after in zip(panel.frames[start + 1:], panel.pictures[start:], panel.pictures[start + 1:],
+                                     strict=False):
         changed = np.argwhere((after != before).any(axis=2))
         damaged = np.zeros(after.shape[:2], bool)
-        for rect in panel.frames[-1]:
+        for rect in damage:
             damaged[rect.y0:rect.y1, rect.x0:rect.x1] = True
         assert damaged[tuple(changed.T)].all()  # every changed pixel was in the frame sent
-        assert damaged.sum() <= 2 * box  # the ball's old and new squares, no more
+        assert damaged.sum() <= (side + 3) * (side + 2) + clock_box  # the cursor's old and new squares, the clock
+        ys, xs = np.nonzero((after == orange).all(axis=2))
+        assert np.ptp(ys) == np.ptp(xs) == side - 1 and len(ys) == side * side  # one solid square
+        positions.append((int(xs.min()), int(ys.min())))
         differs = (after != scene).any(axis=2)
-        ball = differs & (after == ink).all(axis=2)
-        ys, xs = np.nonzero(ball)
-        assert len(ys) and np.ptp(ys) <= 2 * r and np.ptp(xs) <= 2 * r  # one disc, inside the glass
-        assert not (differs & ~ball).any()  # elsewhere the scene is as it was
-    assert demo.frames == 60
+        differs[ys.min():ys.max() + 1, xs.min():xs.max() + 1] = False
+        differs[-13:, -50:] = False  # the clock's box
+        assert not differs.any()  # elsewhere the scene is as it was
+    # from (5, 5), (3, 2) a frame up to x = 96 - 5 = 91, y = 64 - 5 = 59; a step past an edge turns it back
+    # instead: x 89 -> (92) 86, y 59 -> (61) 57
+    assert len(positions) == 40
+    assert [x for x, _ in positions] == [5 + 3 * k for k in range(29)] + [86 - 3 * k for k in range(11)]
+    assert [y for _, y in positions] == [5 + 2 * k for k in range(28)] + [57 - 2 * k for k in range(12)]
+
+
+def test_the_panel_demo_lights_the_scene_on_a_mono_panel():
+    stop = threading.Event()
+    panel = RecordingPanel(128, 64, mode="1", stop=stop, frames_to_stop=3)
+    _run_demo(panel)
+    lit = panel.pictures[0].astype(bool)  # one frame: the scene drawn in colour, then lit
+    # the scene's strokes are lit whatever their colour: drawn in mono directly only ~5 % were (409 pixels)
+    assert 0.1 < lit.mean() < 0.6
 
 
 def test_panel_demo_runs_until_stopped():
@@ -440,6 +478,8 @@ def test_a_simulated_display_is_viewed_through_the_demo(tmp_path, model, size):
             threading.Event().wait(0.05)
         assert frames[-1].shape == (size[1], size[0], 3) and not np.array_equal(frames[0], frames[-1])
         assert len(np.unique(frames[-1].reshape(-1, 3), axis=0)) >= 2  # the scene, not a blank glass
+        if model == "ssd1306":  # the scene's strokes lit whatever their colour (drawn in mono directly: 5 %)
+            assert (frames[-1].max(axis=2) > 0).mean() > 0.1
         stats = json.loads(_wait_for(url + "stats.json", lambda b: True, "stats"))
         if "frames" in stats:  # a panel's bus: the ball's frames are partial refreshes
             later = json.loads(_wait_for(url + "stats.json", lambda b: json.loads(b)["frames"] > stats["frames"] + 3,
