@@ -30,8 +30,9 @@ class QueryCommands(EbbParser):
         bits = 0
         if self._fw3:  # bit 7: limit switch (no switch is fitted), bit 6: power lost
             bits |= 0x40 if self._power_lost_flag else 0
-        else:
-            bits |= 0xC0  # RB5 and RB2 inputs, pulled high
+        else:  # 2.x parse_QG_packet: bit 7 reads RB5, bit 6 RB2 (inputs with pull-ups unless PD/PO change them)
+            ports = self._pins_at(self._now)
+            bits |= ports.pin("B", 5) << 7 | ports.pin("B", 2) << 6
         bits |= 0x20 if self._button else 0
         bits |= 0x10 if self._pen.commanded_up else 0
         bits |= 0x08 if self._exec is not None else 0

@@ -363,6 +363,14 @@ def test_power_on_defaults_of_ebb_init_and_userinit():
     assert rig.send("QU,3\r") == b"QU,1\r\nOK\r\n" and rig.send("QR\r") == b"0\n\rOK\r\n"
 
 
+def test_qg_bits_6_and_7_read_rb2_and_rb5_on_2x():
+    # ebb.c 2.6.5 parse_QG_packet: "if (PORTBbits.RB2) result |= 1 << 6; if (PORTBbits.RB5) result |= 1 << 7"
+    rig = Rig(firmware="2.6.5")
+    assert rig.send("QG\r") == b"D0\r\n"  # both pulled-up inputs high, pen up
+    assert rig.send("PD,B,2,0\rQG\r") == b"OK\r\n90\r\n"  # RB2 now a low output
+    assert rig.send("PO,B,5,0\rPD,B,5,0\rQG\r") == b"OK\r\nOK\r\n10\r\n"
+
+
 def test_analog_channels_ra0_and_vplus_are_enabled_at_boot_on_3x():
     # ebb.c EBB_Init (3.x, l. 1629-1631): AnalogConfigure(RA0_CUR_ADJ_ADC_CHANNEL, 1) and
     # AnalogConfigure(RA11_VPLUS_POWER_ADC_CHANNEL, 1); 2.x firmware boots with none (2.6.5's EBB_Init has no call)
