@@ -30,8 +30,6 @@ Every device is forgotten (closed) when its test ends.
 from __future__ import annotations
 
 import contextlib
-import functools
-import io
 import itertools
 import re
 import uuid
@@ -45,7 +43,7 @@ if TYPE_CHECKING:
     import numpy as np
     from PIL import Image
 
-    from pixelpen.devices.panels.base import FrameStats
+    from pixelpen.devices.panels.frames import FrameStats
     from pixelpen.display.kinds import RasterDisplay
     from pixelpen.drivers.bustrace import BusTrace
     from pixelpen.sim.base import StreamDevice
@@ -155,7 +153,6 @@ class SimPanel:
         self.url = format_url("sim", model, {"id": self.id, **options})
         """``sim:MODEL?id=...&options`` for ``pixelpen.open``."""
         self._display: RasterDisplay | None = None
-        self._frames: list[FrameStats] = []
 
     def __repr__(self) -> str:
         return f"SimPanel({self.url!r})"
@@ -181,10 +178,6 @@ class SimPanel:
             display.close()
             raise ConfigError(f"{self.url} did not open a raster display")
         self._display = display
-        self._frames = []
-        stats = getattr(display, "stats", None)
-        if stats is not None and hasattr(stats, "add"):
-            display.stats = _frame_log_class().following(stats, self._frames)  # type: ignore[attr-defined]
         return display
 
     @property
@@ -197,33 +190,24 @@ class SimPanel:
 
     @property
     def frames(self) -> list[FrameStats]:
-        """Every frame the display of :meth:`open` sent: ``bytes``, ``windows``, ``bus_seconds``,
-        ``host_seconds``, ``full`` (``pixelpen.devices.panels.base.FrameStats``)."""
-        display = self.display
-        if not hasattr(getattr(display, "stats", None), "add"):
+        """The frames the display of :meth:`open` sent since it was opened (its ``stats.history``: the last
+        ``pixelpen.devices.panels.frames.HISTORY``): ``bytes``, ``windows``, ``bus_seconds``, ``host_seconds``,
+        ``full`` (``FrameStats``)."""
+        history = getattr(getattr(self.display, "stats", None), "history", None)
+        if history is None:
             raise LookupError(f"{self.model}: this display keeps no per-frame statistics")
-        return list(self._frames)
+        return list(history)
 
     @contextlib.contextmanager
     def recording(self) -> Iterator[BusTrace]:
-        """Record the bus traffic of the display of :meth:`open` meanwhile: a ``BusTrace`` whose ``events``
-        are its command (``C``) and data (``D``) frames, filled in when the block ends."""
-        from pixelpen.drivers.bustrace import BusTrace, RecordingBus, parse_bus_trace
-
-        wiring = getattr(self.display, "wiring", None)
-        if wiring is None:
+        """Record the bus traffic of the display of :meth:`open` meanwhile (its ``recording()``): a
+        ``BusTrace`` whose ``events`` are its command (``C``) and data (``D``) frames, filled in when the block
+        ends."""
+        recording = getattr(self.display, "recording", None)
+        if recording is None:
             raise LookupError(f"{self.model}: this display has no panel bus to record")
-        inner = wiring.bus
-        text = io.StringIO()
-        trace = BusTrace()
-        wiring.bus = RecordingBus(inner, text, url=self.url, clock=getattr(self.display, "clock", None))
-        try:
+        with recording() as trace:
             yield trace
-        finally:
-            wiring.bus = inner
-            parsed = parse_bus_trace(text.getvalue().splitlines(keepends=True), source=self.url)
-            for name in trace.__dataclass_fields__:
-                setattr(trace, name, getattr(parsed, name))
 
     # -- the simulated chip ------------------------------------------------------------------------------
     @property
@@ -295,32 +279,6 @@ def _is_simulated_panel(scheme: str) -> bool:
     except URLError:
         return False
     return issubclass(cls, RasterDisplay) and bool(cls.simulated)
-
-
-@functools.cache
-def _frame_log_class() -> Any:
-    """``FrameLog(PanelStats)``, made on first use (the plugin imports no display code until a test needs it)."""
-    from pixelpen.devices.panels.base import PanelStats
-
-    class FrameLog(PanelStats):
-        """PanelStats that also keep every frame in a list."""
-
-        history: list[Any]
-
-        @classmethod
-        def following(cls, stats: PanelStats, history: list[Any]) -> FrameLog:
-            """A log carrying on from ``stats`` (its last frame is the first in ``history``)."""
-            log = cls(**{f: getattr(stats, f) for f in stats.__dataclass_fields__})
-            log.history = history
-            if stats.frames:
-                history.append(stats.last)
-            return log
-
-        def add(self, frame: Any) -> None:
-            super().add(frame)
-            self.history.append(frame)
-
-    return FrameLog
 
 
 class _Session:

@@ -11,16 +11,18 @@ with a FramePacer: drawing between due frames only accumulates damage, so frames
 
 from __future__ import annotations
 
-import dataclasses
+import contextlib
 import logging
 import time
 from abc import abstractmethod
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from dataclasses import fields
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
 from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
+from pixelpen.devices.panels.frames import FrameStats, PanelStats
 from pixelpen.devices.panels.windows import WindowCost, window_cost
 from pixelpen.devices.panels.wiring import Interface, Pins, Wiring, open_wiring, parse_target, sim_wiring
 from pixelpen.display.base import Deferral
@@ -38,6 +40,7 @@ from pixelpen.urls import DeviceURL, parse_size
 
 if TYPE_CHECKING:
     from pixelpen.devices.panels.pacing import FramePacer
+    from pixelpen.drivers.bustrace import BusTrace
 
 log = logging.getLogger(__name__)
 
@@ -65,51 +68,6 @@ def panel_size(value: str) -> tuple[int, int]:
 def rotation_degrees(value: str) -> int:
     """0, 90, 180 or 270."""
     return int(choice("0", "90", "180", "270")(value))
-
-
-@dataclasses.dataclass
-class FrameStats:
-    """One frame sent: bytes handed to the bus, windows, host and bus seconds, and whether it was full."""
-
-    bytes: int = 0
-    windows: int = 0
-    host_seconds: float = 0.0
-    bus_seconds: float = 0.0
-    full: bool = False
-
-
-@dataclasses.dataclass
-class PanelStats:
-    """Totals since open: frames (full ones too), windows, bytes, host seconds and bus seconds.
-
-    ``bytes`` counts the command, parameter and pixel bytes the driver handed to the bus (I2C control and
-    address bytes are the bus's: ``display.bus.bytes_sent``).  ``host_seconds`` is processor time spent
-    outside bus calls (planning, trimming, packing), ``bus_seconds`` clock time spent inside them: on a
-    SimulatedClock that is the simulated wire time.
-    """
-
-    frames: int = 0
-    full_frames: int = 0
-    windows: int = 0
-    bytes: int = 0
-    host_seconds: float = 0.0
-    bus_seconds: float = 0.0
-    last: FrameStats = dataclasses.field(default_factory=FrameStats)
-
-    @property
-    def host_seconds_per_frame(self) -> float:
-        """Average host seconds of one frame (0 before the first)."""
-        return self.host_seconds / self.frames if self.frames else 0.0
-
-    def add(self, frame: FrameStats) -> None:
-        """Count one finished frame."""
-        self.frames += 1
-        self.full_frames += frame.full
-        self.windows += frame.windows
-        self.bytes += frame.bytes
-        self.host_seconds += frame.host_seconds
-        self.bus_seconds += frame.bus_seconds
-        self.last = frame
 
 
 class PanelDisplay(RasterDisplay):
@@ -327,6 +285,28 @@ class PanelDisplay(RasterDisplay):
         """The simulated chip of a ``sim:`` display (None on hardware); it stays readable after close."""
         return self._simulator
 
+    @contextlib.contextmanager
+    def recording(self) -> Iterator[BusTrace]:
+        """Record every bus call of the block (``drivers.bustrace.RecordingBus`` wraps the bus meanwhile): a
+        ``BusTrace`` whose ``events`` are the reset pulses and command (``C``) and data (``D``) frames, filled
+        in when the block ends."""
+        import io
+
+        from pixelpen.drivers.bustrace import BusTrace, RecordingBus, parse_bus_trace
+
+        wiring = self.wiring
+        inner = wiring.bus
+        text = io.StringIO()
+        trace = BusTrace()
+        wiring.bus = RecordingBus(inner, text, url=self.profile.name, clock=self.clock)
+        try:
+            yield trace
+        finally:
+            wiring.bus = inner
+            parsed = parse_bus_trace(text.getvalue().splitlines(keepends=True), source=self.profile.name)
+            for name in (f.name for f in fields(trace)):
+                setattr(trace, name, getattr(parsed, name))
+
     def power(self, on: bool) -> None:
         """Display on or off; the RAM keeps the picture."""
         self._require_open()
@@ -340,7 +320,7 @@ class PanelDisplay(RasterDisplay):
         self._full = True
         bus = self._wiring.bus
         self._cost = window_cost(self.profile.controller, pixel_format=self.pixel_format,
-                                 bus_kind=getattr(bus, "kind", "spi"), max_transfer=bus.max_transfer)
+                                 bus_kind=bus.kind, max_transfer=bus.max_transfer)
         try:
             self._pacer = None
             if self.target_fps is not None:
@@ -462,7 +442,7 @@ class PanelDisplay(RasterDisplay):
         w, h = self._window_size()
         frame = self.cost.window(Rect(0, 0, w, h))
         bus = self.wiring.bus
-        check_fps(fps, kind=getattr(bus, "kind", "spi"), clock_hz=getattr(bus, "clock_hz", 0.0),
+        check_fps(fps, kind=bus.kind, clock_hz=bus.clock_hz,
                   frame_bytes=frame.bytes, transfers=frame.transfers, what=self._describe())
 
     @property

@@ -7,6 +7,7 @@ offsets on ``gpiochip`` (the Linux GPIO character device); on an FT232H they are
 
 from __future__ import annotations
 
+import contextlib
 import logging
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -63,20 +64,20 @@ class Wiring:
         self._closed = False
 
     def close(self, *, backlight_on: bool = True) -> None:
-        """Release the bus and the lines; the backlight is left as ``backlight_on`` says (idempotent)."""
+        """Release the bus and the lines; the backlight is left as ``backlight_on`` says (idempotent).  Every
+        part is closed even when another fails (the first failure is raised after)."""
         if self._closed:
             return
         self._closed = True
-        try:
+        with contextlib.ExitStack() as stack:
+            for extra in reversed(self._closers):
+                stack.callback(extra.close)
+            stack.callback(self.bus.close)
+            for line in (self.backlight, self.te):
+                if line is not None:
+                    stack.callback(line.close)
             if self.backlight is not None:
                 self.backlight.set(backlight_on)
-        finally:
-            for line in (self.te, self.backlight):
-                if line is not None:
-                    line.close()
-            self.bus.close()
-            for extra in self._closers:
-                extra.close()
 
 
 def parse_target(target: str, where: str) -> Target:
@@ -100,8 +101,20 @@ def _is_number(text: str) -> bool:
     return text.isascii() and text.isdigit() and len(text) <= 6
 
 
+UNWIRED = {"ftdi": ("te", "bl"), "mcp2221": ("rst", "te", "bl")}
+"""Pin options a bridge has no line for: the FT232H's SPI carries D/C and reset on its GPIO only; the MCP2221A
+is I2C alone."""
+
+
 def open_wiring(target: Target, pins: Pins, *, clock: Clock, where: str) -> Wiring:
-    """Open the hardware bus ``target`` names with ``pins`` (lines are released again if anything fails)."""
+    """Open the hardware bus ``target`` names with ``pins`` (lines are released again if anything fails).
+
+    A pin option the target cannot wire (:data:`UNWIRED`) is a ConfigError naming it.
+    """
+    given = [name for name in UNWIRED.get(target.kind, ()) if getattr(pins, name) is not None]
+    if given:
+        raise ConfigError(f"{where}: {', '.join(f'{name}=' for name in given)} cannot be wired on {target.kind} "
+                          f"(it has no line for {' or '.join(given)}); leave it out")
     if target.interface == "spi" and pins.dc is None:
         raise ConfigError(f"{where}: a 4-wire SPI panel needs its D/C line: add dc=N (the GPIO offset)")
     if target.kind == "spi":

@@ -313,3 +313,31 @@ def test_a_closed_sim_display_opens_again_and_draws_on_the_same_simulator(url: s
     display.close()
     picture = np.asarray(sim.glass().convert("L"))  # type: ignore[union-attr]
     assert picture[: h // 2].min() > 200 and picture[h // 2:].max() == 0
+
+
+def test_stats_history_keeps_the_recent_frames_bounded() -> None:
+    from pixelpen.devices.panels.frames import HISTORY
+
+    bus = StubBus()
+    display = st7789(bus)
+    display.open()
+    assert [f.full for f in display.stats.history] == [True]  # the first frame of the initialisation
+    for i in range(HISTORY + 5):
+        display.canvas.blit(np.full((1, 1, 3), 255 * (i % 2), np.uint8), 7, 9)
+        display.flush()
+    history = display.stats.history
+    assert len(history) == HISTORY and history[-1] is display.stats.last
+    assert all(f.bytes == 11 + 2 and f.windows == 1 and not f.full for f in history)  # one pixel, one window
+
+
+def test_recording_traces_the_frames_of_the_block_and_restores_the_bus() -> None:
+    bus = StubBus()
+    display = st7789(bus)
+    display.open()
+    with display.recording() as trace:
+        display.canvas.blit(np.full((1, 2, 3), 255, np.uint8), 3, 4)
+        display.flush()
+    assert display.bus is not None and display.bus is bus
+    # CASET 3..4, RASET 4..4 (+80 rows at rotation 0 on the 240x240 ST7789: 84), RAMWR, two white RGB565 pixels
+    assert [(e.op, e.data.hex()) for e in trace.events] == [
+        ("C", "2a"), ("D", "00030004"), ("C", "2b"), ("D", "00540054"), ("C", "2c"), ("D", "ffffffff")]

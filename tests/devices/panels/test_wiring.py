@@ -147,3 +147,39 @@ def test_urls_that_cannot_be_wired_say_why(url: str, match: str) -> None:
 
     with pytest.raises(ConfigError, match=match):
         pixelpen.open(url)
+
+
+@pytest.mark.parametrize(("target", "pins", "named"), [
+    (Target("ftdi", where="ftdi://ftdi:232h/1"), Pins(dc=4, te=6), "te="),
+    (Target("ftdi", where="ftdi://ftdi:232h/1"), Pins(dc=4, bl=7), "bl="),
+    (Target("mcp2221"), Pins(rst=3), "rst="),
+    (Target("mcp2221"), Pins(te=1, bl=2), "te=, bl="),
+])
+def test_a_pin_a_bridge_cannot_wire_is_refused_naming_it(target: Target, pins: Pins, named: str) -> None:
+    with pytest.raises(ConfigError, match=f"{named} cannot be wired on {target.kind}"):
+        open_wiring(target, pins, clock=SimulatedClock(), where="u")
+
+
+def test_wiring_close_closes_the_bus_even_when_a_line_fails_to_close() -> None:
+    class BrokenLine:
+        def __init__(self) -> None:
+            self.closed = False
+
+        def set(self, level: bool) -> None:
+            pass
+
+        def get(self) -> bool:
+            return False
+
+        def wait_edge(self, rising: bool, timeout: float) -> bool:
+            return False
+
+        def close(self) -> None:
+            self.closed = True
+            raise OSError("line release failed")
+
+    bus, te, backlight = StubBus(), BrokenLine(), BrokenLine()
+    wiring = Wiring(bus, te=te, backlight=backlight)
+    with pytest.raises(OSError, match="line release failed"):
+        wiring.close()
+    assert bus.log == [("X", b"")] and te.closed and backlight.closed
