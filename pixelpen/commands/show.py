@@ -25,9 +25,11 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import IO
 
 import numpy as np
 from PIL import Image, ImageOps, ImageSequence, UnidentifiedImageError
@@ -54,6 +56,10 @@ VIDEO_SUFFIXES = frozenset({".mp4", ".m4v", ".mkv", ".webm", ".mov", ".avi", ".m
 """File name endings taken for video (decoded by ffmpeg) rather than an image Pillow cannot read."""
 TILE = 16
 """Side of the tiles compared between frames: only changed tiles are drawn."""
+PROBE_TIMEOUT_S = 30.0
+"""Seconds ffprobe may take to describe a video before the file is given up as unreadable."""
+FRAME_TIMEOUT_S = 30.0
+"""Seconds ffmpeg may take to send the next frame before it is taken as stalled and killed (wall time)."""
 
 
 @dataclass(frozen=True)
@@ -117,9 +123,13 @@ class VideoSource:
             raise ConfigError(f"{path} is a video: showing video needs ffmpeg and ffprobe on PATH "
                               "(Debian/Ubuntu: apt install ffmpeg; macOS: brew install ffmpeg)")
         self.ffmpeg = ffmpeg
-        probe = subprocess.run([ffprobe, "-v", "error", "-select_streams", "v:0", "-show_entries",
-                                "stream=width,height,avg_frame_rate,r_frame_rate", "-of", "json", str(path)],
-                               capture_output=True, text=True, check=False)
+        try:
+            probe = subprocess.run([ffprobe, "-v", "error", "-select_streams", "v:0", "-show_entries",
+                                    "stream=width,height,avg_frame_rate,r_frame_rate", "-of", "json", str(path)],
+                                   capture_output=True, text=True, check=False, timeout=PROBE_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            raise ConfigError(f"cannot read {path} as a video: ffprobe gave no answer in {PROBE_TIMEOUT_S:g} s"
+                              ) from None
         try:
             stream = json.loads(probe.stdout)["streams"][0]
             self.size = (int(stream["width"]), int(stream["height"]))
@@ -130,7 +140,7 @@ class VideoSource:
 
     def frames(self) -> Iterator[Frame]:
         """Every frame once, read from ``ffmpeg -f rawvideo -pix_fmt rgb24`` (its messages go to a temporary file,
-        so a chatty decoder never blocks on a full pipe); ConfigError when ffmpeg decodes no frame at all."""
+        so a chatty decoder never blocks on a full pipe); ConfigError when ffmpeg decodes no frame at all or stalls."""
         width, height = self.size
         size = width * height * 3
         decoded = 0
@@ -141,7 +151,7 @@ class VideoSource:
             if stdout is None:  # pragma: no cover - PIPE always gives one
                 raise ConfigError("ffmpeg started without an output pipe")
             try:
-                while len(raw := stdout.read(size)) == size:
+                while len(raw := self._read(process, stdout, size)) == size:
                     decoded += 1
                     yield Frame(Image.frombuffer("RGB", (width, height), raw), 1.0 / self._rate)
             finally:
@@ -154,6 +164,25 @@ class VideoSource:
             if not decoded:
                 raise ConfigError(f"cannot decode {self.path}: ffmpeg says {error.splitlines()[-1]}")
             log.warning("%s: ffmpeg: %s", self.path, error.splitlines()[-1])
+
+    def _read(self, process: subprocess.Popen[bytes], stdout: IO[bytes], size: int) -> bytes:
+        """Up to ``size`` bytes of ffmpeg's output; ConfigError, ffmpeg killed, if they take FRAME_TIMEOUT_S."""
+        stalled = threading.Event()
+
+        def kill() -> None:
+            stalled.set()
+            process.kill()
+
+        watchdog = threading.Timer(FRAME_TIMEOUT_S, kill)
+        watchdog.daemon = True
+        watchdog.start()
+        try:
+            raw = stdout.read(size)
+        finally:
+            watchdog.cancel()
+        if stalled.is_set():
+            raise ConfigError(f"cannot decode {self.path}: ffmpeg sent no frame for {FRAME_TIMEOUT_S:g} s; stopped it")
+        return raw
 
 
 def open_source(path: str | Path) -> ImageSource | VideoSource:
@@ -305,7 +334,9 @@ def show(path: str | Path, url: str, *, fps: float | None = None, loops: int = 1
         raise ConfigError(f"{url}: show needs a raster display (a panel, fbdev: or png:); {cls.__name__} draws "
                           "with a pen")
     display = open_display(url)
-    assert isinstance(display, RasterDisplay)
+    if not isinstance(display, RasterDisplay):
+        display.close()
+        raise ConfigError(f"{url}: opened a {type(display).__name__}, not a raster display")
     player = Player(display, display_clock(display), fit=fit, rotate=rotate, fps=fps)
     interrupted = False
     try:
