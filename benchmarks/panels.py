@@ -2,10 +2,12 @@
 
 Run: ``python3 benchmarks/panels.py [--frames N] [--panels ssd1306,st7789,ili9341] [--workloads cursor,clock]``.
 
-Workloads (seeded, the same frames for both): a 20x20 cursor moving over a gradient, a clock's digits
-changing every frame, a list of text lines scrolling by 2 rows a frame, full-screen video frames (a moving
-gradient).  Each frame is a list of patches pasted onto the picture: luma's application pastes them into a
-PIL image and calls ``device.display(image)``; pixelpen's blits them onto the canvas and calls ``flush()``.
+Workloads (seeded, the same frames for both): a 20x20 cursor moving over a gradient and a clock's digits
+changing every frame (the demo animation's :class:`~pixelpen.animation.Cursor` and
+:class:`~pixelpen.animation.ClockFace`), and the benchmark's own whole-screen changes, which the demo does not
+make: a list of text lines scrolling by 2 rows a frame and full-screen video frames (a moving gradient).
+Each frame is a list of patches pasted onto the picture: luma's application pastes them into a PIL image and
+calls ``device.display(image)``; pixelpen's blits them onto the canvas and calls ``flush()``.
 Only that call is timed (host time per frame: conversion, diffing, window planning, packing, the bus
 calls).  Both drive counting buses: luma a serial interface with ``command(*cmd)``/``data(data)`` (the shape
 of ``luma.core.interface.serial.noop``), pixelpen a PanelBus stub; bytes are command + data bytes as the
@@ -14,8 +16,9 @@ ssd1306 and st7789 (RGB666 there), ``diff_to_previous(25)`` on ili9341 (panels.m
 
 Goals (issue 10, Speed): pixelpen's bytes <= 1.1x the ideal (changed pixels in the native format + one
 window's commands per 4-connected changed region); host time per frame <= 0.5x luma's; full frames on the
-simulated ST7789 240x240 RGB565 at 62.5 MHz (the real SpiBus, the simulated spidev and MipiDcsSim, in
-simulated time) >= 95 % of the bus limit of ``devices/panels/pacing.py`` (67.8 fps).
+simulated ST7789 240x240 RGB565 at 62.5 MHz (the real SpiBus, the simulated spidev and MipiDcsSim) >= 95 % of
+the bus limit of ``devices/panels/pacing.py`` (67.8 fps), judged on the driver's host time per frame added to
+its simulated bus time (the simulated time alone holds only bus time, so it cannot miss the goal).
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ from scipy import ndimage
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from pixelpen.animation import ClockFace, Cursor
 from pixelpen.clock import SimulatedClock
 from pixelpen.devices.panels.base import PanelDisplay
 from pixelpen.devices.panels.mipidcs import ILI9341Display, ST7789Display
@@ -153,53 +157,33 @@ def _gradient(panel: Panel, phase: float = 0.0) -> np.ndarray:
     return np.stack([r, g, b], axis=2).astype(np.uint8)
 
 
-def _text_patch(text: str, size: tuple[int, int], font_px: int) -> np.ndarray:
-    image = Image.new("RGB", size)
-    ImageDraw.Draw(image).text((1, 0), text, fill=(255, 255, 255), font=ImageFont.load_default(size=font_px))
-    return np.asarray(image)
-
-
 def cursor(panel: Panel, frames: int) -> tuple[np.ndarray, list[list[Patch]]]:
-    """A solid white 20x20 cursor moving 3 columns and 2 rows a frame over a gradient (mono: a grid of dots
-    every 4 pixels, so the cursor always changes what it covers), bouncing off the edges."""
+    """The demo animation's solid white 20x20 cursor moving 3 columns and 2 rows a frame over a gradient (mono: a
+    grid of dots every 4 pixels, so the cursor always changes what it covers), bouncing off the edges."""
     if panel.mono:
         background = np.zeros((panel.height, panel.width), np.uint8)
         background[::4, ::4] = 1
     else:
         background = _gradient(panel)
-    ink = np.zeros((CURSOR, CURSOR, *background.shape[2:]), np.uint8)
-    ink[...] = 1 if panel.mono else (255, 255, 255)
-    x, y, dx, dy = 5, 5, 3, 2
-    out = []
-    for _ in range(frames):
-        old = (x, y)
-        x, y = x + dx, y + dy
-        if not 0 <= x <= panel.width - CURSOR:
-            dx, x = -dx, x - 2 * dx
-        if not 0 <= y <= panel.height - CURSOR:
-            dy, y = -dy, y - 2 * dy
-        out.append([(old[0], old[1], background[old[1]:old[1] + CURSOR, old[0]:old[0] + CURSOR]), (x, y, ink)])
+    square = Cursor(background, CURSOR, 1 if panel.mono else (255, 255, 255))
     start = background.copy()
-    start[5:5 + CURSOR, 5:5 + CURSOR] = ink
-    return start, out
+    _paste_array(start, [square.drawn()])
+    return start, [square.move() for _ in range(frames)]
 
 
 def clock(panel: Panel, frames: int) -> tuple[np.ndarray, list[list[Patch]]]:
-    """``HH:MM:SS`` ticking a second a frame in the middle of a black screen."""
-    font_px = max(10, panel.height // 6)
-    size = (min(panel.width, font_px * 5), font_px + font_px // 3)
-    x, y = (panel.width - size[0]) // 2, (panel.height - size[1]) // 2
-    start = np.zeros((panel.height, panel.width, 3), np.uint8)
-    out = []
-    for i in range(frames + 1):
-        t = 12 * 3600 + 34 * 60 + 50 + i
-        patch = _native(_text_patch(f"{t // 3600:02d}:{t // 60 % 60:02d}:{t % 60:02d}", size, font_px), panel)
-        if i == 0:
-            start = _native(start, panel)
-            start[y:y + size[1], x:x + size[0]] = patch
-        else:
-            out.append([(x, y, patch)])
-    return start, out
+    """The demo animation's ``HH:MM:SS`` ticking a second a frame, white in the middle of a black screen."""
+    black = np.zeros((panel.height, panel.width) if panel.mono else (panel.height, panel.width, 3), np.uint8)
+    face = ClockFace(black, max(10, panel.height // 6), 1 if panel.mono else (255, 255, 255),
+                     0 if panel.mono else (0, 0, 0), place="centre")
+    start = black.copy()
+    _paste_array(start, [face.tick()])
+    return start, [[face.tick()] for _ in range(frames)]
+
+
+def _paste_array(frame: np.ndarray, patches: list[Patch]) -> None:
+    for x, y, pixels in patches:
+        frame[y:y + pixels.shape[0], x:x + pixels.shape[1]] = pixels
 
 
 def scrolling_list(panel: Panel, frames: int) -> tuple[np.ndarray, list[list[Patch]]]:
@@ -253,14 +237,14 @@ def ideal_bytes(before: np.ndarray, after: np.ndarray, panel: Panel) -> int:
 
 def luma_device(panel: Panel, serial: CountingSerial) -> object:
     """luma's device for ``panel`` with its default framebuffer."""
-    from luma.core.interface.serial import noop  # type: ignore[import-untyped]
+    from luma.core.interface.serial import noop
 
     if panel.name == "ssd1306":
-        from luma.oled.device import ssd1306  # type: ignore[import-untyped]
+        from luma.oled.device import ssd1306
 
         device = ssd1306(serial, width=panel.width, height=panel.height)
     elif panel.name == "st7789":
-        from luma.lcd.device import st7789  # type: ignore[import-untyped]
+        from luma.lcd.device import st7789
 
         device = st7789(serial, width=panel.width, height=panel.height, gpio=noop())  # no backlight pin
     else:
@@ -344,8 +328,17 @@ def run_workload(panel: Panel, workload: str, frames: int) -> Row:
                n / seconds if seconds else math.inf, bus_limit_fps("spi", panel.clock_hz, round(pp_bytes)))
 
 
-def simulated_full_frames(frames: int) -> tuple[float, float]:
-    """(achieved, bus-limit) fps of full frames on ``sim:st7789?size=240x240`` in simulated time."""
+@dataclass
+class FullFrames:
+    """Full frames on the simulated ST7789: fps in bus time alone and with the driver's host time added."""
+
+    bus_fps: float
+    host_bus_fps: float
+    limit_fps: float
+
+
+def simulated_full_frames(frames: int) -> FullFrames:
+    """Full frames on ``sim:st7789?size=240x240``: bus time from the simulated clock, host time from the driver."""
     import pixelpen
     from pixelpen.raster.damage import Rect
 
@@ -357,16 +350,16 @@ def simulated_full_frames(frames: int) -> tuple[float, float]:
     with display:
         display.canvas.blit(start, 0, 0)
         display.flush()
-        t0 = display.clock.now()
+        t0, host0 = display.clock.now(), display.stats.host_seconds
         for patches in steps:
             for x, y, pixels in patches:
                 display.canvas.blit(pixels, x, y)
             display.flush()
-        seconds = display.clock.now() - t0
+        bus_s, host_s = display.clock.now() - t0, display.stats.host_seconds - host0
         full = display.cost.window(Rect(0, 0, 240, 240))
         bus = display.wiring.bus
         limit = bus_limit_fps(bus.kind, bus.clock_hz, full.bytes, full.transfers)
-    return len(steps) / seconds, limit
+    return FullFrames(len(steps) / bus_s, len(steps) / (bus_s + host_s), limit)
 
 
 def _goal(met: bool) -> str:
@@ -400,18 +393,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     rows = [run_workload(PANELS[p], w, args.frames) for p in args.panels.split(",") for w in args.workloads.split(",")]
     print(f"luma.oled/luma.lcd vs pixelpen, {args.frames} frames per workload; ms = median host time per frame, "
           "B = bytes per frame (command + data)")
-    print(f"goals: host pp/luma <= {HOST_GOAL}, pp/ideal bytes <= {BYTES_GOAL}; pp fps: achieved in simulated time "
+    print(f"goals: host pp/luma <= {HOST_GOAL}, pp/ideal bytes <= {BYTES_GOAL}; pp fps: in simulated time "
           "(bus time only), limit: pacing.py's bus limit of pixelpen's bytes, luma fps: the bus limit of luma's")
     for line in format_table(rows):
         print(line)
-    achieved, limit = simulated_full_frames(min(args.frames, 30))
-    print(f"\nfull frames, sim:st7789?size=240x240 (SpiBus -> simulated spidev -> MipiDcsSim, RGB565, 62.5 MHz), "
-          f"simulated time: {achieved:.1f} fps of the {limit:.1f} fps bus limit = {100 * achieved / limit:.1f} % "
-          f"(goal >= {100 * FULL_FRAME_GOAL:.0f} %: {_goal(achieved >= FULL_FRAME_GOAL * limit)})")
-    video_rows = [r for r in rows if r.panel == "st7789" and r.workload == "video"]
-    for r in video_rows:
-        real = 1000.0 / (r.pixelpen_ms + 1000.0 / r.limit_fps)
-        print(f"with pixelpen's host time per frame added (one thread: pack, then send): {real:.1f} fps")
+    full = simulated_full_frames(min(args.frames, 30))
+    share = full.host_bus_fps / full.limit_fps
+    print(f"\nfull frames, sim:st7789?size=240x240 (SpiBus -> simulated spidev -> MipiDcsSim, RGB565, 62.5 MHz): "
+          f"bus time alone {full.bus_fps:.1f} fps, host + bus time {full.host_bus_fps:.1f} fps, of the "
+          f"{full.limit_fps:.1f} fps bus limit = {100 * share:.1f} % (goal >= {100 * FULL_FRAME_GOAL:.0f} % on "
+          f"host + bus: {_goal(share >= FULL_FRAME_GOAL)})")
     return 0
 
 
