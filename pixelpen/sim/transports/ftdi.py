@@ -47,19 +47,18 @@ from __future__ import annotations
 
 import contextlib
 import errno
-import struct
 import sys
 import types
 from collections.abc import Iterator
-from types import SimpleNamespace
 from typing import Any, Final
 
-import usb.backend
 import usb.core
 
 from pixelpen.clock import Clock, SimulatedClock
 from pixelpen.errors import Disconnected
 from pixelpen.sim.base import BusDevice
+from pixelpen.sim.transports.boundedlog import BoundedLog
+from pixelpen.sim.transports.usbbackend import SPEED_HIGH, SimUsbBackend, fill
 
 VID: Final = 0x0403
 PID: Final = 0x6014
@@ -76,29 +75,36 @@ USB_BYTES_PER_S: Final = 40e6
 CS_BIT: Final = 0x08
 BAD_COMMAND: Final = 0xFA
 MPSSE_MODE: Final = 0x02
-_TIMEOUT_CODE, _PIPE_CODE, _NO_DEVICE_CODE = -7, -9, -4
+COMMAND_LOG: Final = 100_000
+"""MPSSE opcodes ``commands`` keeps (luma sends a 240x240 RGB565 frame in about 190: the last 500 frames)."""
+CONTROL_LOG: Final = 1_000
+"""Vendor requests ``control`` keeps (pyftdi sends 16 when it opens the chip)."""
 _REVERSED: Final = bytes(int(f"{b:08b}"[::-1], 2) for b in range(256))
 _ONE_PARAM: Final = {0x8E: 1, 0x8F: 2, 0x86: 2, 0x80: 2, 0x82: 2, 0x9E: 2}  # opcode -> parameter bytes
 _NO_PARAM: Final = frozenset((0x81, 0x83, 0x84, 0x85, 0x87, 0x88, 0x89, 0x8A, 0x8B, 0x8C, 0x8D, 0x96, 0x97))
 _STRINGS: Final = {1: "FTDI", 2: "Single RS232-HS"}
 
 
-class Ft232hBackend(usb.backend.IBackend):
+class Ft232hBackend(SimUsbBackend):
     """pyusb IBackend for one simulated FT232H whose MPSSE SPI drives ``device`` (see the module docstring)."""
 
     def __init__(
         self, device: BusDevice, *, dc: int = 4, rst: int | None = 5, clock: Clock | None = None,
         serial_number: str = "FTSIM001", bus: int = 1, address: int = 3,
     ) -> None:
+        super().__init__(
+            kind="pixelpen-ft232h", vid=VID, pid=PID, bcd_device=BCD_DEVICE, speed=SPEED_HIGH,
+            strings={**_STRINGS, 3: serial_number}, interface=(0xFF, 0xFF, 0xFF), interface_string=2,
+            endpoints=(EP_IN, EP_OUT), max_packet=MAX_PACKET, self_powered=False, bus=bus, address=address,
+        )
         self.device = device
         self.clock = clock if clock is not None else device.clock
         self.dc_bit = 1 << dc
         self.rst_bit = 1 << rst if rst is not None else 0
-        self._strings = {**_STRINGS, 3: serial_number}
-        self.commands: list[int] = []
-        """Every MPSSE opcode executed, in order (for tests)."""
-        self.control: list[tuple[int, int, int, int]] = []
-        """Every vendor control request: (bmRequestType, bRequest, wValue, wIndex)."""
+        self.commands: BoundedLog[int] = BoundedLog(COMMAND_LOG)
+        """The last COMMAND_LOG MPSSE opcodes executed, in order (``commands.dropped``: older ones), for tests."""
+        self.control: BoundedLog[tuple[int, int, int, int]] = BoundedLog(CONTROL_LOG)
+        """The last CONTROL_LOG vendor control requests: (bmRequestType, bRequest, wValue, wIndex)."""
         self.unselected_bytes = 0
         self.bitmode = 0
         self.latency_ms = 16
@@ -114,29 +120,7 @@ class Ft232hBackend(usb.backend.IBackend):
         self._in = bytearray()
         self._frame = bytearray()
         self._frame_dc = False
-        self._configuration = 1
-        self._claimed: set[int] = set()
         self._closed = False
-        self._ident = SimpleNamespace(kind="pixelpen-ft232h", backend=self)
-        self._device_desc = SimpleNamespace(
-            bLength=18, bDescriptorType=1, bcdUSB=0x0200, bDeviceClass=0, bDeviceSubClass=0, bDeviceProtocol=0,
-            bMaxPacketSize0=64, idVendor=VID, idProduct=PID, bcdDevice=BCD_DEVICE, iManufacturer=1, iProduct=2,
-            iSerialNumber=3, bNumConfigurations=1, bus=bus, address=address, port_number=1, port_numbers=(1,),
-            speed=3,  # high speed (480 Mbit/s), as pyusb's libusb1 backend reports it
-        )
-        self._endpoints = [
-            SimpleNamespace(bLength=7, bDescriptorType=5, bEndpointAddress=ep, bmAttributes=2,
-                            wMaxPacketSize=MAX_PACKET, bInterval=0, bRefresh=0, bSynchAddress=0, extra_descriptors=[])
-            for ep in (EP_IN, EP_OUT)
-        ]
-        self._interface = SimpleNamespace(
-            bLength=9, bDescriptorType=4, bInterfaceNumber=0, bAlternateSetting=0, bNumEndpoints=2,
-            bInterfaceClass=0xFF, bInterfaceSubClass=0xFF, bInterfaceProtocol=0xFF, iInterface=2, extra_descriptors=[],
-        )
-        self._config = SimpleNamespace(
-            bLength=9, bDescriptorType=2, wTotalLength=32, bNumInterfaces=1, bConfigurationValue=1, iConfiguration=0,
-            bmAttributes=0x80, bMaxPower=50, extra_descriptors=[],
-        )
 
     def find(self) -> usb.core.Device:
         """The simulated FT232H as a pyusb Device, for ``SpiController().configure(device)``."""
@@ -155,87 +139,9 @@ class Ft232hBackend(usb.backend.IBackend):
         """Unplug: every later request fails with "No such device"."""
         self._closed = True
 
-    # -- enumeration and descriptors --------------------------------------------------------
-
     def enumerate_devices(self) -> list[Any]:
-        """The one simulated device."""
+        """The one simulated device, until it is unplugged."""
         return [] if self._closed else [self._ident]
-
-    def get_parent(self, dev: Any) -> None:
-        """No hub above it."""
-        return None
-
-    def get_device_descriptor(self, dev: Any) -> Any:
-        """Device descriptor attributes."""
-        return self._device_desc
-
-    def get_configuration_descriptor(self, dev: Any, config: int) -> Any:
-        """The one configuration."""
-        if config != 0:
-            raise IndexError(f"configuration index {config} out of range")
-        return self._config
-
-    def get_interface_descriptor(self, dev: Any, intf: int, alt: int, config: int) -> Any:
-        """The one interface (port A)."""
-        if (intf, alt, config) != (0, 0, 0):
-            raise IndexError(f"interface {intf} alt {alt} config {config} out of range")
-        return self._interface
-
-    def get_endpoint_descriptor(self, dev: Any, ep: int, intf: int, alt: int, config: int) -> Any:
-        """Endpoint 0: bulk IN 0x81, endpoint 1: bulk OUT 0x02."""
-        if (intf, alt, config) != (0, 0, 0) or not 0 <= ep < 2:
-            raise IndexError(f"endpoint index {ep} out of range")
-        return self._endpoints[ep]
-
-    # -- handles, configuration, interfaces --------------------------------------------------
-
-    def open_device(self, dev: Any) -> Any:
-        """A handle."""
-        self._check_present()
-        return SimpleNamespace(dev=dev)
-
-    def close_device(self, dev_handle: Any) -> None:
-        """Close a handle."""
-
-    def set_configuration(self, dev_handle: Any, config_value: int) -> None:
-        """Configuration 1 (or 0)."""
-        self._check_present()
-        if config_value not in (0, 1):
-            raise usb.core.USBError(f"Invalid configuration {config_value}", _PIPE_CODE, errno.EPIPE)
-        self._configuration = config_value
-
-    def get_configuration(self, dev_handle: Any) -> int:
-        """The active configuration value."""
-        return self._configuration
-
-    def set_interface_altsetting(self, dev_handle: Any, intf: int, altsetting: int) -> None:
-        """Only interface 0, alternate setting 0."""
-        if (intf, altsetting) != (0, 0):
-            raise usb.core.USBError(f"No interface {intf} alt {altsetting}", _PIPE_CODE, errno.EPIPE)
-
-    def claim_interface(self, dev_handle: Any, intf: int) -> None:
-        """Claim interface 0."""
-        self._check_present()
-        if intf != 0:
-            raise usb.core.USBError(f"Entity not found: interface {intf}", -5, errno.ENOENT)
-        self._claimed.add(intf)
-
-    def release_interface(self, dev_handle: Any, intf: int) -> None:
-        """Release it."""
-        self._claimed.discard(intf)
-
-    def is_kernel_driver_active(self, dev_handle: Any, intf: int) -> bool:
-        """No ftdi_sio bound to a simulated device."""
-        return False
-
-    def detach_kernel_driver(self, dev_handle: Any, intf: int) -> None:
-        """Nothing to detach."""
-
-    def attach_kernel_driver(self, dev_handle: Any, intf: int) -> None:
-        """Nothing to attach."""
-
-    def clear_halt(self, dev_handle: Any, ep: int) -> None:
-        """Endpoints never halt."""
 
     def reset_device(self, dev_handle: Any) -> None:
         """USB reset: back to the power-on state."""
@@ -247,31 +153,21 @@ class Ft232hBackend(usb.backend.IBackend):
     def ctrl_transfer(
         self, dev_handle: Any, bmRequestType: int, bRequest: int, wValue: int, wIndex: int, data: Any, timeout: int
     ) -> int:
-        """Standard GET_DESCRIPTOR/GET_STATUS/GET_CONFIGURATION and the FTDI vendor requests."""
+        """Standard GET_DESCRIPTOR/GET_STATUS/GET_CONFIGURATION and the FTDI vendor requests; a microframe each."""
         self._check_present()
         self._spend(MICROFRAME)
-        if bmRequestType == 0x40:
-            self.control.append((bmRequestType, bRequest, wValue, wIndex))
-            if self._vendor_out(bRequest, wValue):
-                return 0
-        reply: bytes | None = None
-        if bmRequestType == 0xC0:
-            self.control.append((bmRequestType, bRequest, wValue, wIndex))
-            reply = {0x05: MODEM_STATUS, 0x0A: bytes((self.latency_ms,)), 0x0C: bytes((self.pins & 0xFF,)),
-                     0x90: b"\xff\xff"}.get(bRequest)
-        elif bmRequestType == 0x80 and bRequest == 6:
-            reply = self._descriptor(wValue >> 8, wValue & 0xFF, wIndex)
-        elif bmRequestType == 0x80 and bRequest == 0:
-            reply = b"\x00\x00"  # bus-powered, no remote wake-up
-        elif bmRequestType == 0x80 and bRequest == 8:
-            reply = bytes((self._configuration,))
-        if reply is None:
-            raise usb.core.USBError(f"Pipe error: request type {bmRequestType:#04x} request {bRequest:#04x}",
-                                    _PIPE_CODE, errno.EPIPE)
-        n = min(len(reply), len(data))
-        for i in range(n):
-            data[i] = reply[i]
-        return n
+        return super().ctrl_transfer(dev_handle, bmRequestType, bRequest, wValue, wIndex, data, timeout)
+
+    def _request(self, request_type: int, request: int, value: int, index: int) -> bytes | None:
+        """The FTDI vendor requests: OUT (0x40) ones act, IN (0xC0) ones answer."""
+        if request_type == 0x40:
+            self.control.append((request_type, request, value, index))
+            return b"" if self._vendor_out(request, value) else None
+        if request_type == 0xC0:
+            self.control.append((request_type, request, value, index))
+            return {0x05: MODEM_STATUS, 0x0A: bytes((self.latency_ms,)), 0x0C: bytes((self.pins & 0xFF,)),
+                    0x90: b"\xff\xff"}.get(request)
+        return None
 
     def _vendor_out(self, request: int, value: int) -> bool:
         """Apply a vendor OUT request; False for one the chip does not know."""
@@ -327,9 +223,7 @@ class Ft232hBackend(usb.backend.IBackend):
             if not self._in:
                 break
         self._spend(MICROFRAME)
-        for i, b in enumerate(out):
-            buff[i] = b
-        return len(out)
+        return fill(buff, bytes(out))
 
     # -- the MPSSE engine ---------------------------------------------------------------------
 
@@ -451,32 +345,8 @@ class Ft232hBackend(usb.backend.IBackend):
         if isinstance(self.clock, SimulatedClock):
             self.clock.advance(seconds)
 
-    def _descriptor(self, kind: int, index: int, lang: int) -> bytes | None:
-        if kind == 1 and index == 0:
-            d = self._device_desc
-            return struct.pack("<BBHBBBBHHHBBBB", 18, 1, d.bcdUSB, 0, 0, 0, 64, VID, PID, BCD_DEVICE, 1, 2, 3, 1)
-        if kind == 2 and index == 0:
-            out = struct.pack("<BBHBBBBB", 9, 2, 32, 1, 1, 0, 0x80, 50)
-            out += struct.pack("<BBBBBBBBB", 9, 4, 0, 0, 2, 0xFF, 0xFF, 0xFF, 2)
-            for e in self._endpoints:
-                out += struct.pack("<BBBBHB", 7, 5, e.bEndpointAddress, 2, MAX_PACKET, 0)
-            return out
-        if kind == 3:
-            if index == 0:
-                return struct.pack("<BBH", 4, 3, 0x0409)
-            if index in self._strings and lang == 0x0409:
-                text = self._strings[index].encode("utf-16-le")
-                return bytes((len(text) + 2, 3)) + text
-        return None
-
-    def _check_present(self) -> None:
-        if self._closed:
-            raise usb.core.USBError("No such device (it may have been disconnected)", _NO_DEVICE_CODE, errno.ENODEV)
-
-    def _check_endpoint(self, ep: int, expected: int, intf: int) -> None:
-        self._check_present()
-        if ep != expected or intf not in self._claimed:
-            raise usb.core.USBError(f"Invalid endpoint {ep:#04x} on interface {intf}", _PIPE_CODE, errno.EPIPE)
+    def _absence(self) -> str | None:
+        return "it may have been disconnected" if self._closed else None
 
 
 @contextlib.contextmanager

@@ -35,6 +35,7 @@ from typing import Final
 
 from pixelpen.clock import Clock, SimulatedClock
 from pixelpen.sim.base import BusDevice
+from pixelpen.sim.transports.boundedlog import BoundedLog
 
 REPORT_SIZE: Final = 64
 REPORT_SECONDS: Final = 0.001
@@ -42,6 +43,8 @@ REPORT_SECONDS: Final = 0.001
 VID: Final = 0x04D8
 PID: Final = 0x00DD
 MAX_CHUNK: Final = 60
+REPORT_LOG: Final = 10_000
+"""Output reports ``reports`` keeps (a 128x64 SSD1306 frame is 20: the last 500 frames)."""
 BASE_CLOCK: Final = 12_000_000
 IDLE: Final = 0x00
 ADDRESS_NAK: Final = 0x25
@@ -70,8 +73,9 @@ class SimMCP2221:
         self.clock = clock if clock is not None else device.clock
         self.serial_number = serial_number
         self.path = path
-        self.reports: list[bytes] = []
-        """Every output report received (64 bytes each, report ID stripped), for tests."""
+        self.reports: BoundedLog[bytes] = BoundedLog(REPORT_LOG)
+        """The last REPORT_LOG output reports received (64 bytes each, report ID stripped; ``reports.dropped``:
+        older ones), for tests."""
         self.divider = BASE_CLOCK // 100_000 - 3  # power-on default: 100 kHz
         self._open = False
         self._nonblocking = False

@@ -1,4 +1,10 @@
-"""A pyusb backend presenting one USB printer-class device (a USB-parallel adapter) in front of a StreamDevice.
+"""Simulated pyusb backends: SimUsbBackend (one device, one configuration, one interface) and a USB printer.
+
+:class:`SimUsbBackend` is the chapter-9 part every simulated device shares (USB 2.0 chapter 9: the
+device, configuration, interface, endpoint and string descriptors, handles, SET_CONFIGURATION,
+interface claims, no kernel driver, GET_DESCRIPTOR / GET_STATUS / GET_CONFIGURATION on endpoint 0);
+a subclass adds its transfers, its class or vendor requests (:meth:`SimUsbBackend._request`) and
+says when it is gone (:meth:`SimUsbBackend._absence`).  The FT232H backend (``ftdi.py``) is one.
 
 ``usb.core.find(backend=PrinterClassBackend(device))`` finds a full-speed device with one
 configuration and one interface of class 7 (printer), subclass 1, protocol 2 (bidirectional: bulk
@@ -25,6 +31,7 @@ from __future__ import annotations
 
 import errno
 import struct
+from collections.abc import Mapping, Sequence
 from types import SimpleNamespace
 from typing import Any
 
@@ -44,43 +51,49 @@ _GET_STATUS, _GET_DESCRIPTOR, _GET_CONFIGURATION = 0, 6, 8
 _DESC_DEVICE, _DESC_CONFIG, _DESC_STRING, _DESC_INTERFACE, _DESC_ENDPOINT = 1, 2, 3, 4, 5
 _LANG_EN_US = 0x0409
 _TIMEOUT_CODE, _NO_DEVICE_CODE, _PIPE_CODE = -7, -4, -9  # libusb error codes
+SPEED_FULL, SPEED_HIGH = 2, 3
+"""pyusb's libusb1 speed codes: full speed (12 Mbit/s), high speed (480 Mbit/s)."""
 
 
-class PrinterClassBackend(usb.backend.IBackend):
-    """pyusb IBackend for one simulated USB printer-class device (see the module docstring)."""
+def fill(buff: Any, data: bytes) -> int:
+    """Copy the head of ``data`` into a pyusb transfer buffer (an ``array('B')``); the bytes copied."""
+    n = min(len(data), len(buff))
+    if n:
+        memoryview(buff)[:n] = data[:n]
+    return n
+
+
+class SimUsbBackend(usb.backend.IBackend):
+    """pyusb IBackend for one simulated device with one configuration and one interface (see the module docstring).
+
+    ``strings`` maps string indexes to text (1 manufacturer, 2 product, 3 serial number when present);
+    ``interface`` is (class, subclass, protocol); ``endpoints`` the bulk endpoint addresses in
+    descriptor order.
+    """
 
     def __init__(
         self,
-        device: StreamDevice,
         *,
-        vid: int = 0x067B,
-        pid: int = 0x2305,
-        device_id: str = "MFG:Hewlett-Packard;MDL:7475A;CMD:HPGL;CLS:PRINTER;",
-        manufacturer: str = "Prolific Technology Inc.",
-        product: str = "IEEE-1284 Controller",
-        serial_number: str | None = None,
-        bidirectional: bool = True,
-        max_packet: int = 64,
-        rate: int = 100_000,
-        fifo: int = 256,
-        faults: Faults | None = None,
-        clock: Clock | None = None,
+        kind: str,
+        vid: int,
+        pid: int,
+        bcd_device: int,
+        speed: int,
+        strings: Mapping[int, str],
+        interface: tuple[int, int, int],
+        endpoints: Sequence[int],
+        max_packet: int,
+        self_powered: bool,
+        interface_string: int = 0,
         bus: int = 1,
         address: int = 2,
     ) -> None:
-        self.device = device
-        self.port = SimPort(device, baud=rate * 10, flow="rtscts", faults=faults, tx_buffer=fifo, clock=clock)
-        self.clock = self.port.clock
-        self.device_id = device_id
-        self.bidirectional = bidirectional
-        self.max_packet = max_packet
-        self._strings = {1: manufacturer, 2: product}
-        if serial_number is not None:
-            self._strings[3] = serial_number
+        self._strings = dict(strings)
+        self._self_powered = self_powered
         self._configuration = 1  # the OS configured it on enumeration
         self._claimed: set[int] = set()
         self._open_handles = 0
-        self._ident = SimpleNamespace(kind="pixelpen-printer-class", backend=self)
+        self._ident = SimpleNamespace(kind=kind, backend=self)
         self._device_desc = SimpleNamespace(
             bLength=18,
             bDescriptorType=_DESC_DEVICE,
@@ -91,18 +104,17 @@ class PrinterClassBackend(usb.backend.IBackend):
             bMaxPacketSize0=64,
             idVendor=vid,
             idProduct=pid,
-            bcdDevice=0x0300,
+            bcdDevice=bcd_device,
             iManufacturer=1,
             iProduct=2,
-            iSerialNumber=3 if serial_number is not None else 0,
+            iSerialNumber=3 if 3 in self._strings else 0,
             bNumConfigurations=1,
             bus=bus,
             address=address,
             port_number=1,
             port_numbers=(1,),
-            speed=2,
-        )  # speed 2: full speed (12 Mbit/s), as pyusb's libusb1 backend reports it
-        endpoints = [EP_OUT, EP_IN] if bidirectional else [EP_OUT]
+            speed=speed,
+        )
         self._endpoints = [
             SimpleNamespace(
                 bLength=7,
@@ -123,10 +135,10 @@ class PrinterClassBackend(usb.backend.IBackend):
             bInterfaceNumber=0,
             bAlternateSetting=0,
             bNumEndpoints=len(endpoints),
-            bInterfaceClass=7,
-            bInterfaceSubClass=1,
-            bInterfaceProtocol=2 if bidirectional else 1,
-            iInterface=0,
+            bInterfaceClass=interface[0],
+            bInterfaceSubClass=interface[1],
+            bInterfaceProtocol=interface[2],
+            iInterface=interface_string,
             extra_descriptors=[],
         )
         self._config = SimpleNamespace(
@@ -136,10 +148,10 @@ class PrinterClassBackend(usb.backend.IBackend):
             bNumInterfaces=1,
             bConfigurationValue=1,
             iConfiguration=0,
-            bmAttributes=0xC0,
+            bmAttributes=0xC0 if self_powered else 0x80,
             bMaxPower=50,
             extra_descriptors=[],
-        )  # self-powered, 100 mA
+        )  # 100 mA
 
     # -- enumeration and descriptors --------------------------------------------------------
 
@@ -168,7 +180,7 @@ class PrinterClassBackend(usb.backend.IBackend):
         return self._interface
 
     def get_endpoint_descriptor(self, dev: Any, ep: int, intf: int, alt: int, config: int) -> Any:
-        """Endpoint descriptor by index (0: bulk OUT, 1: bulk IN when bidirectional)."""
+        """Endpoint descriptor by index, in the order the constructor was given them."""
         if (intf, alt, config) != (0, 0, 0) or not 0 <= ep < len(self._endpoints):
             raise IndexError(f"endpoint index {ep} out of range")
         return self._endpoints[ep]
@@ -176,7 +188,7 @@ class PrinterClassBackend(usb.backend.IBackend):
     # -- handles, configuration, interfaces --------------------------------------------------
 
     def open_device(self, dev: Any) -> Any:
-        """Open a handle (fails once the link dropped, like an unplugged device)."""
+        """Open a handle (fails once the device is gone, like an unplugged one)."""
         self._check_present()
         self._open_handles += 1
         return SimpleNamespace(dev=dev)
@@ -214,7 +226,7 @@ class PrinterClassBackend(usb.backend.IBackend):
         self._claimed.discard(intf)
 
     def is_kernel_driver_active(self, dev_handle: Any, intf: int) -> bool:
-        """No kernel driver (usblp) is bound to a simulated device."""
+        """No kernel driver is bound to a simulated device."""
         return False
 
     def detach_kernel_driver(self, dev_handle: Any, intf: int) -> None:
@@ -226,96 +238,39 @@ class PrinterClassBackend(usb.backend.IBackend):
     def clear_halt(self, dev_handle: Any, ep: int) -> None:
         """Endpoints never halt here."""
 
-    def reset_device(self, dev_handle: Any) -> None:
-        """USB reset: the adapter's FIFOs are emptied; the configuration is restored as the OS would."""
-        self._check_present()
-        self.port.reset_output()
-        self.port.reset_input()
-        self._claimed.clear()
-
-    # -- transfers ---------------------------------------------------------------------------
-
-    def bulk_write(self, dev_handle: Any, ep: int, intf: int, data: Any, timeout: int) -> int:
-        """Bulk OUT: queue bytes for the device; USBTimeoutError if they do not fit in time."""
-        self._check_endpoint(ep, EP_OUT, intf)
-        payload = bytes(data)
-        try:
-            n = self.port.write(payload, self._seconds(timeout))
-        except Disconnected as exc:
-            raise self._gone() from exc
-        except LinkTimeout as exc:
-            raise usb.core.USBTimeoutError(f"Operation timed out: {exc}", _TIMEOUT_CODE, errno.ETIMEDOUT) from exc
-        if n < len(payload):
-            raise usb.core.USBTimeoutError(
-                f"Operation timed out ({n} of {len(payload)} bytes accepted)", _TIMEOUT_CODE, errno.ETIMEDOUT
-            )
-        return n
-
-    def bulk_read(self, dev_handle: Any, ep: int, intf: int, buff: Any, timeout: int) -> int:
-        """Bulk IN: bytes the device sent, element-wise into ``buff``; USBTimeoutError if none came in time."""
-        self._check_endpoint(ep, EP_IN, intf)
-        if not self.bidirectional:
-            raise usb.core.USBError(f"Invalid endpoint address {ep:#04x}", _PIPE_CODE, errno.EPIPE)
-        try:
-            data = self.port.read(len(buff), self._seconds(timeout))
-        except Disconnected as exc:
-            raise self._gone() from exc
-        except LinkTimeout as exc:
-            raise usb.core.USBTimeoutError(f"Operation timed out: {exc}", _TIMEOUT_CODE, errno.ETIMEDOUT) from exc
-        if not data:
-            raise usb.core.USBTimeoutError("Operation timed out", _TIMEOUT_CODE, errno.ETIMEDOUT)
-        for i, b in enumerate(data):
-            buff[i] = b
-        return len(data)
+    # -- control transfers ---------------------------------------------------------------------
 
     def ctrl_transfer(
         self, dev_handle: Any, bmRequestType: int, bRequest: int, wValue: int, wIndex: int, data: Any, timeout: int
     ) -> int:
-        """Standard and printer-class control requests on endpoint 0 (others stall with EPIPE)."""
+        """Standard requests and the subclass's own on endpoint 0 (others stall with EPIPE)."""
         self._check_present()
         reply: bytes | None = None
         if bmRequestType == 0x80 and bRequest == _GET_DESCRIPTOR:
             reply = self._descriptor(wValue >> 8, wValue & 0xFF, wIndex)
         elif bmRequestType == 0x80 and bRequest == _GET_STATUS:
-            reply = b"\x01\x00"  # self-powered
+            reply = b"\x01\x00" if self._self_powered else b"\x00\x00"  # no remote wake-up
         elif bmRequestType == 0x80 and bRequest == _GET_CONFIGURATION:
             reply = bytes((self._configuration,))
-        elif bmRequestType == 0xA1 and bRequest == 0 and wIndex >> 8 == 0 and wValue == 0:
-            text = self.device_id.encode("latin-1")
-            reply = (len(text) + 2).to_bytes(2, "big") + text
-        elif bmRequestType == 0xA1 and bRequest == 1 and wIndex & 0xFF == 0:
-            reply = bytes((self.port_status(),))
-        elif bmRequestType in (0x21, 0x23) and bRequest == 2 and wIndex & 0xFF == 0:
-            self.port.reset_output()
-            self.port.reset_input()
-            return 0
+        else:
+            reply = self._request(bmRequestType, bRequest, wValue, wIndex)
         if reply is None:
             raise usb.core.USBError(
-                f"Pipe error: request type {bmRequestType:#04x} request {bRequest} not supported",
+                f"Pipe error: request type {bmRequestType:#04x} request {bRequest:#04x} not supported",
                 _PIPE_CODE,
                 errno.EPIPE,
             )
-        n = min(len(reply), len(data))
-        for i in range(n):
-            data[i] = reply[i]
-        return n
+        return fill(data, reply)
 
-    def port_status(self) -> int:
-        """The GET_PORT_STATUS byte from the device's optional ``paper_empty``/``selected``/``error``."""
-        status = 0
-        if getattr(self.device, "paper_empty", False):
-            status |= 0x20
-        if getattr(self.device, "selected", not self.port.dropped):
-            status |= 0x10
-        if not getattr(self.device, "error", False):
-            status |= 0x08
-        return status
-
-    def close(self) -> None:
-        """Stop the port and the device (its results stay readable)."""
-        self.port.close()
+    def _request(self, request_type: int, request: int, value: int, index: int) -> bytes | None:
+        """A class or vendor request: its answer (b"" when it has none), or None to stall."""
+        return None
 
     # -- helpers -------------------------------------------------------------------------------
+
+    def _absence(self) -> str | None:
+        """Why the device is gone (it answers "No such device"), or None while it is there."""
+        return None
 
     def _descriptor(self, kind: int, index: int, lang: int) -> bytes | None:
         if kind == _DESC_DEVICE and index == 0:
@@ -382,10 +337,9 @@ class PrinterClassBackend(usb.backend.IBackend):
         return None
 
     def _check_present(self) -> None:
-        if self.port.dropped:
-            raise self._gone()
-        if self.port.closed:
-            raise usb.core.USBError("No such device (backend closed)", _NO_DEVICE_CODE, errno.ENODEV)
+        reason = self._absence()
+        if reason is not None:
+            raise usb.core.USBError(f"No such device ({reason})", _NO_DEVICE_CODE, errno.ENODEV)
 
     def _check_endpoint(self, ep: int, expected: int, intf: int) -> None:
         self._check_present()
@@ -395,6 +349,126 @@ class PrinterClassBackend(usb.backend.IBackend):
                 _PIPE_CODE,
                 errno.EPIPE,
             )
+
+
+class PrinterClassBackend(SimUsbBackend):
+    """pyusb IBackend for one simulated USB printer-class device (see the module docstring)."""
+
+    def __init__(
+        self,
+        device: StreamDevice,
+        *,
+        vid: int = 0x067B,
+        pid: int = 0x2305,
+        device_id: str = "MFG:Hewlett-Packard;MDL:7475A;CMD:HPGL;CLS:PRINTER;",
+        manufacturer: str = "Prolific Technology Inc.",
+        product: str = "IEEE-1284 Controller",
+        serial_number: str | None = None,
+        bidirectional: bool = True,
+        max_packet: int = 64,
+        rate: int = 100_000,
+        fifo: int = 256,
+        faults: Faults | None = None,
+        clock: Clock | None = None,
+        bus: int = 1,
+        address: int = 2,
+    ) -> None:
+        strings = {1: manufacturer, 2: product} | ({3: serial_number} if serial_number is not None else {})
+        super().__init__(
+            kind="pixelpen-printer-class",
+            vid=vid,
+            pid=pid,
+            bcd_device=0x0300,
+            speed=SPEED_FULL,
+            strings=strings,
+            interface=(7, 1, 2 if bidirectional else 1),
+            endpoints=[EP_OUT, EP_IN] if bidirectional else [EP_OUT],
+            max_packet=max_packet,
+            self_powered=True,
+            bus=bus,
+            address=address,
+        )
+        self.device = device
+        self.port = SimPort(device, baud=rate * 10, flow="rtscts", faults=faults, tx_buffer=fifo, clock=clock)
+        self.clock = self.port.clock
+        self.device_id = device_id
+        self.bidirectional = bidirectional
+        self.max_packet = max_packet
+
+    def reset_device(self, dev_handle: Any) -> None:
+        """USB reset: the adapter's FIFOs are emptied; the configuration is restored as the OS would."""
+        self._check_present()
+        self.port.reset_output()
+        self.port.reset_input()
+        self._claimed.clear()
+
+    # -- transfers ---------------------------------------------------------------------------
+
+    def bulk_write(self, dev_handle: Any, ep: int, intf: int, data: Any, timeout: int) -> int:
+        """Bulk OUT: queue bytes for the device; USBTimeoutError if they do not fit in time."""
+        self._check_endpoint(ep, EP_OUT, intf)
+        payload = bytes(data)
+        try:
+            n = self.port.write(payload, self._seconds(timeout))
+        except Disconnected as exc:
+            raise self._gone() from exc
+        except LinkTimeout as exc:
+            raise usb.core.USBTimeoutError(f"Operation timed out: {exc}", _TIMEOUT_CODE, errno.ETIMEDOUT) from exc
+        if n < len(payload):
+            raise usb.core.USBTimeoutError(
+                f"Operation timed out ({n} of {len(payload)} bytes accepted)", _TIMEOUT_CODE, errno.ETIMEDOUT
+            )
+        return n
+
+    def bulk_read(self, dev_handle: Any, ep: int, intf: int, buff: Any, timeout: int) -> int:
+        """Bulk IN: bytes the device sent, copied into ``buff``; USBTimeoutError if none came in time."""
+        self._check_endpoint(ep, EP_IN, intf)
+        if not self.bidirectional:
+            raise usb.core.USBError(f"Invalid endpoint address {ep:#04x}", _PIPE_CODE, errno.EPIPE)
+        try:
+            data = self.port.read(len(buff), self._seconds(timeout))
+        except Disconnected as exc:
+            raise self._gone() from exc
+        except LinkTimeout as exc:
+            raise usb.core.USBTimeoutError(f"Operation timed out: {exc}", _TIMEOUT_CODE, errno.ETIMEDOUT) from exc
+        if not data:
+            raise usb.core.USBTimeoutError("Operation timed out", _TIMEOUT_CODE, errno.ETIMEDOUT)
+        return fill(buff, data)
+
+    def _request(self, request_type: int, request: int, value: int, index: int) -> bytes | None:
+        """The printer-class requests: GET_DEVICE_ID, GET_PORT_STATUS, SOFT_RESET."""
+        if request_type == 0xA1 and request == 0 and index >> 8 == 0 and value == 0:
+            text = self.device_id.encode("latin-1")
+            return (len(text) + 2).to_bytes(2, "big") + text
+        if request_type == 0xA1 and request == 1 and index & 0xFF == 0:
+            return bytes((self.port_status(),))
+        if request_type in (0x21, 0x23) and request == 2 and index & 0xFF == 0:
+            self.port.reset_output()
+            self.port.reset_input()
+            return b""
+        return None
+
+    def port_status(self) -> int:
+        """The GET_PORT_STATUS byte from the device's optional ``paper_empty``/``selected``/``error``."""
+        status = 0
+        if getattr(self.device, "paper_empty", False):
+            status |= 0x20
+        if getattr(self.device, "selected", not self.port.dropped):
+            status |= 0x10
+        if not getattr(self.device, "error", False):
+            status |= 0x08
+        return status
+
+    def close(self) -> None:
+        """Stop the port and the device (its results stay readable)."""
+        self.port.close()
+
+    # -- helpers -------------------------------------------------------------------------------
+
+    def _absence(self) -> str | None:
+        if self.port.dropped:
+            return "it may have been disconnected"
+        return "backend closed" if self.port.closed else None
 
     def _gone(self) -> usb.core.USBError:
         return usb.core.USBError("No such device (it may have been disconnected)", _NO_DEVICE_CODE, errno.ENODEV)

@@ -160,6 +160,28 @@ def test_an_unplugged_chip_answers_no_such_device(chip):
         backend.find()
 
 
+def test_the_command_and_control_logs_keep_the_newest_entries_and_count_the_rest(chip):
+    backend, dev, _ = chip
+    assert backend.commands.maxlen == 100_000 and backend.control.maxlen == 1_000  # as documented
+    send(dev, b"\x87" * 100_000 + b"\x85\x8a\x8d\x97\x8b")  # send immediate x 100,000, then five others
+    assert len(backend.commands) == 100_000 and backend.commands.dropped == 5
+    assert backend.commands[-5:] == [0x85, 0x8A, 0x8D, 0x97, 0x8B] and backend.commands[0] == 0x87
+    before = len(backend.control)  # the fixture's set-bit-mode request
+    for latency in range(1, 1_001):
+        dev.ctrl_transfer(0x40, 0x09, latency & 0xFF or 1, 1, b"")
+    assert len(backend.control) == 1_000 and backend.control.dropped == before
+    assert backend.control[-1] == (0x40, 0x09, 1_000 & 0xFF, 1) and backend.latency_ms == 1_000 & 0xFF
+
+
+def test_get_status_says_bus_powered_and_unknown_standard_requests_stall(chip):
+    _, dev, _ = chip
+    assert bytes(dev.ctrl_transfer(0x80, 0, 0, 0, 2)) == b"\x00\x00"  # chapter 9: bit 0 clear, bus-powered
+    assert dev.get_active_configuration().bmAttributes == 0x80
+    with pytest.raises(usb.core.USBError) as info:
+        dev.ctrl_transfer(0x80, 0x0C, 0, 0, 2)  # SYNCH_FRAME is for isochronous endpoints only
+    assert info.value.errno == errno.EPIPE
+
+
 MPSSE_SEEDS = [bytes((0x80, 0x28, DIRECTION)) + frame_bytes(True, bytes(range(100))) + b"\x81\x87\xaa",
                b"\x8a\x86\x00\x00\x84\x31\x03\x00abcd\x19\x00\x00\x01\x13\x07\x55\x8e\x03\x8f\x01\x00"]
 

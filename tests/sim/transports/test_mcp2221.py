@@ -159,6 +159,17 @@ def test_unknown_commands_get_no_answer_and_reset_closes_the_handle(chip):
         fake.write(report(0x10))
 
 
+def test_the_report_log_keeps_the_newest_10000_and_counts_the_rest(chip):
+    fake, _ = chip
+    assert fake.reports.maxlen == 10_000  # as documented
+    for i in range(10_003):
+        fake.write(report(0x33, i & 0xFF, i >> 8))  # a command the chip does not answer: nothing queues up
+    assert len(fake.reports) == 10_000 and fake.reports.dropped == 3
+    assert fake.reports[0][:3] == bytes((0x33, 3, 0)) and fake.reports[-1][:3] == bytes((0x33, 0x12, 0x27))
+    del fake.reports[:]
+    assert len(fake.reports) == 0 and fake.reports.dropped == 3
+
+
 def test_malformed_writes_are_refused(chip):
     fake, _ = chip
     with pytest.raises(OSError):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import array
 import errno
 import struct
 
@@ -11,7 +12,7 @@ import usb.util
 
 from pixelpen.clock import SimulatedClock
 from pixelpen.sim.transports.port import Faults
-from pixelpen.sim.transports.usbbackend import PrinterClassBackend
+from pixelpen.sim.transports.usbbackend import SPEED_HIGH, PrinterClassBackend, SimUsbBackend, fill
 from tests.sim.fakes import EchoDevice
 
 ID = "MFG:Hewlett-Packard;MDL:7475A;CMD:HPGL;"
@@ -121,3 +122,43 @@ def test_unsupported_request_stalls():
     with pytest.raises(usb.core.USBError) as info:
         dev.ctrl_transfer(0xC0, 0x42, 0, 0, 4)
     assert info.value.errno == errno.EPIPE
+
+
+def test_get_status_says_self_powered():
+    _, _, dev = make()
+    assert bytes(dev.ctrl_transfer(0x80, 0, 0, 0, 2)) == b"\x01\x00"  # chapter 9: bit 0 set, self-powered
+
+
+class BareDevice(SimUsbBackend):
+    """A vendor-class device with nothing but the shared chapter-9 part."""
+
+    def __init__(self) -> None:
+        super().__init__(kind="bare", vid=0x1234, pid=0x5678, bcd_device=0x0102, speed=SPEED_HIGH,
+                         strings={1: "Maker", 2: "Thing"}, interface=(0xFF, 0, 0), endpoints=(0x81, 0x02, 0x83),
+                         max_packet=512, self_powered=False)
+
+
+def test_the_shared_base_describes_one_configuration_and_answers_standard_requests():
+    dev = usb.core.find(idVendor=0x1234, idProduct=0x5678, backend=BareDevice())
+    assert dev is not None and dev.speed == 3 and dev.iSerialNumber == 0  # no serial number string
+    assert usb.util.get_string(dev, dev.iManufacturer) == "Maker" and usb.util.get_string(dev, 2) == "Thing"
+    raw = bytes(dev.ctrl_transfer(0x80, 6, 0x0200, 0, 255))
+    # USB 2.0 tables 9-10, 9-12, 9-13: configuration (9 bytes, bus-powered 0x80, 100 mA), interface, 3 bulk endpoints
+    assert raw == (struct.pack("<BBHBBBBB", 9, 2, 39, 1, 1, 0, 0x80, 50)
+                   + struct.pack("<BBBBBBBBB", 9, 4, 0, 0, 3, 0xFF, 0, 0, 0)
+                   + b"".join(struct.pack("<BBBBHB", 7, 5, ep, 2, 512, 0) for ep in (0x81, 0x02, 0x83)))
+    assert bytes(dev.ctrl_transfer(0x80, 0, 0, 0, 2)) == b"\x00\x00"  # GET_STATUS: bus-powered
+    assert bytes(dev.ctrl_transfer(0x80, 8, 0, 0, 1)) == b"\x01"  # GET_CONFIGURATION
+    with pytest.raises(usb.core.USBError) as info:
+        dev.ctrl_transfer(0xC0, 0x01, 0, 0, 2)  # no vendor requests of its own: it stalls
+    assert info.value.errno == errno.EPIPE
+    dev.set_configuration(0)
+    with pytest.raises(usb.core.USBError):
+        dev.write(0x02, b"x")  # unconfigured: interface 0 cannot be claimed
+
+
+def test_fill_copies_into_a_pyusb_buffer():
+    buff = array.array("B", bytes(4))
+    assert fill(buff, b"\x01\x02") == 2 and buff.tobytes() == b"\x01\x02\x00\x00"
+    assert fill(buff, b"abcdef") == 4 and buff.tobytes() == b"abcd"
+    assert fill(array.array("B"), b"") == 0
