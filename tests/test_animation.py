@@ -4,33 +4,8 @@ import numpy as np
 import pytest
 
 from pixelpen.animation import ClockFace, Cursor, PanelAnimation
-from pixelpen.display.capabilities import Capabilities
-from pixelpen.display.kinds import RasterDisplay
 from pixelpen.errors import InvalidArgument
-
-
-class Recorder(RasterDisplay):
-    """A raster display that keeps the pictures it was sent."""
-
-    def __init__(self, width: int, height: int, mode: str) -> None:
-        caps = Capabilities(model="recorder", category="panel", kind="raster", size=(width, height), unit_mm=0.2,
-                            colour_model="mono" if mode == "1" else "rgb565", y_down=True)
-        super().__init__(caps, mode=mode, background="black")
-        self.pictures: list[np.ndarray] = []
-        self.open()
-
-    @classmethod
-    def from_url(cls, url, **kwargs):
-        raise NotImplementedError
-
-    def _open_device(self) -> None:
-        pass
-
-    def _close_device(self) -> None:
-        pass
-
-    def _show(self, canvas) -> None:
-        self.pictures.append(canvas.array.copy())
+from tests.commands.test_sim import RecordingPanel
 
 
 def paste(frame, patches):
@@ -92,7 +67,7 @@ def test_the_clock_sits_bottom_right_in_the_frames_pixels():
 
 @pytest.mark.parametrize("mode, ink", [("RGB", (255, 160, 0)), ("1", 1)])
 def test_the_animation_sends_a_frame_a_step_over_what_was_shown(mode, ink):
-    display = Recorder(120, 72, mode)
+    display = RecordingPanel(120, 72, mode)
     rng = np.random.default_rng(3)
     shown = rng.integers(0, 2, display.canvas.array.shape, dtype=np.uint8) * (1 if mode == "1" else 100)
     display.canvas.blit(shown, 0, 0)

@@ -226,8 +226,11 @@ def test_a_video_ffmpeg_cannot_decode_is_exit_2_with_its_message(tmp_path, capsy
     assert f"cannot decode {src}: ffmpeg says Invalid data found" in err
 
 
-def stalling_tools(folder, probe_hangs):
-    """ffprobe and ffmpeg stand-ins on PATH that hang: ffprobe before answering, or ffmpeg after one 4x2 frame."""
+def stalled_video(tmp_path, monkeypatch, probe_hangs):
+    """A video whose ffprobe (``probe_hangs``) or ffmpeg (after one 4x2 frame) hangs, their timeouts 0.5 s."""
+    from pixelpen.commands import show as showcmd
+
+    folder = tmp_path / "bin"
     fake_tools(folder, 4, 2, "25/1", 0)
     hang = "import time\ntime.sleep(600)\n"
     if probe_hangs:
@@ -235,29 +238,25 @@ def stalling_tools(folder, probe_hangs):
     else:
         (folder / "ffmpeg").write_text(f"#!{sys.executable}\nimport sys\nsys.stdout.buffer.write(bytes(24))\n"
                                        f"sys.stdout.flush()\n{hang}")
+    monkeypatch.setenv("PATH", str(folder))
+    monkeypatch.setattr(showcmd, "PROBE_TIMEOUT_S", 0.5)
+    monkeypatch.setattr(showcmd, "FRAME_TIMEOUT_S", 0.5)
+    src = tmp_path / "clip.mp4"
+    src.write_bytes(b"\x00")
+    return src
 
 
 def test_an_ffprobe_that_never_answers_is_exit_2_naming_the_file(tmp_path, capsys, monkeypatch):
-    from pixelpen.commands import show as showcmd
-
-    stalling_tools(tmp_path / "bin", probe_hangs=True)
-    monkeypatch.setenv("PATH", str(tmp_path / "bin"))
-    monkeypatch.setattr(showcmd, "PROBE_TIMEOUT_S", 0.5)
-    src = tmp_path / "clip.mp4"
-    src.write_bytes(b"\x00")
+    src = stalled_video(tmp_path, monkeypatch, probe_hangs=True)
     assert main(["show", str(src), "--to", f"png:{tmp_path / 'o.png'}?size=4x2"]) == 2
     assert f"cannot read {src} as a video: ffprobe gave no answer in 0.5 s" in capsys.readouterr().err
 
 
 def test_an_ffmpeg_that_stalls_is_killed_with_a_clear_error(tmp_path, capsys, monkeypatch):
-    from pixelpen.commands import show as showcmd
+    from pixelpen.commands.show import open_source
 
-    stalling_tools(tmp_path / "bin", probe_hangs=False)
-    monkeypatch.setenv("PATH", str(tmp_path / "bin"))
-    monkeypatch.setattr(showcmd, "FRAME_TIMEOUT_S", 0.5)
-    src = tmp_path / "clip.mp4"
-    src.write_bytes(b"\x00")
-    frames = showcmd.open_source(src).frames()
+    src = stalled_video(tmp_path, monkeypatch, probe_hangs=False)
+    frames = open_source(src).frames()
     assert next(frames).image.size == (4, 2)  # the one frame it sent
     with pytest.raises(ConfigError, match=f"cannot decode {re.escape(str(src))}: ffmpeg sent no frame for 0.5 s; "
                                           "stopped it"):
