@@ -33,9 +33,11 @@ from pixelpen.drivers.trace import (
     PathOrFile,
     PayloadBudget,
     TraceWriter,
+    format_line,
     parse_header,
     parse_hex,
     parse_stamp,
+    pieces,
     read_trace_text,
     trace_lines,
 )
@@ -108,11 +110,7 @@ def format_frame(time: float, level: str, data: bytes) -> list[str]:
     """Trace lines (no newlines) of one chip-select frame: ``C``/``D`` then ``+`` lines of <= 4096 bytes each."""
     if level not in (COMMAND, DATA):
         raise InvalidArgument(f"frame level must be 'C' or 'D', got {level!r}")
-    stamp = f"{max(time, 0.0):.6f}"
-    return [
-        f"{stamp} {level if i == 0 else MORE} {data[i : i + MAX_CHUNK].hex(' ')}"
-        for i in range(0, len(data), MAX_CHUNK)
-    ]
+    return [format_line(time, level if i == 0 else MORE, piece) for i, piece in enumerate(pieces(data))]
 
 
 # -- reading ------------------------------------------------------------------------------------------
@@ -261,7 +259,7 @@ class RecordingBus:
         """Pulse the wrapped bus's reset line and record ``R``."""
         stamp = self._stamp()
         self._call("reset", b"", lambda: self.inner.reset(recovery))
-        self._lines([f"{stamp:.6f} {RESET}"])
+        self._lines([format_line(stamp, RESET)])
 
     def comment(self, text: str) -> None:
         """Add a comment line to the trace."""

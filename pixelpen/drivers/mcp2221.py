@@ -29,7 +29,7 @@ from __future__ import annotations
 import ctypes
 import errno
 import logging
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, Final, Protocol
 
 from pixelpen.clock import REAL_CLOCK, Clock
@@ -167,16 +167,11 @@ class MCP2221:
         self._make_idle()
         header = bytes((command, len(payload) & 0xFF, len(payload) >> 8, address << 1))
         for start in range(0, max(len(payload), 1), MAX_CHUNK):
-            report = header + payload[start : start + MAX_CHUNK]
-            for _ in range(RETRIES):
-                reply = self._transfer(report, f"write {len(payload)} bytes to {address:#04x}")
-                if reply[1] == 0:
-                    break
-                self._check_state(reply[2], address, "write")
-                self.clock.sleep(RETRY_WAIT)
-            else:
-                self.cancel()
-                raise LinkError(f"{self.name}: I2C engine stayed busy writing to {address:#04x} at byte {start}")
+            self._retry(
+                header + payload[start : start + MAX_CHUNK], f"write {len(payload)} bytes to {address:#04x}",
+                lambda reply: reply[1] == 0, address, "write",
+                f"I2C engine stayed busy writing to {address:#04x} at byte {start}",
+            )
         self._wait_idle(address, "write", ok_no_stop=not stop)
 
     def read(self, address: int, length: int, *, repeated_start: bool = False) -> bytes:
@@ -193,15 +188,11 @@ class MCP2221:
                             f"{reply[2]:#04x})")
         out = bytearray()
         while len(out) < length:
-            for _ in range(RETRIES):
-                reply = self._transfer(bytes((CMD_READ_DATA,)), f"fetch read data from {address:#04x}")
-                if reply[1] == 0 and reply[3] <= MAX_CHUNK and reply[3] > 0:
-                    break
-                self._check_state(reply[2], address, "read")
-                self.clock.sleep(RETRY_WAIT)
-            else:
-                self.cancel()
-                raise LinkError(f"{self.name}: no read data from {address:#04x} after {len(out)} of {length} bytes")
+            reply = self._retry(
+                bytes((CMD_READ_DATA,)), f"fetch read data from {address:#04x}",
+                lambda reply: reply[1] == 0 and 0 < reply[3] <= MAX_CHUNK, address, "read",
+                f"no read data from {address:#04x} after {len(out)} of {length} bytes",
+            )
             out += reply[4 : 4 + reply[3]]
         return bytes(out[:length])
 
@@ -236,6 +227,19 @@ class MCP2221:
             if state == 0x25:
                 raise LinkError(errno.EREMOTEIO, f"{self.name}: no device acknowledged address {address:#04x}")
             raise LinkError(errno.EIO, f"{self.name}: I2C {what} at {address:#04x} failed: {FATAL_STATES[state]}")
+
+    def _retry(
+        self, report: bytes, what: str, done: Callable[[bytes], bool], address: int, op: str, failure: str
+    ) -> bytes:
+        """Send ``report`` until its answer is ``done`` (RETRIES tries); a fatal state or none: cancel, LinkError."""
+        for _ in range(RETRIES):
+            reply = self._transfer(report, what)
+            if done(reply):
+                return reply
+            self._check_state(reply[2], address, op)
+            self.clock.sleep(RETRY_WAIT)
+        self.cancel()
+        raise LinkError(f"{self.name}: {failure}")
 
     def _wait_idle(self, address: int, what: str, ok_no_stop: bool) -> None:
         """Poll the status until the engine is idle (or holds the bus without STOP); NAK and fatal states raise."""

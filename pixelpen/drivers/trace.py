@@ -104,14 +104,21 @@ def format_header(url: str, settings: Mapping[str, object] | None = None) -> str
     return " ".join(parts)
 
 
+def format_line(time: float, op: str, data: bytes = b"") -> str:
+    """One trace line (without newline): ``SECONDS OP [HEX...]``, the time to the microsecond."""
+    return f"{max(time, 0.0):.6f} {op} {data.hex(' ')}" if data else f"{max(time, 0.0):.6f} {op}"
+
+
+def pieces(data: bytes) -> list[bytes]:
+    """``data`` cut into the MAX_CHUNK-byte pieces a line holds at most."""
+    return [data[i : i + MAX_CHUNK] for i in range(0, len(data), MAX_CHUNK)]
+
+
 def format_chunk(time: float, direction: str, data: bytes) -> list[str]:
     """Chunk lines (without newlines) for ``data`` sent in ``direction`` at ``time`` seconds."""
     if direction not in (HOST_TO_DEVICE, DEVICE_TO_HOST):
         raise InvalidArgument(f"direction must be '>' or '<', got {direction!r}")
-    return [
-        f"{max(time, 0.0):.6f} {direction} {data[i : i + MAX_CHUNK].hex(' ')}  # {printable(data[i : i + MAX_CHUNK])}"
-        for i in range(0, len(data), MAX_CHUNK)
-    ]
+    return [f"{format_line(time, direction, piece)}  # {printable(piece)}" for piece in pieces(data)]
 
 
 def parse_trace(lines: Iterable[str], source: str = "<trace>", max_bytes: int = DEFAULT_MAX_BYTES) -> Trace:

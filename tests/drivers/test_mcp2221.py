@@ -214,6 +214,41 @@ class ScriptedHid:
         pass
 
 
+class BusyHid:
+    """A chip whose I2C engine never gets done: write chunks are refused busy, read data never becomes ready."""
+
+    def __init__(self) -> None:
+        self.sent: list[int] = []
+        self._last = 0
+
+    def write(self, buff) -> int:
+        self._last = bytes(buff)[1]
+        self.sent.append(self._last)
+        return len(buff)
+
+    def read(self, max_length: int, timeout_ms: int = 0) -> list[int]:
+        # datasheet 3.1.5: byte 1 0x01 = busy, byte 2 the engine state (0x41: partial data, not fatal);
+        # 3.1.8: byte 1 0x41 = the read data is not ready yet
+        tail = {0x90: (0x01, 0x41), 0x40: (0x41, 0x54), 0x91: (0x00, 0x54)}.get(self._last, (0x00, 0x00))
+        return [self._last, *tail, *bytes(61)]
+
+    def close(self) -> None:
+        pass
+
+
+def test_a_chunk_refused_busy_50_times_cancels_and_fails():
+    hid = BusyHid()
+    adapter = MCP2221(hid, clock=SimulatedClock())
+    del hid.sent[:]
+    with pytest.raises(LinkError, match=r"stayed busy writing to 0x3c at byte 0"):
+        adapter.write(0x3C, b"\x00\xae")
+    assert hid.sent == [0x10] + [0x90] * 50 + [0x10]  # status first; Blinka's 50 tries; then the cancel
+    del hid.sent[:]
+    with pytest.raises(LinkError, match=r"no read data from 0x3c after 0 of 2 bytes"):
+        adapter.read(0x3C, 2)
+    assert hid.sent == [0x10, 0x91] + [0x40] * 50 + [0x10]
+
+
 def drive_with_replies(script: bytes) -> None:
     """The fuzz target: whatever the chip answers, the adapter succeeds or raises a LinkError, never hangs."""
     adapter = MCP2221(ScriptedHid(script), clock=SimulatedClock())

@@ -18,7 +18,9 @@ from pixelpen.drivers.trace import (
     Trace,
     TraceChunk,
     TraceWriter,
+    format_chunk,
     format_header,
+    format_line,
     parse_header,
     parse_trace,
     read_trace,
@@ -308,3 +310,10 @@ def test_trace_writer_line_appends_lines_as_they_are_and_refuses_newlines():
     assert out.getvalue() == "#pixelpen-trace 1 url=sim%3A%2F%2Fx\n0.000000 R\n"
     with pytest.raises(LinkError, match="closed"):
         writer.line("0.2 R")
+
+
+def test_format_line_and_long_chunks_split_at_4096_bytes():
+    assert format_line(0.25, "R") == "0.250000 R"  # no bytes: no trailing space
+    assert format_line(-1.0, "C", b"\x2a\x00") == "0.000000 C 2a 00"  # a clock that went back stamps 0
+    lines_ = format_chunk(2.5, ">", b"A" * 4096 + b"BC")
+    assert lines_ == ["2.500000 > " + " ".join(["41"] * 4096) + "  # " + "A" * 4096, "2.500000 > 42 43  # BC"]
