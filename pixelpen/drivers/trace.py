@@ -11,7 +11,8 @@ Trace format, version 1 (also in ``docs/trace-format.md``).  A UTF-8 text file o
 * Line 1, the header: ``#pixelpen-trace``, the format version (the integer 1), then
   ``key=value`` settings separated by spaces; values are percent-encoded (RFC 3986, as
   ``urllib.parse.quote(value, safe="")``).  ``url`` names the device URL (required, may be empty);
-  other keys (``baudrate``, ``flow`` ...) record the link settings.
+  other keys (``baudrate``, ``flow`` ...) record the link settings; ``kind=bus`` marks a bus trace,
+  which :func:`read_trace` refuses (read it with ``pixelpen.drivers.bustrace.read_bus_trace``).
 * Every later line is blank, a comment (first non-blank character ``#``), or one chunk:
   ``SECONDS DIRECTION HEX [# comment]`` separated by spaces.  ``SECONDS`` is a non-negative decimal
   number of seconds since the recording started, never smaller than the line before.
@@ -28,6 +29,8 @@ Trace format, version 1 (also in ``docs/trace-format.md``).  A UTF-8 text file o
 Replaying compares byte streams, not chunks: the host stream is the concatenation of all ``>``
 bytes, and each ``<`` chunk is released to the program once it has sent every ``>`` byte written
 before that chunk in the file.  Timestamps are informative; replay runs as fast as the program.
+The line-level pieces (``trace_lines``, ``parse_header``, ``parse_stamp``, ``parse_hex``, ``format_line``,
+``read_trace_text``, ``TraceWriter.line``) also read and write bus traces (:mod:`pixelpen.drivers.bustrace`).
 """
 
 from __future__ import annotations
@@ -62,7 +65,7 @@ HOST_TO_DEVICE: Final = ">"
 DEVICE_TO_HOST: Final = "<"
 
 PathOrFile = str | os.PathLike[str] | IO[str]
-T = TypeVar("T")
+_T = TypeVar("_T")
 
 
 @dataclass(frozen=True)
@@ -284,7 +287,7 @@ def _cut_lines(f: IO[str]) -> Iterator[str]:
         yield line
 
 
-def read_trace_text(source: PathOrFile, parse: Callable[[Iterable[str], str], T]) -> T:
+def read_trace_text(source: PathOrFile, parse: Callable[[Iterable[str], str], _T]) -> _T:
     """``parse(lines, name)`` over the lines of a path or an open text file; ParseError when unreadable or not UTF-8."""
     if not isinstance(source, (str, os.PathLike)):
         name = str(getattr(source, "name", "<trace>"))
