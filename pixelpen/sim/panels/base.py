@@ -1,27 +1,36 @@
 """PanelSim: the bus front shared by the panel simulators (4-wire SPI, I2C control bytes, RESET), bus time, events.
 
-Bus time (``BusStats.bus_seconds``) at the configured clock: SPI 8 clocks per byte; I2C per write
-transaction 1 START + 9 clocks per byte (the address byte included: 8 bits + ACK) + 1 STOP, as
-``sim/transports/i2cdev.py`` advances a SimulatedClock.  An SSD1306 frame over I2C at 400 kHz
+Bus time (``BusStats.bus_seconds``) is ``drivers.bus``'s wire-time model, the one the simulated transports
+advance a SimulatedClock by: SPI 8 clocks per byte; I2C per write transaction 1 START + 9 clocks per byte
+(the address byte included: 8 bits + ACK) + 1 STOP.  An SSD1306 frame over I2C at 400 kHz
 (``[00 21 00 7F 22 00 07]``, ``[40 + 1024 bytes]``: 1,032 bytes after the addresses) is 9,310 clocks = 23.3 ms.
+Also what the simulators' registrations share: ``register_panel_simulators`` and the ``pixel_size`` option.
 """
 
 from __future__ import annotations
 
 import logging
+import math
+from collections import deque
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, fields
-from typing import ClassVar
+from typing import Any, ClassVar
+
+import numpy as np
 
 from pixelpen.clock import Clock
-from pixelpen.errors import InvalidArgument, ProtocolError
-from pixelpen.sim.base import Fault, SimulatedDevice
+from pixelpen.drivers.bus import i2c_wire_seconds, spi_wire_seconds
+from pixelpen.errors import ConfigError, InvalidArgument, InvalidArgumentType, ProtocolError, quote_token
+from pixelpen.options import OptionSpec, OptionValues, read_options
+from pixelpen.sim.base import Fault, SimulatedDevice, register_simulator
+from pixelpen.urls import parse_size
 
 log = logging.getLogger(__name__)
 
-SPI_CLOCKS_PER_BYTE = 8
-I2C_CLOCKS_PER_BYTE = 9
-I2C_CLOCKS_PER_TRANSACTION = 2
-"""START and STOP."""
+I2C_ADDRESSES = range(0x08, 0x78)
+"""7-bit addresses a part may answer (0x00..0x07 and 0x78..0x7F are reserved by the I2C specification)."""
+EVENT_LOG_LIMIT = 10_000
+"""Events a simulator keeps (the latest); older ones are dropped and counted in ``events_dropped``."""
 
 
 @dataclass
@@ -89,9 +98,13 @@ class PanelSim(SimulatedDevice):
                  i2c_address: int | None = None, i2c_clock_hz: float | None = None,
                  spi_limit_hz: float | None = None, i2c_limit_hz: float | None = None) -> None:
         super().__init__(clock)
-        if not clock_hz > 0 or (i2c_clock_hz is not None and not i2c_clock_hz > 0):
-            raise InvalidArgument(f"bus clock must be positive, got clock_hz={clock_hz!r}, "
+        if not 0 < clock_hz < math.inf or (i2c_clock_hz is not None and not 0 < i2c_clock_hz < math.inf):
+            raise InvalidArgument(f"bus clock must be a positive number of Hz, got clock_hz={clock_hz!r}, "
                                   f"i2c_clock_hz={i2c_clock_hz!r}")
+        if i2c_address is not None and i2c_address not in I2C_ADDRESSES:
+            shown = f"0x{i2c_address:02x}" if isinstance(i2c_address, int) else quote_token(i2c_address)
+            raise ConfigError(f"{self.model}: I2C address {shown} is not a 7-bit address 0x08..0x77 "
+                              "(0x00..0x07 and 0x78..0x7f are reserved)")
         self.clock_hz = float(clock_hz)
         """SPI clock in Hz, used for bus time."""
         self.i2c_clock_hz = float(i2c_clock_hz if i2c_clock_hz is not None else clock_hz)
@@ -100,7 +113,9 @@ class PanelSim(SimulatedDevice):
         """7-bit I2C address the part acknowledges (None: not an I2C part)."""
         self.strict = strict
         self.stats = BusStats()
-        self.events: list[PanelEvent] = []
+        self._events: deque[PanelEvent] = deque(maxlen=EVENT_LOG_LIMIT)
+        self.events_dropped = 0
+        """Events no longer in ``events`` (the log keeps the latest ``EVENT_LOG_LIMIT``)."""
         self.lines: dict[str, bool] = {name: True for name in self.INPUT_LINES}
         """Levels of the input lines (all high at power-up: RES# released, backlight on)."""
         self._limits = {"spi": spi_limit_hz, "i2c": i2c_limit_hz}
@@ -116,13 +131,18 @@ class PanelSim(SimulatedDevice):
         """True while RES# is held low."""
         return not self.lines["reset"]
 
+    @property
+    def events(self) -> list[PanelEvent]:
+        """What the controller flagged, oldest first: the latest ``EVENT_LOG_LIMIT`` (see ``events_dropped``)."""
+        return list(self._events)
+
     def command(self, data: bytes) -> None:
         """Bytes with D/C low, one chip-select frame (unless chip select is held)."""
-        self.spi_transfer(data, dc=False)
+        self._spi(wire_bytes(data, "command"), dc=False)
 
     def data(self, data: bytes) -> None:
         """Bytes with D/C high, one chip-select frame (unless chip select is held)."""
-        self.spi_transfer(data, dc=True)
+        self._spi(wire_bytes(data, "data"), dc=True)
 
     def chip_select(self, active: bool) -> None:
         """Assert (True) or release (False) chip select: transfers in between form one frame."""
@@ -136,33 +156,18 @@ class PanelSim(SimulatedDevice):
 
     def spi_transfer(self, data: bytes, *, dc: bool) -> bytes:
         """One frame of ``data`` with D/C at ``dc`` (in the held frame when chip select is held); MISO zeros."""
-        data = bytes(data)
-        if self._closed:
-            return bytes(len(data))
-        self._catch_up()
-        self._check_clock("spi", self.clock_hz)
-        framed = not self._held
-        if framed:
-            self.stats.transfers += 1
-            self._panel_select(True)
-        self.stats.bytes += len(data)
-        self.stats.bus_seconds += SPI_CLOCKS_PER_BYTE * len(data) / self.clock_hz
-        self._bus_bytes(data, dc)
-        if framed:
-            self._panel_select(False)
-        return bytes(len(data))
+        return self._spi(wire_bytes(data, "spi_transfer"), dc=dc)
 
     def i2c_write(self, address: int, payload: bytes) -> bool:
         """One write transaction (control bytes included); False (NAK) for another address or a non-I2C part."""
+        payload = wire_bytes(payload, "i2c_write")
         if self._closed or self.i2c_address is None or address != self.i2c_address:
             return False
-        payload = bytes(payload)
         self._catch_up()
         self._check_clock("i2c", self.i2c_clock_hz)
         self.stats.transfers += 1
         self.stats.bytes += 1 + len(payload)
-        clocks = I2C_CLOCKS_PER_TRANSACTION + I2C_CLOCKS_PER_BYTE * (1 + len(payload))
-        self.stats.bus_seconds += clocks / self.i2c_clock_hz
+        self.stats.bus_seconds += i2c_wire_seconds(len(payload), self.i2c_clock_hz)
         self._i2c_payload(payload)
         return True
 
@@ -201,7 +206,9 @@ class PanelSim(SimulatedDevice):
         """Log what the controller would flag (``strict``: raise ProtocolError); a negative command is none."""
         code = None if command is None or command < 0 else command
         event = PanelEvent(self._now, -1 if at is None else self._chunk_start + at, code, message)
-        self.events.append(event)
+        if len(self._events) == self._events.maxlen:
+            self.events_dropped += 1
+        self._events.append(event)
         log.debug("%s: %s (byte %d)", self.model, message, event.offset)
         if self.strict:
             raise ProtocolError(f"{self.model}: {message} (byte {event.offset})", command=code, device=self.model)
@@ -230,6 +237,23 @@ class PanelSim(SimulatedDevice):
         self._panel_reset()
 
     # ---- the SimulatedDevice side ------------------------------------------------------------------
+    def _spi(self, data: bytes, *, dc: bool) -> bytes:
+        """One SPI frame of ``data`` (already bytes); MISO zeros."""
+        if self._closed:
+            return bytes(len(data))
+        self._catch_up()
+        self._check_clock("spi", self.clock_hz)
+        framed = not self._held
+        if framed:
+            self.stats.transfers += 1
+            self._panel_select(True)
+        self.stats.bytes += len(data)
+        self.stats.bus_seconds += spi_wire_seconds(len(data), self.clock_hz)
+        self._bus_bytes(data, dc)
+        if framed:
+            self._panel_select(False)
+        return bytes(len(data))
+
     def _bus_bytes(self, data: bytes, dc: bool) -> None:
         if dc:
             self.stats.data_bytes += len(data)
@@ -283,7 +307,72 @@ class PanelSim(SimulatedDevice):
         self._now = t
 
     def _apply_fault(self, fault: Fault) -> None:
+        self._catch_up()  # a fault happens at the clock's present, not when the bus last moved device time
         if fault is Fault.POWER_LOSS:
             self._panel_power_loss()
         else:
             self._panel_reset()
+
+
+_CALLS = {"command": ("data", "command({})", b"\x2c"), "data": ("data", "data({})", b"\x00\xff"),
+          "spi_transfer": ("data", "spi_transfer({}, dc=False)", b"\x2c"),
+          "i2c_write": ("payload", "i2c_write(0x3c, {})", b"\x00\xae")}
+"""The bus calls taking bytes: the argument's name, a call with a bytes literal, the literal's default bytes."""
+
+
+def wire_bytes(value: object, call: str) -> bytes:
+    """``value`` as bus bytes: bytes, bytearray, memoryview or a numpy uint8 array; InvalidArgumentType otherwise.
+
+    An int is refused rather than read as ``bytes(n)`` (n zero bytes): ``command(0x2C)`` would send 44 NOPs.
+    """
+    if isinstance(value, bytes | bytearray | memoryview):
+        return bytes(value)
+    if isinstance(value, np.ndarray) and value.dtype == np.uint8:
+        return value.tobytes()
+    argument, template, example = _CALLS[call]
+    if isinstance(value, np.ndarray):
+        found = f"a numpy array of {value.dtype}"
+    else:
+        found = f"{type(value).__name__} {quote_token(value)}"
+        if type(value) is int and 0 <= value <= 0xFF:
+            example = bytes([value]) if call != "i2c_write" else b"\x00" + bytes([value])
+    literal = "b'" + "".join(f"\\x{b:02x}" for b in example) + "'"
+    raise InvalidArgumentType(f"{call}() takes bytes as {argument}, e.g. {template.format(literal)}, found {found}")
+
+
+PanelBuilder = Callable[[str, OptionValues, Clock | None], PanelSim]
+"""Makes a model's simulator from its URL options as read (``read_options``) and the clock."""
+
+
+def register_panel_simulators(models: Iterable[str], build: PanelBuilder, options: Sequence[OptionSpec[Any]]) -> None:
+    """Register each of ``models`` for ``create_simulator`` and ``sim:`` URLs: options read against ``options``,
+    then ``build(model, values, clock)``."""
+    specs = tuple(options)
+    for model in models:
+        register_simulator(model, _panel_factory(model, build, specs), specs)
+
+
+def _panel_factory(model: str, build: PanelBuilder, specs: tuple[OptionSpec[Any], ...]) -> Callable[..., PanelSim]:
+    def create(clock: Clock | None = None, **options: str) -> PanelSim:
+        """Simulator factory for ``sim:MODEL?...`` URLs."""
+        return build(model, read_options(specs, options, f"sim:{model}"), clock)
+    return create
+
+
+def pixel_size(text: str) -> tuple[int, int]:
+    """A ``size`` option: ``WxH`` in whole pixels (``128x64``)."""
+    size = parse_size(text)  # its InvalidArgument is a ValueError: the option reader names the option
+    if size.unit != "px" or size.width != int(size.width) or size.height != int(size.height):
+        raise ValueError(f"expected WIDTHxHEIGHT in whole pixels, got {quote_token(text)}")
+    return int(size.width), int(size.height)
+
+
+def i2c_address(text: str) -> int:
+    """An ``address`` option: a 7-bit I2C address 0x08..0x77, decimal or 0x hex (``0x3c``)."""
+    try:
+        value = int(text.strip(), 0)
+    except ValueError:
+        raise ValueError("expected an I2C address such as 0x3c") from None
+    if value not in I2C_ADDRESSES:
+        raise ValueError("expected a 7-bit I2C address 0x08..0x77 (0x00..0x07 and 0x78..0x7f are reserved)")
+    return value

@@ -22,15 +22,13 @@ from numpy.typing import NDArray
 from PIL import Image
 
 from pixelpen.clock import Clock
-from pixelpen.errors import ConfigError, InvalidArgument
-from pixelpen.options import OptionSpec, boolean, choice, number, read_options
-from pixelpen.sim.base import register_simulator
-from pixelpen.sim.panels.base import PanelSim
+from pixelpen.errors import ConfigError
+from pixelpen.options import OptionSpec, OptionValues, boolean, choice, number
+from pixelpen.sim.panels.base import PanelSim, pixel_size, register_panel_simulators
 from pixelpen.sim.panels.dcs_commands import MODELS
 from pixelpen.sim.panels.dcs_controller import DcsController
 from pixelpen.sim.panels.dcs_glass import Module, known_module, render
 from pixelpen.sim.panels.dcs_pixels import PixelFormat
-from pixelpen.urls import parse_size
 
 
 @dataclass(frozen=True)
@@ -112,11 +110,9 @@ class MipiDcsSim(PanelSim):
         self._chip.data(data, self._now)
 
     def _panel_reset(self) -> None:
-        self._catch_up()  # a fault is injected without the bus having moved the device's time on
         self._chip.hardware_reset(self._now)
 
     def _panel_power_loss(self) -> None:
-        self._catch_up()
         self._chip = self._power_up()
 
     # ---- what it shows ---------------------------------------------------------------------------
@@ -176,40 +172,27 @@ def _offset(text: str) -> tuple[int, int]:
     return int(col), int(row)
 
 
-def _size(text: str) -> tuple[int, int]:
-    try:
-        size = parse_size(text)
-    except InvalidArgument as exc:
-        raise ValueError(str(exc)) from None
-    if size.unit != "px" or size.width != int(size.width) or size.height != int(size.height):
-        raise ValueError(f"expected WIDTHxHEIGHT in pixels, got {text!r}")
-    return int(size.width), int(size.height)
-
-
 _DEFAULT_SIZES = {"st7789": (240, 240), "ili9341": (320, 240), "st7735": (128, 160)}
 
 OPTIONS: tuple[OptionSpec[Any], ...] = (
-    OptionSpec("size", _size, None, "glass size WxH (default: st7789 240x240, ili9341 320x240, st7735 128x160)"),
+    OptionSpec("size", pixel_size, None, "glass size WxH (default: st7789 240x240, ili9341 320x240, st7735 128x160)"),
     OptionSpec("hz", number(1, above=True), None, "SPI clock in Hz for bus time (default: the datasheet's)"),
     OptionSpec("offset", _offset, None, "RAM COL,ROW of the glass's top-left at MADCTL 0 (default: known modules)"),
     OptionSpec("turn", choice("0", "90", "180", "270"), None, "how the module is held (default: 90 if landscape)"),
-    OptionSpec("ram", _size, None, "frame memory WxH the module straps (ST7735 green tab: 132x162)"),
-    OptionSpec("bgr", boolean, None, "the glass's colour filters are BGR (default: known modules)"),
+    OptionSpec("ram", pixel_size, None, "frame memory WxH the module straps (ST7735 green tab: 132x162)"),
+    OptionSpec("panel_bgr", boolean, None, "the glass's colour filters are BGR (default: known modules; the "
+                                           "display's own bgr option is the MADCTL bit its driver sends)"),
     OptionSpec("te", boolean, True, "the TE pin is wired"),
     OptionSpec("strict", boolean, False, "raise ProtocolError for what the controller would flag"),
 )
 
 
-def _factory(model: str) -> Any:
-    def create(clock: Clock | None = None, **options: str) -> MipiDcsSim:
-        """Simulator factory for ``sim:MODEL?...`` URLs (options: ``OPTIONS``)."""
-        values = read_options(OPTIONS, options, f"sim:{model}")
-        width, height = values["size"] or _DEFAULT_SIZES[model]
-        turn = None if values["turn"] is None else int(values["turn"])
-        return MipiDcsSim(model, width, height, clock=clock, clock_hz=values["hz"], offset=values["offset"],
-                          turn=turn, ram=values["ram"], bgr=values["bgr"], te=values["te"], strict=values["strict"])
-    return create
+def _build(model: str, values: OptionValues, clock: Clock | None) -> MipiDcsSim:
+    """The simulator of a ``sim:MODEL?...`` URL (options: ``OPTIONS``)."""
+    width, height = values["size"] or _DEFAULT_SIZES[model]
+    turn = None if values["turn"] is None else int(values["turn"])
+    return MipiDcsSim(model, width, height, clock=clock, clock_hz=values["hz"], offset=values["offset"], turn=turn,
+                      ram=values["ram"], bgr=values["panel_bgr"], te=values["te"], strict=values["strict"])
 
 
-for _model in MODELS:
-    register_simulator(_model, _factory(_model), OPTIONS)
+register_panel_simulators(MODELS, _build, OPTIONS)

@@ -17,11 +17,9 @@ from numpy.typing import NDArray
 from PIL import Image
 
 from pixelpen.clock import Clock
-from pixelpen.errors import ConfigError, InvalidArgument
-from pixelpen.options import OptionSpec, boolean, integer, number, read_options
-from pixelpen.sim.base import register_simulator
-from pixelpen.sim.panels.base import PanelSim
-from pixelpen.urls import parse_size
+from pixelpen.errors import ConfigError
+from pixelpen.options import OptionSpec, OptionValues, boolean, integer, number
+from pixelpen.sim.panels.base import PanelSim, i2c_address, pixel_size, register_panel_simulators
 
 HORIZONTAL, VERTICAL, PAGE = 0, 1, 2
 """Memory addressing modes (20h parameter)."""
@@ -107,8 +105,6 @@ class SSD1306Sim(PanelSim):
                               f"{spec.ram_columns} RAM columns")
         if height not in (16, 24, 32, 40, 48, 56, 64):
             raise ConfigError(f"{variant}: glass height must be a multiple of 8 from 16 to 64, got {height}")
-        if not 0x08 <= address <= 0x77:
-            raise ConfigError(f"{variant}: I2C address 0x{address:02x} is not a 7-bit address 0x08..0x77")
         self.width, self.height, self.colstart = width, height, colstart
         self.module_com_pins = com_pins if com_pins is not None else (0x12 if height >= 48 or width == 64 else 0x02)
         self.external_vcc = (not spec.charge_pump) if external_vcc is None else external_vcc
@@ -217,28 +213,48 @@ class SSD1306Sim(PanelSim):
         cs, ce, ps, pe = self.window
         n = len(data)
         inside = cs <= self.column <= ce and ps <= self.page <= pe
+        steps = np.arange(max(0, n - ram_columns * 8), n)  # the pointer visits at most 8 x RAM columns cells
         if self.mode == PAGE:
-            cols = (self.column + np.arange(n)) % ram_columns
-            pages = np.full(n, self.page)
+            cols = (self.column + steps) % ram_columns
+            pages = np.full(len(steps), self.page)
             self.column = int(cols[-1] + 1) % ram_columns
         elif inside and cs <= ce and ps <= pe:
             wc, wp = ce - cs + 1, pe - ps + 1
             major, minor = (self.page - ps, self.column - cs) if self.mode == HORIZONTAL else \
                 (self.column - cs, self.page - ps)
             size = wc if self.mode == HORIZONTAL else wp
-            q = (major * size + minor + np.arange(n)) % (wc * wp)
+            q = (major * size + minor + steps) % (wc * wp)
             if self.mode == HORIZONTAL:
                 pages, cols = ps + q // wc, cs + q % wc
             else:
                 cols, pages = cs + q // wp, ps + q % wp
             self.column, self.page = self._step(int(cols[-1]), int(pages[-1]))
-        else:  # a pointer outside its window or a window with start > end: byte by byte
-            cols, pages = np.empty(n, dtype=np.intp), np.empty(n, dtype=np.intp)
-            for i in range(n):
-                cols[i], pages[i] = self.column, self.page
-                self.column, self.page = self._step(self.column, self.page)
-        keep = slice(max(0, n - ram_columns * 8), n)  # later bytes win where the pointer came round
-        self._ram[pages[keep], cols[keep]] = data[keep]
+        else:  # a pointer outside its window or a window with start > end: stepped, the path's cycle tiled
+            steps, cols, pages = self._walk(n)
+            self.column, self.page = self._step(int(cols[-1]), int(pages[-1]))
+        self._ram[pages, cols] = data[steps]  # in step order: later bytes win where the pointer came round
+
+    def _walk(self, n: int) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
+        """(steps, columns, pages) of what ``n`` bytes from the pointer leave in RAM, by ``_step``: the pointer
+        has 8 x RAM columns states, so its path repeats within that many steps; the path is walked once and
+        only its first visits before the cycle and the cycle's last lap are kept (the last step included)."""
+        seen: dict[tuple[int, int], int] = {}
+        path: list[tuple[int, int]] = []
+        state = (self.column, self.page)
+        while len(path) < n and state not in seen:
+            seen[state] = len(path)
+            path.append(state)
+            state = self._step(*state)
+        steps = np.arange(n)
+        if len(path) < n:  # path[start:] is the cycle
+            start = seen[state]
+            lap = len(path) - start
+            steps = np.concatenate([np.arange(start), np.arange(max(start, n - lap), n)])
+            steps_on_path = np.where(steps < len(path), steps, start + (steps - start) % lap)
+        else:
+            steps_on_path = steps
+        walked = np.asarray(path, dtype=np.intp)[steps_on_path]
+        return steps, walked[:, 0], walked[:, 1]
 
     def _step(self, column: int, page: int) -> tuple[int, int]:
         """The pointer after a byte at (column, page) in horizontal or vertical mode (wraps at window ends)."""
@@ -418,16 +434,6 @@ class SSD1306Sim(PanelSim):
         return Image.fromarray(np.where(lit, level, 0).astype(np.uint8), "L")
 
 
-def _size(text: str) -> tuple[int, int]:
-    try:
-        size = parse_size(text)
-    except InvalidArgument as exc:
-        raise ValueError(str(exc)) from None
-    if size.unit != "px" or size.width != int(size.width) or size.height != int(size.height):
-        raise ValueError(f"expected WIDTHxHEIGHT in pixels, got {text!r}")
-    return int(size.width), int(size.height)
-
-
 def _byte(text: str) -> int:
     value = int(text.strip(), 0)
     if not 0 <= value <= 0xFF:
@@ -436,8 +442,8 @@ def _byte(text: str) -> int:
 
 
 OPTIONS: tuple[OptionSpec[Any], ...] = (
-    OptionSpec("size", _size, (128, 64), "glass size WxH"),
-    OptionSpec("address", _byte, 0x3C, "I2C address (0x3c or 0x3d)"),
+    OptionSpec("size", pixel_size, (128, 64), "glass size WxH"),
+    OptionSpec("address", i2c_address, 0x3C, "I2C address, 0x08..0x77 (modules: 0x3c or 0x3d)"),
     OptionSpec("hz", number(1, above=True), None, "bus clock in Hz for bus time (default: the datasheet's)"),
     OptionSpec("colstart", integer(0, 131), None, "RAM column of the glass's left edge (default: 64-wide 32, "
                                                   "SH1106 2, else 0)"),
@@ -447,16 +453,12 @@ OPTIONS: tuple[OptionSpec[Any], ...] = (
 )
 
 
-def _factory(variant: str) -> Any:
-    def create(clock: Clock | None = None, **options: str) -> SSD1306Sim:
-        """Simulator factory for ``sim:MODEL?...`` URLs (options: ``OPTIONS``)."""
-        values = read_options(OPTIONS, options, f"sim:{variant}")
-        width, height = values["size"]
-        return SSD1306Sim(width, height, variant=variant, address=values["address"], clock=clock,
-                          clock_hz=values["hz"], colstart=values["colstart"], com_pins=values["compins"],
-                          external_vcc=values["external_vcc"], strict=values["strict"])
-    return create
+def _build(variant: str, values: OptionValues, clock: Clock | None) -> SSD1306Sim:
+    """The simulator of a ``sim:MODEL?...`` URL (options: ``OPTIONS``)."""
+    width, height = values["size"]
+    return SSD1306Sim(width, height, variant=variant, address=values["address"], clock=clock, clock_hz=values["hz"],
+                      colstart=values["colstart"], com_pins=values["compins"], external_vcc=values["external_vcc"],
+                      strict=values["strict"])
 
 
-for _variant in VARIANTS:
-    register_simulator(_variant, _factory(_variant), OPTIONS)
+register_panel_simulators(VARIANTS, _build, OPTIONS)

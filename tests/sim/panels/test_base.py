@@ -1,16 +1,22 @@
 """PanelSim's bus front: SPI framing and chip select, I2C control bytes, RESET, bus time, events, faults.
 
 Oracles: the SSD1306 datasheet's I2C control byte (Co, D/C#) and the three producer styles of panels.md §1,
-the wire-time figures of panels.md §4 (1,032 bytes = 23.3 ms at 400 kHz), and hand-counted byte sequences.
+the wire-time figures of panels.md §4 (1,032 bytes = 23.3 ms at 400 kHz), the I2C specification's reserved
+addresses (0x00-0x07, 0x78-0x7F), and hand-counted byte sequences.
 """
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
-from pixelpen.errors import InvalidArgument, ProtocolError
+from pixelpen.clock import SimulatedClock
+from pixelpen.errors import ConfigError, InvalidArgument, InvalidArgumentType, ProtocolError
+from pixelpen.options import OptionSpec, integer
+from pixelpen.sim import panels
 from pixelpen.sim.base import BusDevice, Fault
-from pixelpen.sim.panels.base import PanelSim
+from pixelpen.sim.panels import base
+from pixelpen.sim.panels.base import EVENT_LOG_LIMIT, PanelSim, i2c_address, pixel_size, register_panel_simulators
 
 
 class Recorder(PanelSim):
@@ -21,7 +27,8 @@ class Recorder(PanelSim):
     def __init__(self, **kwargs: object) -> None:
         self.seen: list[tuple[object, ...]] = []
         kwargs.setdefault("clock_hz", 400e3)
-        super().__init__(i2c_address=0x3C, **kwargs)  # type: ignore[arg-type]
+        kwargs.setdefault("i2c_address", 0x3C)
+        super().__init__(**kwargs)  # type: ignore[arg-type]
 
     def _panel_command(self, code: int) -> None:
         self.seen.append(("cmd", code))
@@ -183,9 +190,159 @@ def test_reset_stats_and_close():
 
 
 def test_the_package_exports_the_simulators_lazily():
-    import pixelpen.sim.panels as panels
     from pixelpen.sim.panels.ssd1306 import SSD1306Sim
 
     assert panels.SSD1306Sim is SSD1306Sim and panels.PanelSim is PanelSim
     with pytest.raises(AttributeError, match="no attribute 'Nope'"):
         panels.Nope  # noqa: B018
+
+
+# ---- bytes only on the bus calls ------------------------------------------------------------------------
+
+CALLS = {
+    "command": lambda sim, value: sim.command(value),
+    "data": lambda sim, value: sim.data(value),
+    "spi_transfer": lambda sim, value: sim.spi_transfer(value, dc=False),
+    "i2c_write": lambda sim, value: sim.i2c_write(0x3C, value),
+}
+
+
+@pytest.mark.parametrize("call", CALLS)
+@pytest.mark.parametrize(("value", "found"), [
+    (0x2C, "found int 44"), ("\x2c", "found str"), ([0x2C], "found list [44]"), (None, "found NoneType None"),
+    (2.0, "found float 2.0"), (True, "found bool True"), (np.array([0x2C]), "found a numpy array of int"),
+])
+def test_bus_calls_refuse_anything_but_bytes_naming_the_call_and_what_to_pass(call, value, found):
+    sim = Recorder()
+    pattern = rf"^{call}\(\) takes bytes as (data|payload), e\.g\. {call}\("
+    with pytest.raises(InvalidArgumentType, match=pattern) as info:
+        CALLS[call](sim, value)
+    assert found in str(info.value)
+    assert sim.seen == [] and sim.stats.bytes == 0 and sim.stats.transfers == 0  # bytes(44) would be 44 NULs
+
+
+def test_an_int_is_answered_with_the_bytes_literal_it_probably_meant():
+    with pytest.raises(InvalidArgumentType) as info:
+        Recorder().command(0x2C)  # type: ignore[arg-type]
+    assert str(info.value) == "command() takes bytes as data, e.g. command(b'\\x2c'), found int 44"
+    with pytest.raises(InvalidArgumentType) as info:
+        Recorder().i2c_write(0x3C, 0xAF)  # type: ignore[arg-type]
+    assert str(info.value) == "i2c_write() takes bytes as payload, e.g. i2c_write(0x3c, b'\\x00\\xaf'), found int 175"
+
+
+@pytest.mark.parametrize("value", [b"\x2a\x00\xff", bytearray(b"\x2a\x00\xff"), memoryview(b"\x2a\x00\xff"),
+                                   np.array([0x2A, 0x00, 0xFF], dtype=np.uint8),
+                                   np.array([[0x2A, 0x01], [0x00, 0x01], [0xFF, 0x01]], dtype=np.uint8)[:, 0]])
+def test_bytes_like_values_are_taken_as_their_bytes(value):
+    sim = Recorder()
+    sim.command(value)
+    sim.data(value)
+    sim.i2c_write(0x3C, b"\x40" + bytes(value))
+    assert commands(sim) == [("cmd", 0x2A), ("cmd", 0x00), ("cmd", 0xFF), ("data", b"\x2a\x00\xff"),
+                             ("data", b"\x2a\x00\xff")]
+
+
+# ---- the event log is bounded ---------------------------------------------------------------------------
+
+def test_the_event_log_keeps_the_latest_ten_thousand_and_counts_the_ones_dropped():
+    assert EVENT_LOG_LIMIT == 10_000  # the number docs/panel-simulators.md gives
+    sim = Recorder()
+    sim.command(b"\xee" * (EVENT_LOG_LIMIT + 5))
+    assert len(sim.events) == 10_000 and sim.events_dropped == 5
+    assert sim.events[0].offset == 5 and sim.events[-1].offset == 10_004  # the oldest five went
+    sim.command(b"\xee")
+    assert len(sim.events) == 10_000 and sim.events_dropped == 6 and sim.events[-1].offset == 10_005
+    sim.reset_stats()  # statistics only: the log and its count stay
+    assert len(sim.events) == 10_000 and sim.events_dropped == 6
+
+
+def test_events_is_a_list_snapshot():
+    sim = Recorder()
+    assert sim.events == [] and sim.events_dropped == 0
+    snapshot = sim.events
+    sim.command(b"\xee")
+    assert snapshot == [] and [e.command for e in sim.events] == [0xEE]
+
+
+# ---- faults at the clock's present ----------------------------------------------------------------------
+
+class ResetReporter(Recorder):
+    """Reports each reset, so the event's time says when the controller saw it."""
+
+    def _panel_reset(self) -> None:
+        self._report(None, "reset", at=None)
+
+
+@pytest.mark.parametrize("fault", [Fault.RESET, Fault.POWER_LOSS])
+def test_an_injected_fault_happens_at_the_clocks_present(fault):
+    clock = SimulatedClock()
+    sim = ResetReporter(clock=clock)
+    sim.command(b"\x00")
+    clock.advance(2.5)  # no bus traffic since: the device's time has not moved
+    sim.inject(fault)
+    assert [(e.message, e.time) for e in sim.events] == [("reset", 2.5)]
+
+
+# ---- the registration and option helpers ----------------------------------------------------------------
+
+def test_register_panel_simulators_registers_each_model_with_its_options(monkeypatch):
+    registered = {}
+    monkeypatch.setattr(base, "register_simulator", lambda model, factory, specs: registered.update(
+        {model: (factory, specs)}))
+    specs = (OptionSpec("size", pixel_size, (8, 8), "glass"), OptionSpec("n", integer(0, 9), 1, "a number"))
+    built = []
+
+    def build(model, values, clock):
+        built.append((model, values["size"], values["n"], clock))
+        return Recorder(clock=clock)
+
+    register_panel_simulators(["one", "two"], build, specs)
+    assert sorted(registered) == ["one", "two"] and registered["one"][1] == specs
+    clock = SimulatedClock()
+    sim = registered["two"][0](clock=clock, size="16x4")
+    assert isinstance(sim, Recorder) and built == [("two", (16, 4), 1, clock)]
+    with pytest.raises(ConfigError, match=r"sim:one: option n='12' is not valid"):
+        registered["one"][0](n="12")
+    with pytest.raises(ConfigError, match=r"sim:one: unknown option"):
+        registered["one"][0](colour="red")
+
+
+@pytest.mark.parametrize(("text", "size"), [("128x64", (128, 64)), (" 240X320 ", (240, 320)), ("1x1", (1, 1))])
+def test_pixel_size_reads_whole_pixels(text, size):
+    assert pixel_size(text) == size
+
+
+@pytest.mark.parametrize("text", ["128", "12.5x8", "10x10mm", "a4", "0x8", "x", ""])
+def test_pixel_size_refuses_anything_else_with_a_value_error(text):
+    with pytest.raises(ValueError):
+        pixel_size(text)
+
+
+@pytest.mark.parametrize(("text", "address"), [("0x3c", 0x3C), ("0X3D", 0x3D), ("8", 8), ("0x77", 0x77)])
+def test_i2c_address_option_reads_non_reserved_7_bit_addresses(text, address):
+    assert i2c_address(text) == address
+
+
+@pytest.mark.parametrize("text", ["0x07", "0", "0x78", "0x7f", "0x80", "0x3c3", "-1"])
+def test_i2c_address_option_refuses_reserved_and_out_of_range_addresses(text):
+    with pytest.raises(ValueError, match=r"0x08\.\.0x77 \(0x00\.\.0x07 and 0x78\.\.0x7f are reserved\)"):
+        i2c_address(text)
+
+
+@pytest.mark.parametrize("text", ["sixty", "", "3c"])
+def test_i2c_address_option_refuses_what_is_no_number(text):
+    with pytest.raises(ValueError, match="such as 0x3c"):
+        i2c_address(text)
+
+
+@pytest.mark.parametrize("address", [0x00, 0x07, 0x78, 0x7F, 0x100])
+def test_a_part_at_a_reserved_address_is_refused(address):
+    pattern = rf"recorder: I2C address 0x{address:02x} is not a 7-bit address 0x08\.\.0x77 "
+    with pytest.raises(ConfigError, match=pattern):
+        Recorder(i2c_address=address)
+
+
+@pytest.mark.parametrize("hz", [0.0, -1.0, float("inf"), float("nan")])
+def test_a_bus_clock_must_be_a_positive_finite_number(hz):
+    with pytest.raises(InvalidArgument, match="bus clock"):
+        Recorder(clock_hz=hz)

@@ -562,6 +562,15 @@ def test_te_unwired_stays_low():
         assert not sim.line("te")
 
 
+def test_an_injected_reset_happens_at_the_clocks_present_not_at_the_last_bus_byte():
+    sim = make()  # its clock is 1 s on, the device's time still at power-on (no bus traffic yet)
+    later(sim, 0.5)
+    sim.inject(Fault.RESET)
+    later(sim, 0.006)
+    send(sim, 0x11)
+    assert messages(sim) == ["SLPOUT 6.000 ms after RESX (datasheet: wait 120 ms; carried out)"]
+
+
 # ---- bus statistics, faults, registry ---------------------------------------------------------------------
 
 def test_bus_time_is_eight_clocks_per_byte_and_frames_count_finished_writes():
@@ -590,6 +599,24 @@ def test_registry_options():
     assert sim.glass().size == (128, 160)
     with pytest.raises(URLError):
         create_simulator("ili9341", size="320x240", offset="1")
+    with pytest.raises(URLError, match="unknown option"):
+        create_simulator("st7789", bgr="true")  # the display's option name; the glass's is panel_bgr
+
+
+@pytest.mark.parametrize(("model", "table_bgr"), [("st7789", False), ("ili9341", True), ("st7735", False)])
+def test_panel_bgr_sets_the_glass_filters_and_a_sim_url_reaches_it_beside_the_display_s_bgr(model, table_bgr):
+    assert create_simulator(model).module.bgr is table_bgr  # the module table: ILI9341 modules are BGR
+    assert create_simulator(model, panel_bgr=str(not table_bgr)).module.bgr is not table_bgr
+    import pixelpen
+    from pixelpen.devices.panels.mipidcs import MipiDcsDisplay
+
+    display = pixelpen.open(f"sim:{model}?panel_bgr={str(not table_bgr).lower()}&bgr=true")
+    try:
+        assert isinstance(display, MipiDcsDisplay) and isinstance(display.simulator, MipiDcsSim)
+        assert display.simulator.module.bgr is not table_bgr  # the simulator's wiring ...
+        assert display.bgr is True  # ... and the display's MADCTL bit, each its own option
+    finally:
+        display.close()
     with pytest.raises(ConfigError):
         MipiDcsSim("st7796", 320, 480)
 

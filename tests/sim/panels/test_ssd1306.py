@@ -226,6 +226,50 @@ def test_horizontal_window_wraps_to_its_start_and_vertical_mode_goes_down_first(
     assert (sim.gram[0, 0], sim.gram[1, 0], sim.gram[0, 1]) == (7, 8, 9)
 
 
+def walk_outside_window(mode: int, window: tuple[int, int, int, int], column: int, page: int,
+                        data: bytes) -> tuple[np.ndarray, tuple[int, int]]:
+    """GDDRAM (unwritten cells -1) and the pointer after ``data`` at (column, page), one byte at a time by the
+    documented rule for a pointer outside its window or a window with start > end: horizontal — column +1
+    (wrapping at the RAM edge), at the end column back to the start column and the next page (after the end
+    page the start page); vertical — the same with pages first."""
+    cs, ce, ps, pe = window
+    ram = np.full((8, 128), -1)
+    for byte in data:
+        ram[page, column] = byte
+        if mode == 0:
+            if column == ce:
+                column, page = cs, (ps if page == pe else (page + 1) % 8)
+            else:
+                column = (column + 1) % 128
+        elif page == pe:
+            column, page = (cs if column == ce else (column + 1) % 128), ps
+        else:
+            page = (page + 1) % 8
+    return ram, (column, page)
+
+
+@pytest.mark.parametrize(("mode", "window", "column", "page"), [
+    (0, (10, 20, 2, 3), 100, 6),  # horizontal, the pointer right of and below its window (moved by nibbles/B6)
+    (0, (100, 20, 5, 2), 3, 0),  # horizontal, both starts past their ends
+    (1, (10, 20, 2, 3), 0, 7),  # vertical, the pointer outside
+    (1, (64, 1, 6, 6), 127, 1),  # vertical, a one-page window with start column > end column
+])
+@pytest.mark.parametrize("n", [1, 700, 5000, 100_003])
+def test_a_pointer_outside_its_window_walks_as_the_byte_by_byte_rule_for_any_length(mode, window, column, page, n):
+    cs, ce, ps, pe = window
+    data = bytes(np.random.default_rng(n).integers(0, 256, n, dtype=np.uint8))
+    sim = SSD1306Sim()
+    sim.command(bytes([0x20, mode, 0x21, cs, ce, 0x22, ps, pe]))
+    sim.command(bytes([0xB0 + page, column & 0x0F, 0x10 | column >> 4]))  # B0-B7 and nibbles move it in any mode
+    sim.data(data)
+    ram, pointer = walk_outside_window(mode, window, column, page, data)
+    written = ram >= 0
+    assert np.array_equal(sim.gram[written], ram[written])
+    assert (sim.column, sim.page) == pointer
+    sim.data(b"\xa5")  # and the next byte lands where the rule says
+    assert sim.gram[pointer[1], pointer[0]] == 0xA5
+
+
 def test_page_mode_nibbles_and_page_start():
     sim = SSD1306Sim()
     sim.command(bytes([0xB5, 0x0A, 0x17]))  # column 0x7A on page 5
@@ -432,6 +476,16 @@ def test_frames_count_data_ended_by_a_command():
     assert sim.stats.frames == 2  # the third ends with the next command
     sim.command(b"\xe3")
     assert sim.stats.frames == 3
+
+
+@pytest.mark.parametrize("address", ["0x07", "0x78", "0x7f", "0x100", "-1"])
+def test_the_address_option_is_a_non_reserved_7_bit_address(address):
+    with pytest.raises(URLError, match=rf"sim:ssd1306: option address='{address}' is not valid: .*0x08\.\.0x77"):
+        create_simulator("ssd1306", address=address)
+    with pytest.raises(ConfigError, match=r"ssd1309: I2C address 0x78 is not a 7-bit address 0x08\.\.0x77"):
+        SSD1306Sim(variant="ssd1309", address=0x78)
+    assert create_simulator("sh1106", address="0x08").i2c_address == 0x08
+    assert create_simulator("ssd1306", address="0x77").i2c_address == 0x77
 
 
 def test_registry_and_options():
