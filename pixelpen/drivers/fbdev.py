@@ -16,7 +16,6 @@ from __future__ import annotations
 import ctypes
 import errno
 import fcntl
-import grp
 import logging
 import mmap
 import os
@@ -25,6 +24,7 @@ from typing import Protocol
 
 import numpy as np
 
+from pixelpen.drivers.devnode import node_open_error
 from pixelpen.errors import ConfigError, LinkError
 from pixelpen.raster.colour import CHUNK_PIXELS
 
@@ -120,13 +120,10 @@ class DeviceNode:
         self.name = path
         try:
             self._fd = os.open(path, os.O_RDWR | os.O_CLOEXEC)
-        except FileNotFoundError:
-            raise LinkError(f"{path}: no such framebuffer device (is an fbdev or DRM fbdev-emulation driver "
-                            f"loaded? ls /dev/fb*)") from None
-        except PermissionError:
-            raise LinkError(f"{path}: permission denied; {_group_hint(path)}") from None
         except OSError as exc:
-            raise LinkError(f"{path}: cannot open the framebuffer: {exc}") from None
+            raise node_open_error(path, exc, group="video", udev='SUBSYSTEM=="graphics", KERNEL=="fb*"',
+                                  missing="load a framebuffer driver (fbdev, or DRM with fbdev emulation) and "
+                                          "check the number (ls /dev/fb*)") from exc
 
     def ioctl(self, request: int, arg: bytes | int) -> bytes:
         """``fcntl.ioctl`` on the node."""
@@ -146,15 +143,6 @@ class DeviceNode:
         if self._fd >= 0:
             os.close(self._fd)
             self._fd = -1
-
-
-def _group_hint(path: str) -> str:
-    """Which group may open ``path`` (usually ``video``) and how to join it."""
-    try:
-        group = grp.getgrgid(os.stat(path).st_gid).gr_name
-    except (OSError, KeyError):
-        group = "video"
-    return f"the node belongs to group {group!r}: add the user to it (sudo usermod -aG {group} $USER, log in again)"
 
 
 @dataclass(frozen=True)

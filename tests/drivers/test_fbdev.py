@@ -194,7 +194,8 @@ class PaletteNode(Node):
 
     def __init__(self, *args, refuse=False, **kwargs):
         super().__init__(*args, **kwargs)
-        self.refuse, self.cmap = refuse, None
+        self.refuse = refuse
+        self.cmap: tuple[int, int, int, list[np.ndarray]] | None = None
 
     def ioctl(self, request, arg):
         if request != 0x4605:
@@ -212,6 +213,7 @@ def test_pseudocolour_gets_an_rgb332_palette(tmp_path, caplog):
     fields = {"red": (0, 8, 0), "green": (0, 8, 0), "blue": (0, 8, 0), "transp": (0, 0, 0)}
     node = PaletteNode(4, 2, 8, line_length=8, visual=3, fields=fields, tmp_path=tmp_path)
     fb = Framebuffer(node)
+    assert node.cmap is not None
     start, length, transp, (red, green, blue) = node.cmap
     assert (start, length, transp) == (0, 256, 0)
     index = 0b101_011_10  # RRRGGGBB
@@ -321,19 +323,28 @@ def test_a_block_off_the_screen_is_refused(tmp_path):
 
 
 def test_opening_nodes_names_the_problem(tmp_path, monkeypatch):
-    with pytest.raises(LinkError, match="no-fb: no such framebuffer device"):
+    with pytest.raises(LinkError, match=r"no-fb does not exist: load a framebuffer driver .*ls /dev/fb\*"):
         Framebuffer.open(str(tmp_path / "no-fb"))
     plain = tmp_path / "plain"
     plain.write_bytes(bytes(64))
     with pytest.raises(LinkError, match=r"FBIOGET_VSCREENINFO failed.*not a framebuffer"):
         Framebuffer.open(str(plain))
+    with pytest.raises(LinkError, match=r"cannot open: \[Errno 21\]"):  # EISDIR: the OS's own words
+        DeviceNode(str(tmp_path))
 
     def denied(path, flags):
         raise PermissionError(errno.EACCES, "Permission denied", path)
 
     monkeypatch.setattr(fbdev.os, "open", denied)
-    with pytest.raises(LinkError, match=r"permission denied; the node belongs to group .*usermod -aG"):
+    with pytest.raises(LinkError, match=r"permission denied on .*plain: add your user to the '.+' group "
+                                        r"\(sudo usermod -aG .*KERNEL==\"fb\*\", GROUP="):
         DeviceNode(str(plain))
+    gone = str(tmp_path / "fb7")  # no node to read a group from: the conventional one, video
+    with pytest.raises(LinkError) as denied_info:
+        DeviceNode(gone)
+    assert str(denied_info.value) == (
+        f"permission denied on {gone}: add your user to the 'video' group (sudo usermod -aG video $USER, then log "
+        'in again) or add a udev rule SUBSYSTEM=="graphics", KERNEL=="fb*", GROUP="video", MODE="0660"')
 
 
 def test_a_get_ioctl_failing_is_a_link_error(tmp_path):
