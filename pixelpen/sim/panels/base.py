@@ -4,7 +4,9 @@ Bus time (``BusStats.bus_seconds``) is ``drivers.bus``'s wire-time model, the on
 advance a SimulatedClock by: SPI 8 clocks per byte; I2C per write transaction 1 START + 9 clocks per byte
 (the address byte included: 8 bits + ACK) + 1 STOP.  An SSD1306 frame over I2C at 400 kHz
 (``[00 21 00 7F 22 00 07]``, ``[40 + 1024 bytes]``: 1,032 bytes after the addresses) is 9,310 clocks = 23.3 ms.
-Also what the simulators' registrations share: ``register_panel_simulators`` and the ``pixel_size`` option.
+The bus calls take bytes-like values only (``WireBytes``): an int would be ``bytes(n)``, n NUL bytes.
+Also what the simulators' registrations share: ``register_panel_simulators``, the ``pixel_size`` and
+``i2c_address`` option converters.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from dataclasses import dataclass, fields
 from typing import Any, ClassVar
 
 import numpy as np
+from numpy.typing import NDArray
 
 from pixelpen.clock import Clock
 from pixelpen.drivers.bus import i2c_wire_seconds, spi_wire_seconds
@@ -26,6 +29,9 @@ from pixelpen.sim.base import Fault, SimulatedDevice, register_simulator
 from pixelpen.urls import parse_size
 
 log = logging.getLogger(__name__)
+
+WireBytes = bytes | bytearray | memoryview | NDArray[np.uint8]
+"""What the bus calls take (numpy arrays of other dtypes, ints, str and sequences are refused)."""
 
 I2C_ADDRESSES = range(0x08, 0x78)
 """7-bit addresses a part may answer (0x00..0x07 and 0x78..0x7F are reserved by the I2C specification)."""
@@ -136,11 +142,11 @@ class PanelSim(SimulatedDevice):
         """What the controller flagged, oldest first: the latest ``EVENT_LOG_LIMIT`` (see ``events_dropped``)."""
         return list(self._events)
 
-    def command(self, data: bytes) -> None:
+    def command(self, data: WireBytes) -> None:
         """Bytes with D/C low, one chip-select frame (unless chip select is held)."""
         self._spi(wire_bytes(data, "command"), dc=False)
 
-    def data(self, data: bytes) -> None:
+    def data(self, data: WireBytes) -> None:
         """Bytes with D/C high, one chip-select frame (unless chip select is held)."""
         self._spi(wire_bytes(data, "data"), dc=True)
 
@@ -154,11 +160,11 @@ class PanelSim(SimulatedDevice):
             self.stats.transfers += 1
         self._panel_select(active)
 
-    def spi_transfer(self, data: bytes, *, dc: bool) -> bytes:
+    def spi_transfer(self, data: WireBytes, *, dc: bool) -> bytes:
         """One frame of ``data`` with D/C at ``dc`` (in the held frame when chip select is held); MISO zeros."""
         return self._spi(wire_bytes(data, "spi_transfer"), dc=dc)
 
-    def i2c_write(self, address: int, payload: bytes) -> bool:
+    def i2c_write(self, address: int, payload: WireBytes) -> bool:
         """One write transaction (control bytes included); False (NAK) for another address or a non-I2C part."""
         payload = wire_bytes(payload, "i2c_write")
         if self._closed or self.i2c_address is None or address != self.i2c_address:
