@@ -5,18 +5,21 @@ ADBUS4-7 and 8-15 ACBUS0-7 (FT232H), so ``dc=4`` is ADBUS4.  The MPSSE clock is 
 divisor)), at most 30 MHz; one ``SpiPort.write`` moves at most 0xFF00 bytes (``PAYLOAD_MAX_LENGTH``)
 and is one chip-select frame.  Modes 0 and 2 are native, 1 and 3 emulated with 3-phase clocking.
 Every GPIO write is a read-modify-write over USB (two round trips), so D/C is written only when it
-changes.  Open with a URL (``ftdi://ftdi:232h/1``, pyftdi's scheme) or a ``usb.core.Device`` (what
-``pixelpen.sim.transports.ftdi.Ft232hBackend.find()`` gives).
+changes.  ``clock_hz`` is the port's frequency as pyftdi keeps it: the request capped at 30 MHz (the chip
+runs at the nearest divisor's, 7 MHz asked -> 7.5 MHz).  ``close`` freezes the port: the pins keep their
+levels, so the panel keeps its picture.  Open with a URL (``ftdi://ftdi:232h/1``, pyftdi's scheme) or a
+``usb.core.Device`` (what ``pixelpen.sim.transports.ftdi.Ft232hBackend.find()`` gives).
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
-from typing import Any, Final
+from typing import Any, ClassVar, Final
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.drivers.bus import RESET_PULSE, RESET_RECOVERY, command_bytes
-from pixelpen.drivers.gpio import pulse_reset
+from pixelpen.drivers.bus import FramedBus
+from pixelpen.drivers.devnode import require_module
 from pixelpen.errors import ConfigError, LinkError
 
 log = logging.getLogger(__name__)
@@ -29,8 +32,6 @@ DEFAULT_URL: Final = "ftdi://ftdi:232h/1"
 FIRST_GPIO: Final = 4
 """ADBUS0-3 carry SCK, MOSI, MISO and CS0."""
 LAST_GPIO: Final = 15
-_FAULTS: Final = (OSError, ValueError)
-"""What pyftdi raises on a fault: FtdiError and SpiIOError (OSError), usb.core.USBError (OSError), ValueError."""
 
 
 class _GpioPin:
@@ -48,10 +49,12 @@ class _GpioPin:
         """Nothing to release: the bus owns the port."""
 
 
-class FtdiSpiBus:
+class FtdiSpiBus(FramedBus):
     """A PanelBus over pyftdi's SpiController: ``command`` one D/C-low frame, ``data`` D/C-high frames."""
 
-    kind: Final = "spi"
+    kind: ClassVar[str] = "spi"
+    faults: ClassVar[tuple[type[Exception], ...]] = (OSError, ValueError)
+    """What pyftdi raises on a fault: FtdiError and SpiIOError (OSError), usb.core.USBError (OSError), ValueError."""
 
     def __init__(
         self,
@@ -67,26 +70,21 @@ class FtdiSpiBus:
         name: str = "ftdi",
     ) -> None:
         _check_options(name, dc, rst, clock_hz, mode, max_transfer, cs)
-        self.name = name
-        self.max_transfer = max_transfer
-        self.bytes_sent = 0
-        self.transfers = 0
-        self._controller = controller
-        self._clock = clock
-        self._closed = False
-        self._dc_bit = 1 << dc
-        self._mask = self._dc_bit | (1 << rst if rst is not None else 0)
-        self._reset_line = _GpioPin(self, rst) if rst is not None else None
+        super().__init__(name, clock_hz=clock_hz, max_transfer=max_transfer,
+                         reset=_GpioPin(self, rst) if rst is not None else None, clock=clock,
+                         closers=(lambda: controller.close(freeze=True),))
+        self._dc = dc
+        self._mask = 1 << dc | (1 << rst if rst is not None else 0)
         if mode in (1, 3):
             log.warning("%s: SPI mode %d is emulated by pyftdi with 3-phase clocking and may be unreliable", name, mode)
         try:
             self._port = controller.get_port(cs=cs, freq=clock_hz, mode=mode)
+            self.clock_hz = float(self._port.frequency)
             self._gpio = controller.get_gpio()
             self._gpio.set_direction(self._mask, self._mask)
-            self._levels = self._mask & ~self._dc_bit  # reset released (high), D/C low
+            self._levels = self._mask & ~(1 << dc)  # reset released (high), D/C low
             self._gpio.write(self._levels)
-            self.clock_hz = float(self._port.frequency)
-        except _FAULTS as exc:
+        except self.faults as exc:
             raise LinkError(f"{name}: setting up SPI (cs {cs}, {clock_hz:g} Hz, mode {mode}) and GPIO failed: "
                             f"{exc}") from exc
 
@@ -98,43 +96,40 @@ class FtdiSpiBus:
         """Open an FT232H by pyftdi URL (``ftdi://ftdi:232h/1``) or ``usb.core.Device`` and configure MPSSE SPI."""
         name = target if isinstance(target, str) else "ftdi"
         _check_options(name, dc, rst, clock_hz, mode, max_transfer, cs)
-        try:
-            from pyftdi.spi import SpiController
-            from pyftdi.usbtools import UsbToolsError
-        except ImportError:
-            raise ConfigError("the FT232H bus needs pyftdi: pip install pyftdi (or pixelpen[panels])") from None
-        controller = SpiController(cs_count=cs + 1)
+        spi = require_module("pyftdi.spi", needed_by="FT232H panels", package="pyftdi",
+                             install="pyftdi ('pixelpen[panels]')")
+        from pyftdi.usbtools import UsbToolsError  # importable once pyftdi.spi is
+
+        controller = spi.SpiController(cs_count=cs + 1)
         try:
             controller.configure(target, frequency=clock_hz)
-        except (*_FAULTS, UsbToolsError) as exc:
+        except (*cls.faults, UsbToolsError) as exc:
             raise LinkError(f"{name}: cannot open the FTDI device: {exc} (is it plugged in, and may this user "
                             "open it? see pyftdi's installation notes for the udev rule)") from exc
-        return cls(controller, dc=dc, rst=rst, clock_hz=clock_hz, mode=mode, cs=cs, max_transfer=max_transfer,
-                   clock=clock, name=name)
+        try:
+            return cls(controller, dc=dc, rst=rst, clock_hz=clock_hz, mode=mode, cs=cs, max_transfer=max_transfer,
+                       clock=clock, name=name)
+        except BaseException:
+            with contextlib.suppress(*cls.faults):  # released again; the setup error is the one to report
+                controller.close()
+            raise
 
     def command(self, *cmd: int | bytes) -> None:
-        """One chip-select frame of command bytes with D/C low."""
-        payload = command_bytes(*cmd)
-        if payload:
-            self._set_dc(False)
-            self._write(payload)
+        """Send all of ``cmd`` as one chip-select frame with D/C low."""
+        frame = self._command_frame(*cmd)
+        self._set_dc(False)
+        self._send(frame)
 
     def data(self, data: bytes) -> None:
-        """Data bytes with D/C high, one frame per ``max_transfer`` bytes."""
-        payload = bytes(data)
-        if payload:
+        """Send ``data`` (any bytes-like) with D/C high, one frame per ``max_transfer`` bytes."""
+        chunks = self._data_chunks(data)
+        if chunks:
             self._set_dc(True)
-            for start in range(0, len(payload), self.max_transfer):
-                self._write(payload[start : start + self.max_transfer])
-
-    def reset(self, recovery: float = RESET_RECOVERY) -> None:
-        """Pulse the reset pin low for RESET_PULSE, then wait ``recovery`` s (nothing when no pin is wired)."""
-        self._check_open()
-        if self._reset_line is not None:
-            pulse_reset(self._reset_line, self._clock, pulse=RESET_PULSE, recovery=recovery)
+        for chunk in chunks:
+            self._send(chunk)
 
     def set_pin(self, bit: int, level: bool) -> None:
-        """Drive one of the bus's GPIO output pins (D/C or reset)."""
+        """Drive one of the bus's GPIO output pins (D/C or reset); a write goes out only when the level changes."""
         self._check_open()
         mask = 1 << bit
         if not mask & self._mask:
@@ -143,35 +138,18 @@ class FtdiSpiBus:
         if levels != self._levels:
             try:
                 self._gpio.write(levels)
-            except _FAULTS as exc:
+            except self.faults as exc:
                 raise LinkError(f"{self.name}: setting GPIO {bit} {'high' if level else 'low'} failed: {exc}") from exc
             self._levels = levels
 
-    def close(self) -> None:
-        """Release the FTDI device (pins keep their levels: the panel keeps what it shows); idempotent."""
-        if self._closed:
-            return
-        self._closed = True
-        try:
-            self._controller.close(freeze=True)
-        except _FAULTS as exc:
-            log.warning("%s: closing the FTDI device failed: %s", self.name, exc)
-
-    def _check_open(self) -> None:
-        if self._closed:
-            raise LinkError(f"{self.name}: the bus is closed")
-
     def _set_dc(self, level: bool) -> None:
-        self.set_pin(self._dc_bit.bit_length() - 1, level)
+        self.set_pin(self._dc, level)
 
-    def _write(self, payload: bytes) -> None:
-        self._check_open()
-        try:
-            self._port.write(payload)
-        except _FAULTS as exc:
-            raise LinkError(f"{self.name}: SPI write of {len(payload)} bytes failed: {exc}") from exc
-        self.bytes_sent += len(payload)
-        self.transfers += 1
+    def _transfer(self, frame: bytes | memoryview) -> None:
+        self._port.write(bytes(frame))
+
+    def _fault(self, nbytes: int, error: Exception) -> LinkError:
+        return LinkError(f"{self.name}: SPI write of {nbytes} bytes failed: {error}")
 
 
 def _check_options(

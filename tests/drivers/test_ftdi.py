@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import sys
 
 import numpy as np
 import pytest
@@ -11,7 +12,7 @@ from pixelpen.clock import SimulatedClock
 from pixelpen.drivers.bus import PanelBus
 from pixelpen.drivers.bustrace import RecordingBus, ReplayBus, read_bus_trace
 from pixelpen.drivers.ftdi import FtdiSpiBus
-from pixelpen.errors import ConfigError, LinkError
+from pixelpen.errors import ConfigError, InvalidArgument, LinkError
 from pixelpen.sim.transports.ftdi import Ft232hBackend, use_for_urls
 from tests.sim.transports.test_mcp2221 import StubBusDevice
 
@@ -66,12 +67,34 @@ def test_a_spi_write_is_cs_low_0x11_cs_high(wired):
     assert 0x81 not in backend.commands  # D/C already high: no GPIO traffic
 
 
+def test_an_empty_command_is_refused_and_empty_data_sends_nothing(wired):
+    bus, backend, device = wired
+    del backend.commands[:]
+    with pytest.raises(InvalidArgument, match="ftdi: command\\(\\) needs at least one byte"):
+        bus.command()
+    with pytest.raises(InvalidArgument, match="command byte 1 is 256"):
+        bus.command(0x2A, 0x100)
+    bus.data(b"")
+    assert device.frames == [] and list(backend.commands) == [] and (bus.bytes_sent, bus.transfers) == (0, 0)
+
+
+def test_any_contiguous_buffer_is_sent_as_its_bytes(wired):
+    bus, _, device = wired
+    bus.data(np.array([0xF800, 0x07E0], dtype=">u2"))  # RGB565 red, green, big-endian as the panel takes them
+    bus.data(bytearray(b"\x01"))
+    bus.data(memoryview(b"\x02\x03"))
+    assert device.frames == [(b"\xf8\x00\x07\xe0", True), (b"\x01", True), (b"\x02\x03", True)]
+
+
 def test_reset_pulses_the_reset_pin(wired):
     bus, _, device = wired
     t0 = device.clock.now()
     bus.reset()
     assert device.lines[-2:] == [("reset", False), ("reset", True)]
     assert device.clock.now() - t0 >= 0.120 + 10e-6
+    bus.close()
+    with pytest.raises(LinkError, match="ftdi: the bus is closed"):
+        bus.reset()
 
 
 def test_options_are_checked():
@@ -90,12 +113,73 @@ def test_options_are_checked():
 def test_faults_become_link_errors(wired):
     bus, backend, _ = wired
     backend.close()  # unplugged
-    with pytest.raises(LinkError, match="SPI write of 2 bytes failed"):
+    with pytest.raises(LinkError, match="ftdi: SPI write of 2 bytes failed"):
         bus.command(0x01, 0x02)
+    assert (bus.bytes_sent, bus.transfers) == (0, 0)  # nothing reached the wire
     bus.close()
     bus.close()
     with pytest.raises(LinkError, match="closed"):
         bus.data(b"\x00")
+
+
+class FailingController:
+    """Just what FtdiSpiBus calls on pyftdi's SpiController, with a close that fails as a vanished device's does."""
+
+    def __init__(self) -> None:
+        self.written: list[bytes] = []
+        self.closes = 0
+
+    def get_port(self, cs, freq, mode):
+        return type("Port", (), {"frequency": freq, "write": lambda _, data: self.written.append(data)})()
+
+    def get_gpio(self):
+        return type("Gpio", (), {"set_direction": lambda *_: None, "write": lambda *_: None})()
+
+    def close(self, freeze=False):
+        self.closes += 1
+        raise OSError(19, "No such device")
+
+
+def test_a_failing_close_is_a_link_error_and_the_bus_is_closed_all_the_same():
+    controller = FailingController()
+    bus = FtdiSpiBus(controller, clock_hz=10e6)
+    bus.command(0x29)
+    assert controller.written == [b"\x29"] and bus.clock_hz == 10e6
+    with pytest.raises(LinkError, match=r"ftdi: closing failed: \[Errno 19\] No such device"):
+        bus.close()
+    assert bus.closed
+    bus.close()  # once closed, closing again does nothing
+    assert controller.closes == 1
+    with pytest.raises(LinkError, match="closed"):
+        bus.command(0x29)
+
+
+def test_a_failing_setup_releases_the_device(monkeypatch):
+    from pyftdi.spi import SpiController, SpiIOError
+
+    def no_gpio(self):
+        raise SpiIOError("GPIO port unavailable")
+
+    device = StubBusDevice(SimulatedClock())
+    backend = Ft232hBackend(device)
+    monkeypatch.setattr(SpiController, "get_gpio", no_gpio)
+    with pytest.raises(LinkError, match=r"ftdi: setting up SPI \(cs 0, 3e\+07 Hz, mode 0\) and GPIO failed: GPIO port"):
+        FtdiSpiBus.open(backend.find(), clock=device.clock)
+    assert backend.control[-2][:3] == (0x40, 0x0B, 0x0000)  # bit mode reset (AN_108): the chip is handed back
+
+
+def test_closing_leaves_the_pins_driven_so_the_panel_keeps_its_picture(wired):
+    bus, backend, _ = wired
+    bus.data(b"\x01")
+    bus.close()
+    assert backend.bitmode == 0x02  # still MPSSE: no bit mode reset was sent
+    assert backend.pins & 0x38 == 0x38 and backend.direction & 0x3B == 0x3B  # CS, D/C and reset still driven high
+
+
+def test_without_pyftdi_the_error_says_what_to_install(monkeypatch):
+    monkeypatch.setitem(sys.modules, "pyftdi.spi", None)  # import fails as if the package were missing
+    with pytest.raises(ConfigError, match=r"FT232H panels need pyftdi: pip install pyftdi"):
+        FtdiSpiBus.open("ftdi://ftdi:232h/1")
 
 
 def test_a_url_finds_the_simulated_chip():
