@@ -1,7 +1,7 @@
 """PanelDisplay: a raster display on a panel controller behind a bus: init, partial refresh, pacing, safe close.
 
 A frame is the canvas's damage trimmed to the pixels that differ from what the panel last received (a
-shadow copy of the sent frame, compared with ``raster.damage.tile_damage``), planned into controller windows
+shadow copy of the sent frame, compared by ``trim.trim_damage``), planned into controller windows
 (``windows.plan_windows``: the controller's alignment, several windows or fewer merged ones by bytes plus
 window commands), each sent as the controller's window commands and its pixels packed natively with
 ``raster.formats.pack``.  The next frame is full after open, ``reset()``, a rotation change, a bus fault
@@ -23,6 +23,7 @@ import numpy as np
 
 from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
 from pixelpen.devices.panels.frames import FrameStats, PanelStats
+from pixelpen.devices.panels.trim import trim_damage
 from pixelpen.devices.panels.windows import WindowCost, window_cost
 from pixelpen.devices.panels.wiring import Interface, Pins, Wiring, open_wiring, parse_target, sim_wiring
 from pixelpen.display.base import Deferral
@@ -33,7 +34,7 @@ from pixelpen.errors import ConfigError, InvalidArgument, LinkError, URLError
 from pixelpen.options import OptionSpec, OptionValues, boolean, choice, integer, positive, text
 from pixelpen.profiles.panel import InitStep, PanelProfile, load_panel_profile, panel_profile_for
 from pixelpen.raster.canvas import Canvas
-from pixelpen.raster.damage import Rect, tile_damage
+from pixelpen.raster.damage import Rect
 from pixelpen.sim.base import BusDevice, create_simulator
 from pixelpen.sim.base import simulator_options as simulator_specs
 from pixelpen.urls import DeviceURL, parse_size
@@ -44,13 +45,6 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-EXACT_TRIM = 1 / 16
-"""Damage of at most this share of the panel is trimmed to exact runs of changed pixels; larger damage (a
-diagonal across the screen) to changed tiles of :data:`TRIM_TILE` pixels, which bounds the planning cost."""
-TRIM_TILE = 8
-"""Side of the tiles larger damage is trimmed to (rounded up to the controller's alignment)."""
-SEND_WHOLE = 0.5
-"""A damaged rectangle in which more than this share of the values changed is sent whole (a video frame)."""
 TE_TIMEOUT = 0.05
 """Seconds to wait for the tearing-effect pulse before sending anyway (three frames at 60 Hz)."""
 PIXEL_PITCH_MM = 0.2
@@ -135,7 +129,6 @@ class PanelDisplay(RasterDisplay):
         self._full = True
         self._pacer: FramePacer | None = None
         self._force = False
-        self._bus_perf = 0.0
         self._frame = FrameStats()
         self._cost: WindowCost | None = None
         super().__init__(self._capabilities(), mode=self.canvas_mode, background=background, deferral=deferral)
@@ -496,95 +489,75 @@ class PanelDisplay(RasterDisplay):
         return r
 
     def _show(self, canvas: Canvas) -> None:
-        """Send the damaged (or, when due, every) pixel of ``canvas``; a fault or interruption makes the next full."""
+        """Send the damaged (or, when due, every) pixel of ``canvas``; a fault or interruption makes the next full.
+
+        Host work first (trim, plan, pack every window, update the shadow), then the bus calls: the frame is
+        timed once, host seconds up to the first bus call, bus seconds (the display's clock) from there."""
         started = time.perf_counter()
-        self._bus_perf = 0.0
-        self._frame = FrameStats(full=self._full or self.refresh_mode == "full")
+        frame = self._frame = FrameStats(full=self._full or self.refresh_mode == "full")
         native = self._native(canvas.array)
         height, width = native.shape[:2]
-        if self._frame.full or self._shadow is None or self._shadow.shape != native.shape:
+        shadow = self._shadow
+        if frame.full or shadow is None or shadow.shape != native.shape:
             rects = [Rect(0, 0, width, height)]
-            self._frame.full = True
+            frame.full = True
+            shadow = self._shadow = np.empty_like(native)
         else:
-            rects = self._trim([self._native_rect(r, canvas.width, canvas.height) for r in canvas.damage()], native)
+            rects = trim_damage([self._native_rect(r, canvas.width, canvas.height) for r in canvas.damage()],
+                                native, shadow, self.cost)
         if not rects:
             return
-        windows = self.cost.plan(rects, width=width, height=height)
+        windows = rects if len(rects) == 1 and not frame.full else self.cost.plan(rects, width=width, height=height)
         self._full = True  # until the last window is out
-        if self._frame.full:
-            self._shadow = np.empty_like(native)
-        assert self._shadow is not None
-        waited = self._wait_te()
+        packed = self._pack(native, windows)
         for window in windows:
             rows, cols = window.slices
-            self._write_window(window, self._pack(native, window))
-            self._shadow[rows, cols] = native[rows, cols]
+            shadow[rows, cols] = native[rows, cols]
+        frame.host_seconds = time.perf_counter() - started
+        self._wait_te()
+        on_bus = self.clock.now()
+        for window, pixels in zip(windows, packed, strict=True):
+            self._write_window(window, pixels)
+        frame.bus_seconds = self.clock.now() - on_bus
         self._full = False
         if self._pacer is not None:
             self._pacer.sent()
-        self._frame.windows = len(windows)
-        self._frame.host_seconds = max(time.perf_counter() - started - waited - self._bus_perf, 0.0)
-        self.stats.add(self._frame)
+        frame.windows = len(windows)
+        self.stats.add(frame)
 
-    def _pack(self, native: np.ndarray, window: Rect) -> bytes:
-        """The window's pixels in the wire format (one vectorised conversion of a view)."""
+    def _pack(self, native: np.ndarray, windows: list[Rect]) -> list[bytes]:
+        """Each window's pixels in the wire format: one vectorised conversion of the view of their bounding
+        box when that is not much larger than they are (else one per window), then a slice per window."""
         from pixelpen.raster.formats import pack
 
-        view = native[window.slices]
         if self.canvas_mode == "1":
-            view = view.view(np.bool_)
-        return pack(view, self.pixel_format)
+            native = native.view(np.bool_)
+        box = Rect(min(w.x0 for w in windows), min(w.y0 for w in windows), max(w.x1 for w in windows),
+                   max(w.y1 for w in windows))
+        if len(windows) == 1 or box.area > 2 * sum(w.area for w in windows):
+            return [pack(native[w.slices], self.pixel_format) for w in windows]
+        unit_rows = self.cost.align[1] if self.pixel_format == "mono-pages" else 1
+        data = np.frombuffer(pack(native[box.slices], self.pixel_format), dtype=np.uint8)
+        grid = data.reshape(-(-box.height // unit_rows), box.width, -1)
+        return [grid[(w.y0 - box.y0) // unit_rows:-(-(w.y1 - box.y0) // unit_rows),
+                     w.x0 - box.x0:w.x1 - box.x0].tobytes() for w in windows]
 
-    def _trim(self, rects: list[Rect], native: np.ndarray) -> list[Rect]:
-        """The damage shrunk to the pixels that differ from the shadow: exact runs for small damage, changed
-        tiles for large, the rectangle itself where most of it changed."""
-        assert self._shadow is not None
-        height, width = native.shape[:2]
-        cost = self.cost
-        ax, ay = cost.align
-        if sum(r.area for r in rects) > EXACT_TRIM * width * height:
-            ax, ay = -(-TRIM_TILE // ax) * ax, -(-TRIM_TILE // ay) * ay
-        out: list[Rect] = []
-        for r in rects:
-            a = r.aligned(ax, ay, width, height)
-            rows, cols = a.slices
-            now, before = native[rows, cols], self._shadow[rows, cols]
-            if np.count_nonzero(now != before) > SEND_WHOLE * now.size:
-                out.append(a)
-                continue
-            found = tile_damage(np.ascontiguousarray(now), before, (ax, ay), cost.window_bytes, cost.bytes_per_pixel)
-            out.extend(Rect(a.x0 + f.x0, a.y0 + f.y0, a.x0 + f.x1, a.y0 + f.y1) for f in found)
-        return out
-
-    def _wait_te(self) -> float:
-        """Start at the tearing-effect pulse when a TE line is wired (a missing pulse is logged, not fatal);
-        returns the processor seconds the wait took (neither host nor bus time)."""
+    def _wait_te(self) -> None:
+        """Start at the tearing-effect pulse when a TE line is wired (a missing pulse is logged, not fatal)."""
         te = self.wiring.te
-        if te is None:
-            return 0.0
-        started = time.perf_counter()
-        if not te.wait_edge(True, TE_TIMEOUT):
+        if te is not None and not te.wait_edge(True, TE_TIMEOUT):
             log.debug("%s: no TE pulse within %g s; sending anyway", self.profile.name, TE_TIMEOUT)
-        return time.perf_counter() - started
 
     # -- the bus, counted -------------------------------------------------------------------------
     def _command(self, *cmd: int | bytes) -> None:
-        """``bus.command`` with the bytes and time counted in the frame's statistics."""
+        """``bus.command`` with the bytes counted in the frame's statistics."""
         self._frame.bytes += sum(1 if isinstance(c, int) else len(c) for c in cmd)
-        self._timed(self.wiring.bus.command, *cmd)
+        self.wiring.bus.command(*cmd)
 
     def _data(self, data: bytes) -> None:
-        """``bus.data`` with the bytes and time counted."""
+        """``bus.data`` with the bytes counted."""
         self._frame.bytes += len(data)
-        self._timed(self.wiring.bus.data, data)
-
-    def _timed(self, call: Callable[..., Any], *args: Any) -> Any:
-        perf, now = time.perf_counter(), self.clock.now()
-        try:
-            return call(*args)
-        finally:
-            self._bus_perf += time.perf_counter() - perf
-            self._frame.bus_seconds += self.clock.now() - now
+        self.wiring.bus.data(data)
 
 
 def _turned(size: tuple[int, int] | None, profile: PanelProfile) -> bool:

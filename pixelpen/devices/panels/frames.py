@@ -25,9 +25,9 @@ class PanelStats:
     """Totals since open: frames (full ones too), windows, bytes, host seconds and bus seconds.
 
     ``bytes`` counts the command, parameter and pixel bytes the driver handed to the bus (I2C control and
-    address bytes are the bus's: ``display.bus.bytes_sent``).  ``host_seconds`` is processor time spent
-    outside bus calls (planning, trimming, packing), ``bus_seconds`` clock time spent inside them: on a
-    SimulatedClock that is the simulated wire time.
+    address bytes are the bus's: ``display.bus.bytes_sent``).  A frame is timed once: ``host_seconds`` is
+    the processor time before its first bus call (trimming, planning, packing every window), ``bus_seconds``
+    the display clock's time from there to its last bus call (on a SimulatedClock the simulated wire time).
     """
 
     frames: int = 0

@@ -145,3 +145,45 @@ def test_plan_invariants(damage, controller, max_windows):
     assert cost <= simple_cost(bounding, bpp, overhead) + 1e-9
     if len(aligned) <= max_windows:
         assert cost <= simple_cost(aligned, bpp, overhead) + 1e-9
+
+
+rects_strategy = st.lists(st.builds(lambda x, y, w, h: Rect(x, y, x + w, y + h), st.integers(0, 60),
+                                    st.integers(0, 60), st.integers(1, 30), st.integers(1, 30)), max_size=8)
+
+
+@settings(max_examples=200, deadline=None)
+@given(rects_strategy, st.sampled_from([0, 3, 6, 11]), st.sampled_from([0.125, 2, 3]))
+def test_merge_few_merges_as_merge_rects(rects, overhead, bpp):
+    from pixelpen.devices.panels.windows import merge_few
+    from pixelpen.raster.damage import merge_rects
+
+    assert merge_few(rects, overhead, bpp) == merge_rects(rects, overhead, bpp)
+
+
+# One window through the real bus classes over the simulated chips: the bytes on the wire (bus.bytes_sent, I2C
+# control bytes included) are what the cost model says, so the overheads declared in windows.py (MIPI 11,
+# SSD1306 6, SH1106 3 per page) are the ones _write_window sends.
+@pytest.mark.parametrize(("url", "changed", "window"), [
+    ("sim:st7789", Rect(5, 9, 8, 10), Rect(5, 9, 8, 10)),
+    ("sim:ili9341", Rect(5, 9, 8, 10), Rect(5, 9, 8, 10)),
+    ("sim:st7735", Rect(5, 9, 8, 10), Rect(5, 9, 8, 10)),
+    ("sim:ssd1306", Rect(5, 9, 8, 10), Rect(5, 8, 8, 16)),
+    ("sim:ssd1306?dc=24", Rect(5, 9, 8, 10), Rect(5, 8, 8, 16)),
+    ("sim:ssd1309", Rect(5, 9, 8, 10), Rect(5, 8, 8, 16)),
+    ("sim:sh1106", Rect(5, 9, 8, 10), Rect(5, 8, 8, 16)),
+    ("sim:sh1106?dc=24", Rect(5, 6, 8, 10), Rect(5, 0, 8, 16)),
+])
+def test_the_window_overhead_is_what_the_controller_sends(url, changed, window):
+    import pixelpen
+
+    with pixelpen.open(url) as display:
+        before = display.bus.bytes_sent
+        value = 1 if display.canvas_mode == "1" else (255, 255, 255)
+        display.canvas.array[changed.slices] = value
+        display.canvas.mark_damaged(changed.x0, changed.y0, changed.x1, changed.y1)
+        display.flush()
+        assert display.stats.last.windows == 1
+        assert display.bus.bytes_sent - before == display.cost.window(window).bytes
+        per_window = display.cost.window_bytes - display.cost.data_framing * 0  # commands (+ I2C control byte)
+        expected = {"st7": 11, "ili": 11, "ssd": 6, "sh1": 3}[url[4:7]] + (display.bus.kind == "i2c")
+        assert per_window == expected

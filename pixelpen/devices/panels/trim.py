@@ -1,0 +1,93 @@
+"""Damage trimming: a frame's damaged rectangles shrunk to what differs from the shadow of the sent frame.
+
+Small damage (at most :data:`EXACT_TRIM` of the panel) is cut exactly, without labelling: the changed mask
+of each rectangle (in the controller's alignment units) is cropped to its bounding box with ``np.any`` over
+each axis, then cut into bands of identical rows and each band into its runs of changed columns (a square
+moving by a few pixels costs only the strips it uncovered and covered).  Larger damage (a diagonal across
+the screen has the whole screen as its bounding box) is cut to the changed tiles of :data:`TRIM_TILE`
+pixels, which bounds the planning cost; so is a rectangle of more than :data:`MAX_BANDS` bands.  A rectangle
+in which more than :data:`SEND_WHOLE` of its values changed (a video frame) is sent whole.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pixelpen.devices.panels.windows import WindowCost
+from pixelpen.raster.damage import Rect, tile_damage
+
+EXACT_TRIM = 1 / 16
+"""Damage of at most this share of the panel is cut exactly (bands of identical rows, runs of columns)."""
+TRIM_TILE = 8
+"""Side of the tiles larger damage is cut to (rounded up to the controller's alignment)."""
+SEND_WHOLE = 0.5
+"""A damaged rectangle in which more than this share of the values changed is sent whole (a video frame)."""
+MAX_BANDS = 8
+"""Bands of identical rows an exact cut makes at most; a more ragged change is cut to tiles instead."""
+
+
+def trim_damage(rects: list[Rect], native: np.ndarray, shadow: np.ndarray, cost: WindowCost) -> list[Rect]:
+    """The parts of ``rects`` (window space) where ``native`` differs from ``shadow``, aligned to ``cost.align``."""
+    height, width = native.shape[:2]
+    ax, ay = cost.align
+    exact = sum(r.area for r in rects) <= EXACT_TRIM * width * height
+    if not exact:
+        ax, ay = -(-TRIM_TILE // ax) * ax, -(-TRIM_TILE // ay) * ay
+    elif len(rects) > 1:
+        box = Rect(min(r.x0 for r in rects), min(r.y0 for r in rects), max(r.x1 for r in rects),
+                   max(r.y1 for r in rects))
+        if box.area <= 2 * sum(r.area for r in rects):
+            rects = [box]  # one pass over their bounding box (outside the damage the canvas is the shadow)
+    out: list[Rect] = []
+    for r in rects:
+        a = r.aligned(ax, ay, width, height)
+        rows, cols = a.slices
+        now, before = native[rows, cols], shadow[rows, cols]
+        diff = now != before
+        changed = np.count_nonzero(diff)
+        if not changed:
+            continue
+        if changed > SEND_WHOLE * diff.size:
+            out.append(a)
+            continue
+        cut = _bands(_units(diff.any(axis=2) if diff.ndim == 3 else diff, ax, ay)) if exact else None
+        if cut is None:
+            found = tile_damage(np.ascontiguousarray(now), before, (ax, ay), cost.window_bytes, cost.bytes_per_pixel)
+            out.extend(Rect(a.x0 + f.x0, a.y0 + f.y0, a.x0 + f.x1, a.y0 + f.y1) for f in found)
+            continue
+        out.extend(Rect(min(a.x0 + x0 * ax, a.x1), min(a.y0 + y0 * ay, a.y1), min(a.x0 + x1 * ax, a.x1),
+                        min(a.y0 + y1 * ay, a.y1)) for x0, y0, x1, y1 in cut)
+    return out
+
+
+def _units(diff: np.ndarray, ax: int, ay: int) -> np.ndarray:
+    """The changed mask per alignment unit (ax x ay pixels; the last ones may be cut by the rectangle's edge)."""
+    if ay > 1:
+        diff = np.logical_or.reduceat(diff, np.arange(0, diff.shape[0], ay), axis=0)
+    if ax > 1:
+        diff = np.logical_or.reduceat(diff, np.arange(0, diff.shape[1], ax), axis=1)
+    return diff
+
+
+def _bands(mask: np.ndarray) -> list[tuple[int, int, int, int]] | None:
+    """An exact cover of the True units of ``mask`` by (x0, y0, x1, y1) boxes: the bounding box, cut into
+    bands of identical rows and each band into its runs; None when that makes more than MAX_BANDS bands."""
+    rows_any: np.ndarray = np.any(mask, axis=1)
+    cols_any: np.ndarray = np.any(mask, axis=0)
+    y0, y1 = int(rows_any.argmax()), rows_any.shape[0] - int(rows_any[::-1].argmax())
+    x0, x1 = int(cols_any.argmax()), cols_any.shape[0] - int(cols_any[::-1].argmax())
+    box = mask[y0:y1, x0:x1]
+    if box.all():
+        return [(x0, y0, x1, y1)]
+    new = np.ones(box.shape[0], dtype=bool)
+    new[1:] = (box[1:] != box[:-1]).any(axis=1)
+    starts = np.flatnonzero(new).tolist()
+    if len(starts) > MAX_BANDS:
+        return None
+    out: list[tuple[int, int, int, int]] = []
+    for start, end in zip(starts, [*starts[1:], box.shape[0]], strict=True):
+        edges = np.diff(np.concatenate(([0], box[start].view(np.int8), [0]))).tolist()
+        run_starts = [i for i, e in enumerate(edges) if e == 1]
+        run_ends = [i for i, e in enumerate(edges) if e == -1]
+        out.extend((x0 + s, y0 + start, x0 + e, y0 + end) for s, e in zip(run_starts, run_ends, strict=True))
+    return out
