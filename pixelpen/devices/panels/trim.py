@@ -5,7 +5,8 @@ of each rectangle (in the controller's alignment units) is cropped to its boundi
 each axis, then cut into bands of identical rows and each band into its runs of changed columns (a square
 moving by a few pixels costs only the strips it uncovered and covered).  Larger damage (a diagonal across
 the screen has the whole screen as its bounding box) is cut to the changed tiles of :data:`TRIM_TILE`
-pixels, which bounds the planning cost; so is a rectangle of more than :data:`MAX_BANDS` bands.  A rectangle
+pixels, which bounds the planning cost.  A small rectangle whose change makes more than :data:`MAX_BANDS`
+bands (text) is cut by ``raster.damage.tile_damage`` at the controller's alignment instead.  A rectangle
 in which more than :data:`SEND_WHOLE` of its values changed (a video frame) is sent whole.
 """
 
@@ -23,7 +24,7 @@ TRIM_TILE = 8
 SEND_WHOLE = 0.5
 """A damaged rectangle in which more than this share of the values changed is sent whole (a video frame)."""
 MAX_BANDS = 8
-"""Bands of identical rows an exact cut makes at most; a more ragged change is cut to tiles instead."""
+"""Bands of identical rows a cut by bands makes at most; a more ragged change goes to ``tile_damage``."""
 
 
 def trim_damage(rects: list[Rect], native: np.ndarray, shadow: np.ndarray, cost: WindowCost) -> list[Rect]:
@@ -53,7 +54,8 @@ def trim_damage(rects: list[Rect], native: np.ndarray, shadow: np.ndarray, cost:
         cut = _bands(_units(diff.any(axis=2) if diff.ndim == 3 else diff, ax, ay)) if exact else None
         if cut is None:
             found = tile_damage(np.ascontiguousarray(now), before, (ax, ay), cost.window_bytes, cost.bytes_per_pixel)
-            out.extend(Rect(a.x0 + f.x0, a.y0 + f.y0, a.x0 + f.x1, a.y0 + f.y1) for f in found)
+            out.extend(Rect(a.x0 + f.x0, a.y0 + f.y0, min(a.x0 + f.x1, width), min(a.y0 + f.y1, height))
+                       for f in found)
             continue
         out.extend(Rect(min(a.x0 + x0 * ax, a.x1), min(a.y0 + y0 * ay, a.y1), min(a.x0 + x1 * ax, a.x1),
                         min(a.y0 + y1 * ay, a.y1)) for x0, y0, x1, y1 in cut)
