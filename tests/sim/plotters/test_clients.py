@@ -90,13 +90,13 @@ def test_plotink_pen_and_motion_draw_only_pen_down_moves(ebb_port):
     ebb_motion.setPenUpPos(ebb_port, 20641)  # pyaxidraw: 60 % / 30 % of 9855..27831
     ebb_motion.setPenDownPos(ebb_port, 15248)
     ebb_motion.sendEnableMotors(ebb_port, 1)
-    ebb_motion.sendPenUp(ebb_port, 150)
+    ebb_motion.sendPenUp(ebb_port, 200)
     ebb_motion.doABMove(ebb_port, 800, 800, 500)
-    ebb_motion.sendPenDown(ebb_port, 150)
+    ebb_motion.sendPenDown(ebb_port, 200)
     wait_until_still(ebb_port)  # QP reports the pen command the motion queue has reached (ebb.c)
     assert ebb_motion.QueryPenUp(ebb_port) is False
     ebb_motion.doABMove(ebb_port, 1600, 0, 500)
-    ebb_motion.sendPenUp(ebb_port, 150)
+    ebb_motion.sendPenUp(ebb_port, 200)
     ebb_motion.doABMove(ebb_port, -2400, -800, 800)
     wait_until_still(ebb_port)
     (_, ink), = ebb_port.sim_device.paper.strokes()
