@@ -45,6 +45,9 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
+PACK_ONCE = 4096
+"""Windows whose bounding box has at most this many pixels are packed in one conversion (numpy's per-call
+cost outweighs converting the pixels between them)."""
 TE_TIMEOUT = 0.05
 """Seconds to wait for the tearing-effect pulse before sending anyway (three frames at 60 Hz)."""
 PIXEL_PITCH_MM = 0.2
@@ -527,14 +530,15 @@ class PanelDisplay(RasterDisplay):
 
     def _pack(self, native: np.ndarray, windows: list[Rect]) -> list[bytes]:
         """Each window's pixels in the wire format: one vectorised conversion of the view of their bounding
-        box when that is not much larger than they are (else one per window), then a slice per window."""
+        box when that is at most twice their area or :data:`PACK_ONCE` pixels (else one per window), then a
+        slice per window."""
         from pixelpen.raster.formats import pack
 
         if self.canvas_mode == "1":
             native = native.view(np.bool_)
         box = Rect(min(w.x0 for w in windows), min(w.y0 for w in windows), max(w.x1 for w in windows),
                    max(w.y1 for w in windows))
-        if len(windows) == 1 or box.area > 2 * sum(w.area for w in windows):
+        if len(windows) == 1 or box.area > max(2 * sum(w.area for w in windows), PACK_ONCE):
             return [pack(native[w.slices], self.pixel_format) for w in windows]
         unit_rows = self.cost.align[1] if self.pixel_format == "mono-pages" else 1
         data = np.frombuffer(pack(native[box.slices], self.pixel_format), dtype=np.uint8)

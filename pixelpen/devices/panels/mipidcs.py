@@ -44,7 +44,10 @@ class MipiDcsDisplay(PanelDisplay):
             raise ConfigError(f"colour must be rgb565 or rgb666, got {colour!r}")
         self._format = _FORMATS[colour] if colour else profile.pixel_format
         self.bgr = profile.bgr if bgr is None else bgr
+        self._offsets = (0, 0)
         super().__init__(*args, **kwargs)
+        g = self.geometry
+        self._offsets = (g.x_offset, g.y_offset)
 
     @classmethod
     def compatible_controllers(cls) -> tuple[str, ...]:
@@ -76,7 +79,9 @@ class MipiDcsDisplay(PanelDisplay):
         return g.width, g.height
 
     def _setup(self) -> None:
-        """COLMOD, MADCTL, INVON/INVOFF and (with a TE line) TEON."""
+        """COLMOD, MADCTL, INVON/INVOFF and (with a TE line) TEON; the rotation's CASET/RASET offsets are kept."""
+        g = self.geometry
+        self._offsets = (g.x_offset, g.y_offset)
         self._command(COLMOD_CMD)
         self._data(bytes([COLMOD[self._format]]))
         self._command(MADCTL)
@@ -87,11 +92,11 @@ class MipiDcsDisplay(PanelDisplay):
             self._data(b"\x00")
 
     def _write_window(self, window: Rect, pixels: bytes) -> None:
-        g = self.geometry
+        x, y = self._offsets
         self._command(CASET)
-        self._data(struct.pack(">HH", window.x0 + g.x_offset, window.x1 - 1 + g.x_offset))
+        self._data(struct.pack(">HH", window.x0 + x, window.x1 - 1 + x))
         self._command(RASET)
-        self._data(struct.pack(">HH", window.y0 + g.y_offset, window.y1 - 1 + g.y_offset))
+        self._data(struct.pack(">HH", window.y0 + y, window.y1 - 1 + y))
         self._command(RAMWR)
         self._data(pixels)
 
