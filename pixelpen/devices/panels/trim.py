@@ -1,13 +1,14 @@
 """Damage trimming: a frame's damaged rectangles shrunk to what differs from the shadow of the sent frame.
 
-Small damage (at most :data:`EXACT_TRIM` of the panel) is cut exactly, without labelling: the changed mask
-of each rectangle (in the controller's alignment units) is cropped to its bounding box with ``np.any`` over
-each axis, then cut into bands of identical rows and each band into its runs of changed columns (a square
-moving by a few pixels costs only the strips it uncovered and covered).  Larger damage (a diagonal across
-the screen has the whole screen as its bounding box) is cut to the changed tiles of :data:`TRIM_TILE`
-pixels, which bounds the planning cost.  A small rectangle whose change makes more than :data:`MAX_BANDS`
-bands (text) is cut by ``raster.damage.tile_damage`` at the controller's alignment instead.  A rectangle
-in which more than :data:`SEND_WHOLE` of its values changed (a video frame) is sent whole.
+Small damage (at most :data:`EXACT_TRIM` of the panel or :data:`EXACT_PIXELS`) is cut exactly, without
+labelling: the changed mask of each rectangle (in the controller's alignment units) is cropped to its
+bounding box with ``np.any`` over each axis, then cut into bands of identical rows and each band into its
+runs of changed columns (a square moving by a few pixels costs only the strips it uncovered and covered).
+Larger damage (a diagonal across the screen has the whole screen as its bounding box) is cut to the
+changed tiles of :data:`TRIM_TILE` pixels, which bounds the planning cost.  A small rectangle whose change
+makes more than :data:`MAX_BANDS` bands (text) is cut by ``raster.damage.tile_damage`` at the controller's
+alignment instead.  A rectangle in which more than :data:`SEND_WHOLE` of its values changed (a video
+frame) is sent whole.
 """
 
 from __future__ import annotations
@@ -19,6 +20,8 @@ from pixelpen.raster.damage import Rect, tile_damage
 
 EXACT_TRIM = 1 / 16
 """Damage of at most this share of the panel is cut exactly (bands of identical rows, runs of columns)."""
+EXACT_PIXELS = 2048
+"""...or of at most this many pixels (a cursor on a 128x64 OLED): small panels are cut exactly too."""
 TRIM_TILE = 8
 """Side of the tiles larger damage is cut to (rounded up to the controller's alignment)."""
 SEND_WHOLE = 0.5
@@ -31,7 +34,7 @@ def trim_damage(rects: list[Rect], native: np.ndarray, shadow: np.ndarray, cost:
     """The parts of ``rects`` (window space) where ``native`` differs from ``shadow``, aligned to ``cost.align``."""
     height, width = native.shape[:2]
     ax, ay = cost.align
-    exact = sum(r.area for r in rects) <= EXACT_TRIM * width * height
+    exact = sum(r.area for r in rects) <= max(EXACT_TRIM * width * height, EXACT_PIXELS)
     if not exact:
         ax, ay = -(-TRIM_TILE // ax) * ax, -(-TRIM_TILE // ay) * ay
     elif len(rects) > 1:
