@@ -16,6 +16,7 @@ from typing import Any, Generic, TypeVar
 
 from pixelpen.colour import parse_colour
 from pixelpen.errors import ConfigError, URLError, quote_token
+from pixelpen.urls import parse_size
 
 T = TypeVar("T")
 Converter = Callable[[str], T]
@@ -164,6 +165,29 @@ def choice(*allowed: str) -> Converter[str]:
             raise ValueError(f"expected one of {', '.join(allowed)}") from None
 
     return convert
+
+
+I2C_ADDRESSES = range(0x08, 0x78)
+"""The 7-bit I2C addresses a device may have (0x00..0x07 and 0x78..0x7f are reserved)."""
+
+
+def pixels(value: str) -> tuple[int, int]:
+    """A size in whole pixels, ``WxH`` (``128x64``)."""
+    size = parse_size(value)  # its InvalidArgument is a ValueError: the option reader names the option
+    if size.unit != "px" or size.width != int(size.width) or size.height != int(size.height):
+        raise ValueError(f"expected WIDTHxHEIGHT in whole pixels, got {quote_token(value)}")
+    return int(size.width), int(size.height)
+
+
+def i2c_address(value: str) -> int:
+    """A 7-bit I2C address 0x08..0x77, decimal or 0x hex (``0x3c``)."""
+    try:
+        address = int(value.strip(), 0)
+    except ValueError:
+        raise ValueError("expected an I2C address such as 0x3c") from None
+    if address not in I2C_ADDRESSES:
+        raise ValueError("expected a 7-bit I2C address 0x08..0x77 (0x00..0x07 and 0x78..0x7f are reserved)")
+    return address
 
 
 def colour(value: str) -> str:

@@ -16,9 +16,11 @@ from pixelpen.options import (
     choice,
     colour,
     describe,
+    i2c_address,
     integer,
     non_negative,
     number,
+    pixels,
     positive,
     read_options,
     text,
@@ -121,3 +123,31 @@ def test_option_values_is_a_read_only_mapping() -> None:
     with pytest.raises(TypeError):
         values["paper"] = "a3"  # type: ignore[index]
     assert math.isclose(values["speed"], 10.0)
+
+
+@pytest.mark.parametrize(("text", "size"), [("128x64", (128, 64)), (" 240X320 ", (240, 320)), ("1x1", (1, 1))])
+def test_pixels_reads_whole_pixels(text, size):
+    assert pixels(text) == size
+
+
+@pytest.mark.parametrize("text", ["128", "12.5x8", "10x10mm", "a4", "0x8", "x", ""])
+def test_pixels_refuses_anything_else_with_a_value_error(text):
+    with pytest.raises(ValueError):
+        pixels(text)
+
+
+@pytest.mark.parametrize(("text", "address"), [("0x3c", 0x3C), ("0X3D", 0x3D), ("8", 8), ("0x77", 0x77)])
+def test_i2c_address_option_reads_non_reserved_7_bit_addresses(text, address):
+    assert i2c_address(text) == address
+
+
+@pytest.mark.parametrize("text", ["0x07", "0", "0x78", "0x7f", "0x80", "0x3c3", "-1"])
+def test_i2c_address_option_refuses_reserved_and_out_of_range_addresses(text):
+    with pytest.raises(ValueError, match=r"0x08\.\.0x77 \(0x00\.\.0x07 and 0x78\.\.0x7f are reserved\)"):
+        i2c_address(text)
+
+
+@pytest.mark.parametrize("text", ["sixty", "", "3c"])
+def test_i2c_address_option_refuses_what_is_no_number(text):
+    with pytest.raises(ValueError, match="such as 0x3c"):
+        i2c_address(text)

@@ -5,8 +5,7 @@ advance a SimulatedClock by: SPI 8 clocks per byte; I2C per write transaction 1 
 (the address byte included: 8 bits + ACK) + 1 STOP.  An SSD1306 frame over I2C at 400 kHz
 (``[00 21 00 7F 22 00 07]``, ``[40 + 1024 bytes]``: 1,032 bytes after the addresses) is 9,310 clocks = 23.3 ms.
 The bus calls take bytes-like values only (``WireBytes``): an int would be ``bytes(n)``, n NUL bytes.
-Also what the simulators' registrations share: ``register_panel_simulators``, the ``pixel_size`` and
-``i2c_address`` option converters.
+Also what the simulators' registrations share: ``register_panel_simulators``.
 """
 
 from __future__ import annotations
@@ -24,16 +23,14 @@ from numpy.typing import NDArray
 from pixelpen.clock import Clock
 from pixelpen.drivers.bus import i2c_wire_seconds, spi_wire_seconds
 from pixelpen.errors import ConfigError, InvalidArgument, InvalidArgumentType, ProtocolError, quote_token
-from pixelpen.options import OptionSpec, OptionValues, read_options
+from pixelpen.options import I2C_ADDRESSES, OptionSpec, OptionValues, read_options
 from pixelpen.sim.base import Fault, SimulatedDevice, register_simulator
-from pixelpen.urls import parse_size
 
 log = logging.getLogger(__name__)
 
 WireBytes = bytes | bytearray | memoryview | NDArray[np.uint8]
 """What the bus calls take (numpy arrays of other dtypes, ints, str and sequences are refused)."""
 
-I2C_ADDRESSES = range(0x08, 0x78)
 """7-bit addresses a part may answer (0x00..0x07 and 0x78..0x7F are reserved by the I2C specification)."""
 EVENT_LOG_LIMIT = 10_000
 """Events a simulator keeps (the latest); older ones are dropped and counted in ``events_dropped``."""
@@ -363,22 +360,3 @@ def _panel_factory(model: str, build: PanelBuilder, specs: tuple[OptionSpec[Any]
         """Simulator factory for ``sim:MODEL?...`` URLs."""
         return build(model, read_options(specs, options, f"sim:{model}"), clock)
     return create
-
-
-def pixel_size(text: str) -> tuple[int, int]:
-    """A ``size`` option: ``WxH`` in whole pixels (``128x64``)."""
-    size = parse_size(text)  # its InvalidArgument is a ValueError: the option reader names the option
-    if size.unit != "px" or size.width != int(size.width) or size.height != int(size.height):
-        raise ValueError(f"expected WIDTHxHEIGHT in whole pixels, got {quote_token(text)}")
-    return int(size.width), int(size.height)
-
-
-def i2c_address(text: str) -> int:
-    """An ``address`` option: a 7-bit I2C address 0x08..0x77, decimal or 0x hex (``0x3c``)."""
-    try:
-        value = int(text.strip(), 0)
-    except ValueError:
-        raise ValueError("expected an I2C address such as 0x3c") from None
-    if value not in I2C_ADDRESSES:
-        raise ValueError("expected a 7-bit I2C address 0x08..0x77 (0x00..0x07 and 0x78..0x7f are reserved)")
-    return value

@@ -26,9 +26,8 @@ from PIL import Image
 
 from pixelpen.clock import REAL_CLOCK, Clock
 from pixelpen.errors import ConfigError, URLError
-from pixelpen.options import OptionSpec, boolean, integer, number, read_options, text
+from pixelpen.options import OptionSpec, boolean, integer, number, pixels, read_options, text
 from pixelpen.sim.base import register_simulator
-from pixelpen.urls import parse_size
 
 FBIOGET_VSCREENINFO, FBIOPUT_VSCREENINFO, FBIOGET_FSCREENINFO = 0x4600, 0x4601, 0x4602
 FBIOPUTCMAP, FBIOPAN_DISPLAY, FBIOBLANK, FBIO_WAITFORVSYNC = 0x4605, 0x4606, 0x4611, 0x40044620
@@ -395,16 +394,8 @@ class FbdevNode:
             raise OSError(errno.EBADF, "bad file descriptor")
 
 
-def _pixels(value: str) -> tuple[int, int]:
-    """``WxH`` in whole pixels."""
-    size = parse_size(value, "px")
-    if size.unit != "px" or size.width != int(size.width) or size.height != int(size.height):
-        raise ValueError("expected whole pixels, WxH (e.g. 320x240)")
-    return int(size.width), int(size.height)
-
-
 OPTIONS: tuple[OptionSpec[Any], ...] = (
-    OptionSpec("size", _pixels, (320, 240), "visible size in pixels, WxH"),
+    OptionSpec("size", pixels, (320, 240), "visible size in pixels, WxH"),
     OptionSpec("bpp", integer(8, 32), 16, "bits per pixel: 8 (grey), 16 (RGB565), 24 (RGB888) or 32 (XRGB8888)"),
     OptionSpec("stride", integer(1), None, "line_length in bytes (default: the row rounded up to 64 bytes)"),
     OptionSpec("virtual", integer(1), None, "yres_virtual in lines (default: twice the height, for panning)"),

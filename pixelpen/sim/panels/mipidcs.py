@@ -23,8 +23,8 @@ from PIL import Image
 
 from pixelpen.clock import Clock
 from pixelpen.errors import ConfigError
-from pixelpen.options import OptionSpec, OptionValues, boolean, choice, number
-from pixelpen.sim.panels.base import PanelSim, pixel_size, register_panel_simulators
+from pixelpen.options import OptionSpec, OptionValues, boolean, choice, number, pixels
+from pixelpen.sim.panels.base import PanelSim, register_panel_simulators
 from pixelpen.sim.panels.dcs_commands import MODELS
 from pixelpen.sim.panels.dcs_controller import DcsController
 from pixelpen.sim.panels.dcs_glass import Module, known_module, render
@@ -175,11 +175,11 @@ def _offset(text: str) -> tuple[int, int]:
 _DEFAULT_SIZES = {"st7789": (240, 240), "ili9341": (320, 240), "st7735": (128, 160)}
 
 OPTIONS: tuple[OptionSpec[Any], ...] = (
-    OptionSpec("size", pixel_size, None, "glass size WxH (default: st7789 240x240, ili9341 320x240, st7735 128x160)"),
+    OptionSpec("size", pixels, None, "glass size WxH (default: st7789 240x240, ili9341 320x240, st7735 128x160)"),
     OptionSpec("hz", number(1, above=True), None, "SPI clock in Hz for bus time (default: the datasheet's)"),
     OptionSpec("offset", _offset, None, "RAM COL,ROW of the glass's top-left at MADCTL 0 (default: known modules)"),
     OptionSpec("turn", choice("0", "90", "180", "270"), None, "how the module is held (default: 90 if landscape)"),
-    OptionSpec("ram", pixel_size, None, "frame memory WxH the module straps (ST7735 green tab: 132x162)"),
+    OptionSpec("ram", pixels, None, "frame memory WxH the module straps (ST7735 green tab: 132x162)"),
     OptionSpec("panel_bgr", boolean, None, "the glass's colour filters are BGR (default: known modules; the "
                                            "display's own bgr option is the MADCTL bit its driver sends)"),
     OptionSpec("te", boolean, True, "the TE pin is wired"),

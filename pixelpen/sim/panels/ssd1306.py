@@ -18,8 +18,8 @@ from PIL import Image
 
 from pixelpen.clock import Clock
 from pixelpen.errors import ConfigError
-from pixelpen.options import OptionSpec, OptionValues, boolean, integer, number
-from pixelpen.sim.panels.base import PanelSim, i2c_address, pixel_size, register_panel_simulators
+from pixelpen.options import OptionSpec, OptionValues, boolean, i2c_address, integer, number, pixels
+from pixelpen.sim.panels.base import PanelSim, register_panel_simulators
 
 HORIZONTAL, VERTICAL, PAGE = 0, 1, 2
 """Memory addressing modes (20h parameter)."""
@@ -442,7 +442,7 @@ def _byte(text: str) -> int:
 
 
 OPTIONS: tuple[OptionSpec[Any], ...] = (
-    OptionSpec("size", pixel_size, (128, 64), "glass size WxH"),
+    OptionSpec("size", pixels, (128, 64), "glass size WxH"),
     OptionSpec("address", i2c_address, 0x3C, "I2C address, 0x08..0x77 (modules: 0x3c or 0x3d)"),
     OptionSpec("hz", number(1, above=True), None, "bus clock in Hz for bus time (default: the datasheet's)"),
     OptionSpec("colstart", integer(0, 131), None, "RAM column of the glass's left edge (default: 64-wide 32, "

@@ -12,11 +12,11 @@ import pytest
 
 from pixelpen.clock import SimulatedClock
 from pixelpen.errors import ConfigError, InvalidArgument, InvalidArgumentType, ProtocolError
-from pixelpen.options import OptionSpec, integer
+from pixelpen.options import OptionSpec, integer, pixels
 from pixelpen.sim import panels
 from pixelpen.sim.base import BusDevice, Fault
 from pixelpen.sim.panels import base
-from pixelpen.sim.panels.base import EVENT_LOG_LIMIT, PanelSim, i2c_address, pixel_size, register_panel_simulators
+from pixelpen.sim.panels.base import EVENT_LOG_LIMIT, PanelSim, register_panel_simulators
 
 
 class Recorder(PanelSim):
@@ -289,7 +289,7 @@ def test_register_panel_simulators_registers_each_model_with_its_options(monkeyp
     registered = {}
     monkeypatch.setattr(base, "register_simulator", lambda model, factory, specs: registered.update(
         {model: (factory, specs)}))
-    specs = (OptionSpec("size", pixel_size, (8, 8), "glass"), OptionSpec("n", integer(0, 9), 1, "a number"))
+    specs = (OptionSpec("size", pixels, (8, 8), "glass"), OptionSpec("n", integer(0, 9), 1, "a number"))
     built = []
 
     def build(model, values, clock):
@@ -305,34 +305,6 @@ def test_register_panel_simulators_registers_each_model_with_its_options(monkeyp
         registered["one"][0](n="12")
     with pytest.raises(ConfigError, match=r"sim:one: unknown option"):
         registered["one"][0](colour="red")
-
-
-@pytest.mark.parametrize(("text", "size"), [("128x64", (128, 64)), (" 240X320 ", (240, 320)), ("1x1", (1, 1))])
-def test_pixel_size_reads_whole_pixels(text, size):
-    assert pixel_size(text) == size
-
-
-@pytest.mark.parametrize("text", ["128", "12.5x8", "10x10mm", "a4", "0x8", "x", ""])
-def test_pixel_size_refuses_anything_else_with_a_value_error(text):
-    with pytest.raises(ValueError):
-        pixel_size(text)
-
-
-@pytest.mark.parametrize(("text", "address"), [("0x3c", 0x3C), ("0X3D", 0x3D), ("8", 8), ("0x77", 0x77)])
-def test_i2c_address_option_reads_non_reserved_7_bit_addresses(text, address):
-    assert i2c_address(text) == address
-
-
-@pytest.mark.parametrize("text", ["0x07", "0", "0x78", "0x7f", "0x80", "0x3c3", "-1"])
-def test_i2c_address_option_refuses_reserved_and_out_of_range_addresses(text):
-    with pytest.raises(ValueError, match=r"0x08\.\.0x77 \(0x00\.\.0x07 and 0x78\.\.0x7f are reserved\)"):
-        i2c_address(text)
-
-
-@pytest.mark.parametrize("text", ["sixty", "", "3c"])
-def test_i2c_address_option_refuses_what_is_no_number(text):
-    with pytest.raises(ValueError, match="such as 0x3c"):
-        i2c_address(text)
 
 
 @pytest.mark.parametrize("address", [0x00, 0x07, 0x78, 0x7F, 0x100])
