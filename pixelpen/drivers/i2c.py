@@ -20,6 +20,7 @@ from pixelpen.drivers.bus import DEFAULT_MAX_TRANSFER, I2C_COMMAND, I2C_DATA, Fr
 from pixelpen.drivers.devnode import node_open_error, require_module
 from pixelpen.drivers.gpio import OutputLine, open_output_line
 from pixelpen.errors import ConfigError, LinkError
+from pixelpen.options import I2C_ADDRESSES
 
 log = logging.getLogger(__name__)
 
@@ -57,8 +58,8 @@ class I2CBus(FramedBus):
         clock: Clock = REAL_CLOCK,
         name: str = "i2c",
     ) -> None:
-        if not isinstance(address, int) or not 0x03 <= address <= 0x77:
-            raise ConfigError(f"{name}: I2C address must be a 7-bit address 0x03..0x77, got {address!r}")
+        if not isinstance(address, int) or address not in I2C_ADDRESSES:
+            raise ConfigError(f"{name}: I2C address must be a 7-bit address 0x08..0x77, got {address!r}")
         super().__init__(name, clock_hz=clock_hz, max_transfer=max_transfer, reset=reset, clock=clock,
                          closers=(adapter.close,))
         self.address = address

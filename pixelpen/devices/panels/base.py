@@ -31,13 +31,13 @@ from pixelpen.display.capabilities import Capabilities, ColourModel
 from pixelpen.display.kinds import RasterDisplay
 from pixelpen.drivers.bus import PanelBus
 from pixelpen.errors import ConfigError, InvalidArgument, LinkError, URLError
-from pixelpen.options import OptionSpec, OptionValues, boolean, choice, integer, positive, text
+from pixelpen.options import OptionSpec, OptionValues, boolean, choice, integer, pixels, positive, text
 from pixelpen.profiles.panel import InitStep, PanelProfile, load_panel_profile, panel_profile_for
 from pixelpen.raster.canvas import Canvas
 from pixelpen.raster.damage import Rect
 from pixelpen.sim.base import BusDevice, create_simulator
 from pixelpen.sim.base import simulator_options as simulator_specs
-from pixelpen.urls import DeviceURL, parse_size
+from pixelpen.urls import DeviceURL
 
 if TYPE_CHECKING:
     from pixelpen.devices.panels.pacing import FramePacer
@@ -52,14 +52,6 @@ TE_TIMEOUT = 0.05
 """Seconds to wait for the tearing-effect pulse before sending anyway (three frames at 60 Hz)."""
 PIXEL_PITCH_MM = 0.2
 """Millimetres per pixel when a profile says nothing (the world window of ``Display`` is in millimetres)."""
-
-
-def panel_size(value: str) -> tuple[int, int]:
-    """``WxH`` in whole pixels (``240x240``)."""
-    size = parse_size(value, "px")
-    if size.unit != "px" or size.width != int(size.width) or size.height != int(size.height):
-        raise ValueError("a panel size is whole pixels, WxH (e.g. 240x240)")
-    return int(size.width), int(size.height)
 
 
 def rotation_degrees(value: str) -> int:
@@ -81,7 +73,7 @@ class PanelDisplay(RasterDisplay):
     display_on: ClassVar[int] = 0x29
     """The init table's display-on command: sent after the first full frame, so nothing stale flashes."""
     OPTIONS: ClassVar[tuple[OptionSpec[Any], ...]] = (
-        OptionSpec("size", panel_size, None, "module size WxH at rotation 0 (picks the built-in profile)"),
+        OptionSpec("size", pixels, None, "module size WxH at rotation 0 (picks the built-in profile)"),
         OptionSpec("profile", text, None, "a built-in panel profile name or a panel profile TOML file"),
         OptionSpec("rotation", rotation_degrees, 0, "0, 90, 180 or 270 degrees clockwise on the glass"),
         OptionSpec("hz", positive, None, "bus clock in Hz; default the profile's for the bus"),
@@ -519,8 +511,8 @@ class PanelDisplay(RasterDisplay):
         frame.host_seconds = time.perf_counter() - started
         self._wait_te()
         on_bus = self.clock.now()
-        for window, pixels in zip(windows, packed, strict=True):
-            self._write_window(window, pixels)
+        for window, data in zip(windows, packed, strict=True):
+            self._write_window(window, data)
         frame.bus_seconds = self.clock.now() - on_bus
         self._full = False
         if self._pacer is not None:

@@ -16,7 +16,7 @@ from pixelpen.devices.panels.base import PanelDisplay
 from pixelpen.devices.panels.wiring import Interface, Pins
 from pixelpen.display.registry import register_display
 from pixelpen.errors import ConfigError
-from pixelpen.options import OptionSpec, OptionValues, integer
+from pixelpen.options import OptionSpec, OptionValues, i2c_address, integer
 from pixelpen.profiles.panel import InitStep, PanelGeometry, PanelProfile
 from pixelpen.raster.damage import Rect
 from pixelpen.sim.base import simulator_options as simulator_specs
@@ -24,17 +24,6 @@ from pixelpen.sim.base import simulator_options as simulator_specs
 SET_CONTRAST, NORMAL, INVERSE, DISPLAY_OFF, DISPLAY_ON = 0x81, 0xA6, 0xA7, 0xAE, 0xAF
 SEGMENT_NORMAL, SEGMENT_REMAP, COM_NORMAL, COM_REVERSE = 0xA0, 0xA1, 0xC0, 0xC8
 COLUMN_ADDRESS, PAGE_ADDRESS, PAGE_START = 0x21, 0x22, 0xB0
-
-
-def i2c_address(value: str) -> int:
-    """A 7-bit I2C address, decimal or 0x hex (0x3c)."""
-    try:
-        number = int(value.strip(), 0)
-    except ValueError:
-        raise ValueError("expected an I2C address such as 0x3c") from None
-    if not 0x08 <= number <= 0x77:
-        raise ValueError("expected a 7-bit I2C address 0x08..0x77")
-    return number
 
 
 def _same_address(text: str) -> int | None:

@@ -8,7 +8,7 @@ from luma.oled.device import sh1106, ssd1306
 from PIL import Image
 
 from pixelpen.clock import SimulatedClock
-from pixelpen.devices.panels.ssd1306 import SH1106Display, SSD1306Display, SSD1309Display, i2c_address
+from pixelpen.devices.panels.ssd1306 import SH1106Display, SSD1306Display, SSD1309Display
 from pixelpen.devices.panels.wiring import Wiring
 from pixelpen.profiles.panel import load_panel_profile
 from tests.devices.panels.test_base import StubBus
@@ -154,17 +154,6 @@ def test_close_with_persist_false_sleeps_the_panel() -> None:
     bus.take()
     display.close()
     assert bus.take() == [("C", b"\xae"), ("X", b"")]
-
-
-@pytest.mark.parametrize(("text", "value"), [("0x3c", 0x3C), ("61", 61), ("0X3D", 0x3D)])
-def test_i2c_address_option(text: str, value: int) -> None:
-    assert i2c_address(text) == value
-
-
-@pytest.mark.parametrize("text", ["0x78", "3", "sixty", ""])
-def test_bad_i2c_address(text: str) -> None:
-    with pytest.raises(ValueError):
-        i2c_address(text)
 
 
 def test_a_glass_off_centre_moves_its_columns_when_rotation_flips_the_segment_remap() -> None:
