@@ -143,15 +143,20 @@ class PanelSource:
         return cast(Image.Image, self._glass)
 
     def stats(self) -> Stats:
-        """BusStats (bytes, transfers, bus_seconds, frames, ...) and ``events``: how many the controller flagged.
+        """BusStats (bytes, transfers, bus_seconds, frames, ...), ``events``: how many the controller flagged.
 
-        A framebuffer simulator has its own counters (ioctls, pans, ...) and no event log.
+        ``events`` counts the kept log and ``events_dropped`` (shown too when the device counts drops: a
+        panel simulator keeps only the latest ``EVENT_LOG_LIMIT``).  A framebuffer simulator has its own
+        counters (ioctls, pans, ...) and no event log.
         """
         with self._lock:
             out = _counters(getattr(self.device, "stats", None))
             events = getattr(self.device, "events", None)
+            dropped = getattr(self.device, "events_dropped", None)
             if events is not None:
-                out["events"] = len(events)
+                out["events"] = len(events) + (dropped or 0)
+            if dropped is not None:
+                out["events_dropped"] = dropped
         return out
 
 

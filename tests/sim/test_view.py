@@ -17,6 +17,7 @@ from PIL import Image
 from pixelpen.clock import SimulatedClock
 from pixelpen.errors import ConfigError
 from pixelpen.sim.base import create_simulator
+from pixelpen.sim.panels.base import BusStats
 from pixelpen.sim.view import PanelSource, PlotterSource, ViewServer, ViewSource, is_loopback, source_for
 
 
@@ -291,18 +292,6 @@ def test_a_sheet_plotters_version_follows_its_ink():
     assert source.version() != touched
 
 
-@dataclass
-class BusStats:
-    """The counters the panel simulators keep (the shared design's names)."""
-
-    bytes: int = 0
-    command_bytes: int = 0
-    data_bytes: int = 0
-    transfers: int = 0
-    bus_seconds: float = 0.0
-    frames: int = 0
-
-
 class StubPanel:
     """A panel simulator's public surface: model, glass(), stats, events."""
 
@@ -331,6 +320,27 @@ def test_a_panels_glass_and_counters():
     panel.events.append("RAMWR before SLPOUT")
     assert source.stats() == {"bytes": 80, "command_bytes": 0, "data_bytes": 0, "transfers": 0,
                               "bus_seconds": 1e-5, "frames": 1, "events": 1}
+
+
+class StubPanelWithDrops(StubPanel):
+    """A panel whose bounded event log counts what it dropped (as PanelSim does)."""
+
+    events_dropped = 0
+
+
+def test_a_panels_event_count_includes_the_dropped_ones():
+    panel = StubPanelWithDrops()
+    panel.events.extend(["RAMWR before SLPOUT"] * 3)
+    panel.events_dropped = 7  # the log kept the latest 3 of 10
+    stats = source_for(panel).stats()
+    assert stats["events"] == 10 and stats["events_dropped"] == 7
+
+
+def test_a_panel_simulators_event_count_goes_past_its_log():
+    device = create_simulator("st7789")
+    device.command(b"\xee" * 10_005)  # 10,005 undefined commands: one event each, the log keeps 10,000
+    stats = source_for(device).stats()
+    assert stats["events"] == 10_005 and stats["events_dropped"] == 5
 
 
 def test_a_panels_picture_before_any_version_is_the_glass():
