@@ -13,6 +13,7 @@ pair first, until no pair qualifies.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from typing import NamedTuple
 
@@ -22,6 +23,9 @@ from pixelpen.errors import ConfigError
 
 DEFAULT_MERGE_COST = 128.0
 """Default per-window overhead in bytes: a CASET/RASET/RAMWR window (11 bytes) plus bus turnaround."""
+
+FEW_RECTS = 8
+"""Up to this many rectangles are merged in plain Python (a few, as a frame's damage usually is)."""
 
 _MAX_PENDING = 64
 """Rectangles a tracker keeps before compacting them (cheapest merges first) to half as many."""
@@ -78,8 +82,44 @@ class Rect(NamedTuple):
 def merge_rects(
     rects: Iterable[Rect], merge_cost: float, bytes_per_pixel: float, max_count: int | None = None
 ) -> list[Rect]:
-    """Greedy cost-model merge (cheapest pair first) while a merge saves bytes or more than max_count remain."""
-    boxes = np.array([tuple(r) for r in rects if r.area > 0], dtype=np.int64).reshape(-1, 4)
+    """Greedy cost-model merge (cheapest pair first) while a merge saves bytes or more than max_count remain.
+
+    Up to :data:`FEW_RECTS` rectangles are merged in plain Python (numpy's per-call overhead dominates
+    there), more with one vectorised pairwise matrix per step; both pick the same pair (the first minimum
+    in row-major order)."""
+    boxes = [tuple(r) for r in rects if r.area > 0]
+    if len(boxes) <= FEW_RECTS:
+        return _merge_few(boxes, merge_cost, bytes_per_pixel, max_count)
+    return _merge_many(np.array(boxes, dtype=np.int64).reshape(-1, 4), merge_cost, bytes_per_pixel, max_count)
+
+
+def _merge_few(
+    rects: list[tuple[int, ...]], merge_cost: float, bytes_per_pixel: float, max_count: int | None
+) -> list[Rect]:
+    """:func:`merge_rects` for a handful of (x0, y0, x1, y1) boxes, in plain Python."""
+    boxes = [(x0, y0, x1, y1, (x1 - x0) * (y1 - y0)) for x0, y0, x1, y1 in rects]
+    bpp = float(bytes_per_pixel)
+    while len(boxes) > 1:
+        best = math.inf
+        pick = (0, 0, (0, 0, 0, 0, 0))
+        for i, (ax0, ay0, ax1, ay1, a) in enumerate(boxes):
+            for j, (bx0, by0, bx1, by1, b) in enumerate(boxes):
+                if i == j:
+                    continue
+                ux0, uy0, ux1, uy1 = min(ax0, bx0), min(ay0, by0), max(ax1, bx1), max(ay1, by1)
+                area = (ux1 - ux0) * (uy1 - uy0)
+                extra = (area - a - b) * bpp
+                if extra < best:
+                    best, pick = extra, (i, j, (ux0, uy0, ux1, uy1, area))
+        i, j, merged = pick
+        if best > merge_cost and (max_count is None or len(boxes) <= max_count):
+            break
+        boxes = [box for k, box in enumerate(boxes) if k != i and k != j] + [merged]
+    return sorted(Rect(x0, y0, x1, y1) for x0, y0, x1, y1, _ in boxes)
+
+
+def _merge_many(boxes: np.ndarray, merge_cost: float, bytes_per_pixel: float, max_count: int | None) -> list[Rect]:
+    """:func:`merge_rects` for an Nx4 int64 array of boxes, one pairwise cost matrix per merge."""
     while boxes.shape[0] > 1:
         x0, y0, x1, y1 = boxes.T
         area = (x1 - x0) * (y1 - y0)

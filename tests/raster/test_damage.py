@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from pixelpen.errors import ConfigError
 from pixelpen.raster.canvas import Canvas
-from pixelpen.raster.damage import DamageTracker, Rect, merge_rects, tile_damage
+from pixelpen.raster.damage import FEW_RECTS, DamageTracker, Rect, merge_rects, tile_damage
 
 
 def covered(rects: list[Rect], shape: tuple[int, int]) -> np.ndarray:
@@ -144,3 +144,19 @@ def test_tile_damage_covers_all_differences(points, tile, cost):
     rects = tile_damage(cur, prev, tile, cost, 2)
     assert not ((cur != prev) & ~covered(rects, (48, 64))).any()
     assert all(0 <= r.x0 < r.x1 <= 64 and 0 <= r.y0 < r.y1 <= 48 for r in rects)
+
+
+few_rects = st.lists(st.builds(lambda x, y, w, h: Rect(x, y, x + w, y + h), st.integers(0, 60),
+                               st.integers(0, 60), st.integers(0, 30), st.integers(1, 30)), max_size=FEW_RECTS)
+
+
+@settings(max_examples=200, deadline=None)
+@given(few_rects, st.sampled_from([0, 3, 6, 11, 128]), st.sampled_from([0.125, 1, 2, 3]),
+       st.sampled_from([None, 1, 2]))
+def test_few_rects_merge_as_the_vectorised_pairwise_matrix(rects, cost, bpp, max_count):
+    # The plain-Python path for a few rectangles against the numpy pairwise-matrix path (ties included:
+    # both take the first cheapest pair in row-major order).
+    from pixelpen.raster.damage import _merge_many
+
+    boxes = np.array([tuple(r) for r in rects if r.area > 0], dtype=np.int64).reshape(-1, 4)
+    assert merge_rects(rects, cost, bpp, max_count) == _merge_many(boxes, cost, bpp, max_count)

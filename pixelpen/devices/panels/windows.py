@@ -26,7 +26,7 @@ from typing import NamedTuple
 
 from pixelpen.errors import ConfigError
 from pixelpen.profiles.panel import BYTES_PER_PIXEL, OLED_CONTROLLERS
-from pixelpen.raster.damage import Rect, merge_rects
+from pixelpen.raster.damage import FEW_RECTS, Rect, merge_rects
 
 MIPI_WINDOW_BYTES = 11
 """CASET 2Ah + 4 parameter bytes, RASET 2Bh + 4, RAMWR 2Ch."""
@@ -36,13 +36,10 @@ SH1106_PAGE_BYTES = 3
 """``B0+page``, column low nibble ``0x0L``, column high nibble ``0x1H``: one page of a page-mode window."""
 MAX_RECTS = 64
 """Rectangles planned one by one; more are sent as their bounding window (merging is quadratic per step)."""
-FEW_RECTS = 8
-"""Up to this many rectangles in one band are merged by :func:`merge_few` in plain Python (numpy's per-call
-cost would dominate :func:`~pixelpen.raster.damage.merge_rects` there)."""
 _BAND_GAP = 1 << 24
 """Rows put between bands while merging, so that no merge across bands is ever the cheaper one."""
 
-__all__ = ["FEW_RECTS", "MAX_RECTS", "PlanCost", "WindowCost", "merge_few", "plan_windows", "window_cost"]
+__all__ = ["MAX_RECTS", "PlanCost", "WindowCost", "plan_windows", "window_cost"]
 
 
 class PlanCost(NamedTuple):
@@ -108,7 +105,7 @@ def plan_windows(
     one_band = band_rows is None or len({b.y0 // band_rows for b in boxes} | {(b.y1 - 1) // band_rows
                                                                               for b in boxes}) == 1
     if len(boxes) <= min(FEW_RECTS, max_windows) and one_band:
-        few = merge_few(boxes, window_overhead, bytes_per_pixel)
+        few = merge_rects(boxes, window_overhead, bytes_per_pixel)
         few_bytes = sum(b.area for b in few) * bytes_per_pixel + len(few) * window_overhead
         return [bounding] if bounding.area * bytes_per_pixel + window_overhead < few_bytes else few
     strips = [s for b in boxes for s in _bands(b, band_rows)]
@@ -130,29 +127,6 @@ def plan_windows(
         return sum(w.area for w in ws) * bytes_per_pixel + len(ws) * window_overhead
 
     return sorted(bounding_strips) if cost(bounding_strips) < cost(windows) else sorted(windows)
-
-
-def merge_few(rects: list[Rect], merge_cost: float, bytes_per_pixel: float) -> list[Rect]:
-    """:func:`~pixelpen.raster.damage.merge_rects` (greedy, cheapest pair first, while a merge adds at most
-    ``merge_cost`` bytes) for a handful of rectangles, in plain Python; sorted."""
-    boxes = [(r.x0, r.y0, r.x1, r.y1, r.area) for r in rects if r.area > 0]
-    while len(boxes) > 1:
-        best: tuple[float, int, int, tuple[int, int, int, int, int]] | None = None
-        for i, (ax0, ay0, ax1, ay1, a) in enumerate(boxes):
-            for j, (bx0, by0, bx1, by1, b) in enumerate(boxes):
-                if i == j:
-                    continue
-                u = (min(ax0, bx0), min(ay0, by0), max(ax1, bx1), max(ay1, by1))
-                area = (u[2] - u[0]) * (u[3] - u[1])
-                extra = (area - a - b) * bytes_per_pixel
-                if best is None or extra < best[0]:
-                    best = (extra, i, j, (*u, area))
-        assert best is not None
-        extra, i, j, merged = best
-        if extra > merge_cost:
-            break
-        boxes = [box for k, box in enumerate(boxes) if k not in (i, j)] + [merged]
-    return sorted(Rect(x0, y0, x1, y1) for x0, y0, x1, y1, _ in boxes)
 
 
 @dataclass(frozen=True)

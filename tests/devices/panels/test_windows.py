@@ -147,19 +147,6 @@ def test_plan_invariants(damage, controller, max_windows):
         assert cost <= simple_cost(aligned, bpp, overhead) + 1e-9
 
 
-rects_strategy = st.lists(st.builds(lambda x, y, w, h: Rect(x, y, x + w, y + h), st.integers(0, 60),
-                                    st.integers(0, 60), st.integers(1, 30), st.integers(1, 30)), max_size=8)
-
-
-@settings(max_examples=200, deadline=None)
-@given(rects_strategy, st.sampled_from([0, 3, 6, 11]), st.sampled_from([0.125, 2, 3]))
-def test_merge_few_merges_as_merge_rects(rects, overhead, bpp):
-    from pixelpen.devices.panels.windows import merge_few
-    from pixelpen.raster.damage import merge_rects
-
-    assert merge_few(rects, overhead, bpp) == merge_rects(rects, overhead, bpp)
-
-
 # One window through the real bus classes over the simulated chips: the bytes on the wire (bus.bytes_sent, I2C
 # control bytes included) are what the cost model says, so the overheads declared in windows.py (MIPI 11,
 # SSD1306 6, SH1106 3 per page) are the ones _write_window sends.
