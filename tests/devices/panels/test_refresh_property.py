@@ -101,7 +101,8 @@ def test_glass_equals_canvas_after_every_frame(model: str, size: str, rotation: 
     mono = display.canvas_mode == "1"
     assert (glass(display) == expected_glass(display)).all()
 
-    @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow], database=None)
+    @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow], database=None,
+              derandomize=True)  # the same drawings every run: the last assertion needs one that changed pixels
     @given(operations(width, height, mono))
     def frames(ops: list[tuple[str, Any]]) -> None:
         for op in ops:
