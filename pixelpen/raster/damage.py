@@ -52,7 +52,8 @@ class Rect(NamedTuple):
     @property
     def area(self) -> int:
         """Pixels covered."""
-        return max(self.width, 0) * max(self.height, 0)
+        x0, y0, x1, y1 = self
+        return (x1 - x0) * (y1 - y0) if x1 > x0 and y1 > y0 else 0
 
     @property
     def slices(self) -> tuple[slice, slice]:
@@ -135,7 +136,7 @@ def _merge_many(boxes: np.ndarray, merge_cost: float, bytes_per_pixel: float, ma
             break
         merged = [ux0[i, j], uy0[i, j], ux1[i, j], uy1[i, j]]
         boxes = np.vstack([np.delete(boxes, [i, j], axis=0), merged])
-    return sorted(Rect(*map(int, b)) for b in boxes)
+    return sorted(Rect(*b) for b in boxes.tolist())
 
 
 class DamageTracker:
@@ -183,6 +184,22 @@ class DamageTracker:
         return other
 
 
+def changed_pixels(current: np.ndarray, previous: np.ndarray) -> np.ndarray:
+    """The HxW mask of pixels where two HxW or HxWxC frames differ (in any channel)."""
+    return pixel_mask(current != previous)
+
+
+def pixel_mask(diff: np.ndarray) -> np.ndarray:
+    """An HxWxC per-value mask as HxW, true where any channel is (one OR per channel: ``any(axis=2)`` over
+    a short last axis is ten times slower); an HxW mask as it is."""
+    if diff.ndim != 3:
+        return diff
+    mask = diff[..., 0].copy()
+    for channel in range(1, diff.shape[2]):
+        mask |= diff[..., channel]
+    return mask
+
+
 def _tile_size(tile: int | tuple[int, int]) -> tuple[int, int]:
     """(tile width, tile height) from an int or a pair, or ConfigError."""
     tw, th = (tile, tile) if isinstance(tile, (int, np.integer)) else tuple(tile)
@@ -209,9 +226,7 @@ def tile_damage(
         )
     tw, th = _tile_size(tile)
     height, width = current.shape[:2]
-    diff = current != previous
-    if diff.ndim == 3:
-        diff = diff.any(axis=2)
+    diff = changed_pixels(current, previous)
     changed = np.logical_or.reduceat(
         np.logical_or.reduceat(diff, np.arange(0, height, th), axis=0), np.arange(0, width, tw), axis=1
     )

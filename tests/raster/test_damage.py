@@ -160,3 +160,16 @@ def test_few_rects_merge_as_the_vectorised_pairwise_matrix(rects, cost, bpp, max
 
     boxes = np.array([tuple(r) for r in rects if r.area > 0], dtype=np.int64).reshape(-1, 4)
     assert merge_rects(rects, cost, bpp, max_count) == _merge_many(boxes, cost, bpp, max_count)
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.integers(1, 9), st.integers(1, 9), st.sampled_from([0, 1, 3, 4]), st.integers(0, 2**32 - 1))
+def test_changed_pixels_is_any_channel_differing(h, w, channels, seed):
+    from pixelpen.raster.damage import changed_pixels
+
+    rng = np.random.default_rng(seed)
+    shape = (h, w, channels) if channels else (h, w)
+    a = rng.integers(0, 2, shape, dtype=np.uint8)
+    b = rng.integers(0, 2, shape, dtype=np.uint8)
+    expected = (a != b).any(axis=2) if channels else a != b
+    assert np.array_equal(changed_pixels(a, b), expected)
