@@ -260,7 +260,9 @@ def _tile_runs(changed: np.ndarray, tw: int, th: int, width: int, height: int) -
 
 def _runs(changed: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(tile row, first tile, end tile exclusive) of each horizontal run of True in a 2-D bool array."""
-    edges = np.diff(np.pad(changed, ((0, 0), (1, 1))).astype(np.int8), axis=1)
+    padded = np.zeros((changed.shape[0], changed.shape[1] + 2), dtype=np.int8)
+    padded[:, 1:-1] = changed
+    edges = np.diff(padded, axis=1)
     rows, starts = np.nonzero(edges == 1)
     _, ends = np.nonzero(edges == -1)
     return rows, starts, ends

@@ -45,9 +45,9 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-PACK_ONCE = 4096
-"""Windows whose bounding box has at most this many pixels are packed in one conversion (numpy's per-call
-cost outweighs converting the pixels between them)."""
+PACK_ONCE = 8192
+"""Windows whose bounding box has at most this many pixels (a 128x64 OLED's frame) are packed in one
+conversion (numpy's per-call cost outweighs converting the pixels between them)."""
 TE_TIMEOUT = 0.05
 """Seconds to wait for the tearing-effect pulse before sending anyway (three frames at 60 Hz)."""
 PIXEL_PITCH_MM = 0.2
