@@ -89,10 +89,11 @@ def _bands(mask: np.ndarray) -> list[tuple[int, int, int, int]] | None:
     starts = np.flatnonzero(new).tolist()
     if len(starts) > MAX_BANDS:
         return None
-    out: list[tuple[int, int, int, int]] = []
-    for start, end in zip(starts, [*starts[1:], box.shape[0]], strict=True):
-        edges = np.diff(np.concatenate(([0], box[start].view(np.int8), [0]))).tolist()
-        run_starts = [i for i, e in enumerate(edges) if e == 1]
-        run_ends = [i for i, e in enumerate(edges) if e == -1]
-        out.extend((x0 + s, y0 + start, x0 + e, y0 + end) for s, e in zip(run_starts, run_ends, strict=True))
-    return out
+    ends = [*starts[1:], box.shape[0]]
+    padded = np.zeros((len(starts), box.shape[1] + 2), dtype=np.int8)
+    padded[:, 1:-1] = box[starts]
+    edges = np.diff(padded, axis=1)
+    bands, run_starts = np.nonzero(edges == 1)
+    run_ends = np.nonzero(edges == -1)[1]
+    return [(x0 + s, y0 + starts[k], x0 + e, y0 + ends[k])
+            for k, s, e in zip(bands.tolist(), run_starts.tolist(), run_ends.tolist(), strict=True)]
