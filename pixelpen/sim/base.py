@@ -23,7 +23,7 @@ from importlib import metadata
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.errors import ConfigError, URLError
+from pixelpen.errors import ConfigError, InvalidArgumentType, URLError
 from pixelpen.options import OptionSpec
 
 MAX_EVENTS_PER_ADVANCE = 10_000_000
@@ -211,8 +211,14 @@ class SimulatedDevice(ABC):
         """Hardware handshake as the device drives it (a device with no handshake line: always True)."""
         return True
 
-    def receive(self, data: bytes) -> None:
-        """Host bytes, split where a fault injected ``at`` a byte count falls due (ignored once closed)."""
+    def receive(self, data: bytes | bytearray | memoryview) -> None:
+        """Host bytes (bytes, bytearray or memoryview), split where a fault injected ``at`` a byte count falls due.
+
+        Ignored once closed; anything else (an int, str, list) raises InvalidArgumentType.
+        """
+        if not isinstance(data, (bytes, bytearray, memoryview)):
+            raise InvalidArgumentType(f"{self.model}: receive() takes bytes, bytearray or memoryview, "
+                                      f"not {type(data).__name__} {data!r:.40}")
         data = bytes(data)
         if self._closed:
             self._ignore(data)

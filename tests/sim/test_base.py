@@ -6,7 +6,7 @@ import sys
 import pytest
 
 from pixelpen.clock import SimulatedClock
-from pixelpen.errors import ConfigError, URLError
+from pixelpen.errors import ConfigError, InvalidArgumentType, URLError
 from pixelpen.sim.base import (
     BUILTIN_SIMULATORS,
     Fault,
@@ -105,6 +105,22 @@ def test_a_fault_at_a_count_already_passed_applies_at_once() -> None:
     dev.receive(b"abcdef")
     dev.inject(Fault.RESET, at=3)
     assert dev.log[-1][1:] == ("fault", Fault.RESET)
+
+
+@pytest.mark.parametrize("data", [bytearray(b"ab"), memoryview(b"xab")[1:]])
+def test_bytes_like_input_is_taken_as_its_bytes(data) -> None:
+    dev = Recorder(SimulatedClock())
+    dev.receive(data)
+    assert dev.log == [(0.0, "rx", b"ab")] and type(dev.log[0][2]) is bytes
+
+
+@pytest.mark.parametrize("data, name", [(5, "int"), ("abc", "str"), ([0x41, 0x42], "list"), (None, "NoneType")])
+def test_input_that_is_not_bytes_like_is_refused_naming_it(data, name) -> None:
+    dev = Recorder(SimulatedClock())
+    message = f"recorder: receive\\(\\) takes bytes, bytearray or memoryview, not {name}"
+    with pytest.raises(InvalidArgumentType, match=message):
+        dev.receive(data)  # receive(5) once sent five NUL bytes
+    assert dev.log == []
 
 
 def test_unknown_and_unmodelled_faults_are_refused_naming_the_known() -> None:
