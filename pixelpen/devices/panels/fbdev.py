@@ -14,7 +14,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.devices.panels.base import FrameStats, PanelStats
+from pixelpen.devices.panels.frames import FrameStats, PanelStats
 from pixelpen.display.capabilities import Capabilities, ColourModel
 from pixelpen.display.kinds import RasterDisplay
 from pixelpen.display.registry import register_display
