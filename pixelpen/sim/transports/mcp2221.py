@@ -34,6 +34,7 @@ from collections.abc import Sequence
 from typing import Final
 
 from pixelpen.clock import Clock, SimulatedClock
+from pixelpen.drivers.bus import I2C_CLOCKS_PER_BYTE, I2C_RESTART_CLOCKS, I2C_TRANSACTION_CLOCKS, i2c_wire_seconds
 from pixelpen.sim.base import BusDevice
 from pixelpen.sim.transports.boundedlog import BoundedLog
 
@@ -225,8 +226,9 @@ class SimMCP2221:
             self.nak = False
         chunk = report[4 : 4 + min(MAX_CHUNK, length - len(self._payload))]
         self._payload += chunk
-        bits = 9 * len(chunk) + (10 if not continuing else 0) + (1 if len(self._payload) == length else 0)
-        self._busy_until = now + bits / self.clock_hz
+        start = 0 if continuing else I2C_RESTART_CLOCKS  # START and the address byte, as a repeated START's
+        stop = I2C_TRANSACTION_CLOCKS - I2C_RESTART_CLOCKS if len(self._payload) == length else 0
+        self._busy_until = now + (I2C_CLOCKS_PER_BYTE * len(chunk) + start + stop) / self.clock_hz
         if len(self._payload) < length:
             self.state = PARTIAL_DATA
         elif self.device.i2c_write(address, bytes(self._payload)):
@@ -246,7 +248,7 @@ class SimMCP2221:
         self.nak = answer is None
         self._read_data = bytearray(answer[:length].ljust(length, b"\xff")) if answer is not None else bytearray()
         self.state = ADDRESS_NAK if answer is None else READ_PARTIAL
-        self._busy_until = self.clock.now() + (9 * length + 11) / self.clock_hz
+        self._busy_until = self.clock.now() + i2c_wire_seconds(length, self.clock_hz)
         return bytes((cmd, 0x00, self.state))
 
     def _fetch(self) -> bytes:
