@@ -13,7 +13,7 @@ pair first, until no pair qualifies.
 
 from __future__ import annotations
 
-import math
+import heapq
 from collections.abc import Iterable
 from typing import NamedTuple
 
@@ -97,26 +97,36 @@ def merge_rects(
 def _merge_few(
     rects: list[tuple[int, ...]], merge_cost: float, bytes_per_pixel: float, max_count: int | None
 ) -> list[Rect]:
-    """:func:`merge_rects` for a handful of (x0, y0, x1, y1) boxes, in plain Python."""
-    boxes = [(x0, y0, x1, y1, (x1 - x0) * (y1 - y0)) for x0, y0, x1, y1 in rects]
+    """:func:`merge_rects` for a few (x0, y0, x1, y1) boxes in plain Python: every pair's cost once in a heap,
+    then only the merged box's pairs.  Boxes are numbered in list order and a merged box gets the next
+    number, so the heap's (cost, first, second) order is the row-major first minimum of the matrix path."""
     bpp = float(bytes_per_pixel)
+    boxes = {k: (x0, y0, x1, y1, (x1 - x0) * (y1 - y0)) for k, (x0, y0, x1, y1) in enumerate(rects)}
+    heap = [(_extra(boxes[i], boxes[j], bpp), i, j) for i in boxes for j in boxes if i < j]
+    heapq.heapify(heap)
+    next_id = len(boxes)
     while len(boxes) > 1:
-        best = math.inf
-        pick = (0, 0, (0, 0, 0, 0, 0))
-        for i, (ax0, ay0, ax1, ay1, a) in enumerate(boxes):
-            for j, (bx0, by0, bx1, by1, b) in enumerate(boxes):
-                if i == j:
-                    continue
-                ux0, uy0, ux1, uy1 = min(ax0, bx0), min(ay0, by0), max(ax1, bx1), max(ay1, by1)
-                area = (ux1 - ux0) * (uy1 - uy0)
-                extra = (area - a - b) * bpp
-                if extra < best:
-                    best, pick = extra, (i, j, (ux0, uy0, ux1, uy1, area))
-        i, j, merged = pick
-        if best > merge_cost and (max_count is None or len(boxes) <= max_count):
+        extra, i, j = heap[0]
+        if i not in boxes or j not in boxes:
+            heapq.heappop(heap)
+            continue
+        if extra > merge_cost and (max_count is None or len(boxes) <= max_count):
             break
-        boxes = [box for k, box in enumerate(boxes) if k != i and k != j] + [merged]
-    return sorted(Rect(x0, y0, x1, y1) for x0, y0, x1, y1, _ in boxes)
+        heapq.heappop(heap)
+        (ax0, ay0, ax1, ay1, _), (bx0, by0, bx1, by1, _) = boxes.pop(i), boxes.pop(j)
+        ux0, uy0, ux1, uy1 = min(ax0, bx0), min(ay0, by0), max(ax1, bx1), max(ay1, by1)
+        merged = (ux0, uy0, ux1, uy1, (ux1 - ux0) * (uy1 - uy0))
+        for k, box in boxes.items():
+            heapq.heappush(heap, (_extra(box, merged, bpp), k, next_id))
+        boxes[next_id] = merged
+        next_id += 1
+    return sorted(Rect(x0, y0, x1, y1) for x0, y0, x1, y1, _ in boxes.values())
+
+
+def _extra(a: tuple[int, ...], b: tuple[int, ...], bytes_per_pixel: float) -> float:
+    """Bytes merging two (x0, y0, x1, y1, area) boxes adds: their union's area minus both areas."""
+    union = (max(a[2], b[2]) - min(a[0], b[0])) * (max(a[3], b[3]) - min(a[1], b[1]))
+    return (union - a[4] - b[4]) * bytes_per_pixel
 
 
 def _merge_many(boxes: np.ndarray, merge_cost: float, bytes_per_pixel: float, max_count: int | None) -> list[Rect]:
