@@ -43,11 +43,11 @@ from pixelpen.animation import ClockFace, Cursor
 from pixelpen.clock import SimulatedClock
 from pixelpen.devices.panels.base import PanelDisplay
 from pixelpen.devices.panels.mipidcs import ILI9341Display, ST7789Display
-from pixelpen.devices.panels.pacing import SPI_CLOCKS_PER_BYTE, bus_limit_fps
+from pixelpen.devices.panels.pacing import bus_limit_fps
 from pixelpen.devices.panels.ssd1306 import SSD1306Display
 from pixelpen.devices.panels.windows import MIPI_WINDOW_BYTES, SSD1306_WINDOW_BYTES
 from pixelpen.devices.panels.wiring import Wiring
-from pixelpen.drivers.bus import RESET_RECOVERY, command_bytes
+from pixelpen.drivers.bus import RESET_RECOVERY, command_bytes, spi_wire_seconds
 from pixelpen.profiles.panel import panel_profile_for
 
 SEED = 20261202
@@ -136,7 +136,7 @@ class CountingBus:
     def _send(self, count: int, transfers: int) -> None:
         self.bytes_sent += count
         self.transfers += transfers
-        self.clock.advance(SPI_CLOCKS_PER_BYTE * count / self.clock_hz)
+        self.clock.advance(spi_wire_seconds(count, self.clock_hz))
 
 
 # -- workloads --------------------------------------------------------------------------------------------

@@ -12,15 +12,13 @@ import math
 from typing import NamedTuple
 
 from pixelpen.clock import Clock
-from pixelpen.drivers.bus import SPI_CLOCKS_PER_BYTE, i2c_wire_seconds, spi_wire_seconds
+from pixelpen.drivers.bus import i2c_wire_seconds, spi_wire_seconds
 from pixelpen.errors import ConfigError
 
 FPS_WINDOW = 60
 """Frames the achieved frame rate is measured over."""
 
-__all__ = [  # SPI_CLOCKS_PER_BYTE: drivers.bus's, named here for benchmarks/panels.py
-    "SPI_CLOCKS_PER_BYTE", "BandwidthEstimate", "FramePacer", "bus_limit_fps", "check_fps", "estimate_bandwidth",
-]
+__all__ = ["BandwidthEstimate", "FramePacer", "bus_limit_fps", "check_fps", "estimate_bandwidth"]
 
 
 class BandwidthEstimate(NamedTuple):
