@@ -24,7 +24,7 @@ from pixelpen.errors import ConfigError
 DEFAULT_MERGE_COST = 128.0
 """Default per-window overhead in bytes: a CASET/RASET/RAMWR window (11 bytes) plus bus turnaround."""
 
-FEW_RECTS = 8
+FEW_RECTS = 12
 """Up to this many rectangles are merged in plain Python (a few, as a frame's damage usually is)."""
 
 _MAX_PENDING = 64
