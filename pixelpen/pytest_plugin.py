@@ -56,7 +56,38 @@ _ids = itertools.count(1)
 _REPORTS = pytest.StashKey[dict[str, pytest.TestReport]]()
 
 
-class SimPlotter:
+class _Simulated:
+    """What both fixtures' objects share: a URL naming a simulator instance by ``id``, and its lookup."""
+
+    id: str
+    url: str
+
+    def __str__(self) -> str:
+        """The URL, so the object can be handed on where a URL string is expected."""
+        return self.url
+
+    @property
+    def opened(self) -> bool:
+        """True once the application has opened the URL (the simulator exists)."""
+        from pixelpen.sim.base import named_simulator
+
+        try:
+            named_simulator(self.id)
+        except KeyError:
+            return False
+        return True
+
+    def _named(self, what: str) -> Any:
+        """The simulator behind the URL; LookupError naming ``what`` before the URL is opened."""
+        from pixelpen.sim.base import named_simulator
+
+        try:
+            return named_simulator(self.id)
+        except KeyError:
+            raise LookupError(f"the application has not opened {self.url} yet, so there is no {what}") from None
+
+
+class SimPlotter(_Simulated):
     """A simulated device for one test: the URL to hand the application, and the device behind it."""
 
     def __init__(self, model: str, options: dict[str, str] | None = None, *, port: bool = False) -> None:
@@ -80,30 +111,10 @@ class SimPlotter:
     def __repr__(self) -> str:
         return f"SimPlotter({self.url!r})"
 
-    def __str__(self) -> str:
-        """The URL, so the object can be handed on where a URL string is expected."""
-        return self.url
-
-    @property
-    def opened(self) -> bool:
-        """True once the application has opened the URL (the device exists)."""
-        from pixelpen.sim.base import named_simulator
-
-        try:
-            named_simulator(self.id)
-        except KeyError:
-            return False
-        return True
-
     @property
     def device(self) -> StreamDevice:
         """The simulated device the application opened (its paper, logs, counters and state)."""
-        from pixelpen.sim.base import named_simulator
-
-        try:
-            return named_simulator(self.id)
-        except KeyError:
-            raise LookupError(f"the application has not opened {self.url} yet, so there is no device") from None
+        return self._named("device")
 
     def paper(self, dpi: float = 96.0) -> np.ndarray:
         """The paper as an (H, W, 3) uint8 RGB array (white sheet, strokes in their pens' colours)."""
@@ -132,7 +143,7 @@ def _new_id() -> str:
     return f"pytest-{next(_ids)}-{uuid.uuid4().hex[:8]}"
 
 
-class SimPanel:
+class SimPanel(_Simulated):
     """A simulated panel (or framebuffer) for one test: the URL to hand the application, the chip behind it,
     and, for a display opened with :meth:`open`, its frames and bus traffic."""
 
@@ -156,10 +167,6 @@ class SimPanel:
 
     def __repr__(self) -> str:
         return f"SimPanel({self.url!r})"
-
-    def __str__(self) -> str:
-        """The URL, so the object can be handed on where a URL string is expected."""
-        return self.url
 
     # -- the display ---------------------------------------------------------------------------------
     def open(self, **options: Any) -> RasterDisplay:
@@ -211,25 +218,9 @@ class SimPanel:
 
     # -- the simulated chip ------------------------------------------------------------------------------
     @property
-    def opened(self) -> bool:
-        """True once the URL was opened (the simulator exists)."""
-        from pixelpen.sim.base import named_simulator
-
-        try:
-            named_simulator(self.id)
-        except KeyError:
-            return False
-        return True
-
-    @property
     def simulator(self) -> Any:
         """The simulated chip (``MipiDcsSim``, ``SSD1306Sim``, ``FbdevSim``); LookupError before the URL is opened."""
-        from pixelpen.sim.base import named_simulator
-
-        try:
-            return named_simulator(self.id)
-        except KeyError:
-            raise LookupError(f"the application has not opened {self.url} yet, so there is no panel") from None
+        return self._named("panel")
 
     def glass(self) -> Image.Image:
         """What the panel shows now, as a PIL image (RGB for a TFT, "1"/"L" for a mono OLED)."""
