@@ -259,3 +259,25 @@ class FramedBus(abc.ABC):
     def _fault(self, nbytes: int, error: Exception) -> LinkError:
         """The LinkError for a frame of ``nbytes`` that failed with ``error``."""
         return LinkError(f"{self.name}: write of {nbytes} bytes failed: {error}")
+
+
+class FourWireBus(FramedBus):
+    """A 4-wire SPI panel bus: command frames with D/C low, data frames with D/C high (subclasses drive D/C)."""
+
+    def command(self, *cmd: int | bytes) -> None:
+        """Send all of ``cmd`` as one chip-select frame with D/C low."""
+        frame = self._command_frame(*cmd)
+        self._set_dc(False)
+        self._send(frame)
+
+    def data(self, data: bytes) -> None:
+        """Send ``data`` (any bytes-like) with D/C high, in frames of at most ``max_transfer`` bytes."""
+        chunks = self._data_chunks(data)
+        if chunks:
+            self._set_dc(True)
+        for chunk in chunks:
+            self._send(chunk)
+
+    @abc.abstractmethod
+    def _set_dc(self, level: bool) -> None:
+        """Drive the D/C line (low: command, high: data)."""

@@ -18,7 +18,7 @@ import logging
 from typing import Any, ClassVar, Final
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.drivers.bus import FramedBus
+from pixelpen.drivers.bus import FourWireBus
 from pixelpen.drivers.devnode import require_module
 from pixelpen.errors import ConfigError, LinkError
 
@@ -49,7 +49,7 @@ class _GpioPin:
         """Nothing to release: the bus owns the port."""
 
 
-class FtdiSpiBus(FramedBus):
+class FtdiSpiBus(FourWireBus):
     """A PanelBus over pyftdi's SpiController: ``command`` one D/C-low frame, ``data`` D/C-high frames."""
 
     kind: ClassVar[str] = "spi"
@@ -113,20 +113,6 @@ class FtdiSpiBus(FramedBus):
             with contextlib.suppress(*cls.faults):  # released again; the setup error is the one to report
                 controller.close()
             raise
-
-    def command(self, *cmd: int | bytes) -> None:
-        """Send all of ``cmd`` as one chip-select frame with D/C low."""
-        frame = self._command_frame(*cmd)
-        self._set_dc(False)
-        self._send(frame)
-
-    def data(self, data: bytes) -> None:
-        """Send ``data`` (any bytes-like) with D/C high, one frame per ``max_transfer`` bytes."""
-        chunks = self._data_chunks(data)
-        if chunks:
-            self._set_dc(True)
-        for chunk in chunks:
-            self._send(chunk)
 
     def set_pin(self, bit: int, level: bool) -> None:
         """Drive one of the bus's GPIO output pins (D/C or reset); a write goes out only when the level changes."""

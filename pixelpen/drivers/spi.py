@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, ClassVar, Final
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.drivers.bus import FramedBus
+from pixelpen.drivers.bus import FourWireBus
 from pixelpen.drivers.devnode import node_open_error, require_module
 from pixelpen.drivers.gpio import OutputLine, open_output_line
 from pixelpen.errors import ConfigError, LinkError
@@ -38,7 +38,7 @@ def spidev_bufsiz(path: Path | None = None) -> int:
     return min(value, SPIDEV_MAX_BLOCK) if value > 0 else SPIDEV_DEFAULT_BUFSIZ
 
 
-class SpiBus(FramedBus):
+class SpiBus(FourWireBus):
     """A PanelBus on 4-wire SPI: ``command`` is one D/C-low frame, ``data`` D/C-high frames of <= ``max_transfer``."""
 
     kind: ClassVar[str] = "spi"
@@ -69,20 +69,6 @@ class SpiBus(FramedBus):
             spi.max_speed_hz = int(clock_hz)
         except OSError as e:
             raise LinkError(f"{name}: setting mode {mode} and clock {int(clock_hz)} Hz failed: {e}") from e
-
-    def command(self, *cmd: int | bytes) -> None:
-        """Send all of ``cmd`` as one frame with D/C low."""
-        frame = self._command_frame(*cmd)
-        self._set_dc(False)
-        self._send(frame)
-
-    def data(self, data: bytes) -> None:
-        """Send ``data`` (any bytes-like) with D/C high, in frames of at most ``max_transfer`` bytes."""
-        chunks = self._data_chunks(data)
-        if chunks:
-            self._set_dc(True)
-        for chunk in chunks:
-            self._send(chunk)
 
     def _set_dc(self, level: bool) -> None:
         if self._dc_level is not level:
