@@ -8,6 +8,7 @@ from pixelpen.clock import SimulatedClock
 from pixelpen.devices.panels.wiring import Pins, Target, Wiring, open_wiring, parse_target, sim_wiring
 from pixelpen.errors import ConfigError, LinkError, URLError
 from tests.devices.panels.test_base import StubBus
+from tests.sim.transports.chips import RecordingChip
 
 
 @pytest.mark.parametrize(("text", "target"), [
@@ -69,55 +70,15 @@ def test_wiring_close_releases_everything_once_and_sets_the_backlight() -> None:
     assert backlight.levels == [False] and backlight.closed == 1 and bus.log == [("X", b"")]
 
 
-class RecordingChip:
-    """A BusDevice that records what reaches it."""
-
-    model = "recorder"
-
-    def __init__(self) -> None:
-        self.clock = SimulatedClock()
-        self.spi: list[tuple[bool, bytes]] = []
-        self.i2c: list[tuple[int, bytes]] = []
-        self.lines: list[tuple[str, bool]] = []
-
-    def spi_transfer(self, data: bytes, *, dc: bool) -> bytes:
-        self.spi.append((dc, bytes(data)))
-        return bytes(len(data))
-
-    def i2c_write(self, address: int, data: bytes) -> bool:
-        self.i2c.append((address, bytes(data)))
-        return address == 0x3C
-
-    def i2c_read(self, address: int, length: int) -> bytes | None:
-        return None
-
-    def set_line(self, name: str, level: bool) -> None:
-        self.lines.append((name, level))
-
-    def line(self, name: str) -> bool:
-        return False
-
-    def advance_to(self, t: float) -> None:
-        pass
-
-    def next_event_time(self) -> float | None:
-        return None
-
-    def inject(self, fault: object, at: int | None = None) -> None:
-        pass
-
-    def close(self) -> None:
-        pass
-
-
 def test_sim_spi_wiring_runs_the_real_spi_bus() -> None:
     chip = RecordingChip()
     wiring = sim_wiring(chip, "spi", Pins(dc=25, rst=27, hz=10e6), clock=chip.clock)
     wiring.bus.command(0x2A)
     wiring.bus.data(b"\x00\x00\x00\xef")
     wiring.bus.reset()
-    assert chip.spi == [(False, b"\x2a"), (True, b"\x00\x00\x00\xef")]
-    assert ("reset", False) in chip.lines and chip.lines[-1] == ("reset", True)
+    assert chip.frames == [(False, b"\x2a"), (True, b"\x00\x00\x00\xef")]
+    lines = [(name, level) for name, level, _ in chip.line_changes]
+    assert ("reset", False) in lines and lines[-1] == ("reset", True)
     assert wiring.simulator is chip and wiring.te is None
 
 
@@ -126,7 +87,7 @@ def test_sim_i2c_wiring_sends_control_bytes_and_naks_become_link_errors() -> Non
     wiring = sim_wiring(chip, "i2c", Pins(addr=0x3C, hz=400e3), clock=chip.clock)
     wiring.bus.command(0xAE, 0xAF)
     wiring.bus.data(b"\xff")
-    assert chip.i2c == [(0x3C, b"\x00\xae\xaf"), (0x3C, b"\x40\xff")]
+    assert chip.writes == [(0x3C, b"\x00\xae\xaf"), (0x3C, b"\x40\xff")]
     wrong = sim_wiring(chip, "i2c", Pins(addr=0x3D, hz=400e3), clock=chip.clock)
     with pytest.raises(LinkError):
         wrong.bus.command(0xAE)
