@@ -26,7 +26,7 @@ from types import MappingProxyType
 from typing import Any, TypeGuard
 
 from pixelpen.errors import ConfigError, ParseError, quote_token
-from pixelpen.profiles.toml import Table, one_of, pair_of
+from pixelpen.profiles.toml import Table, one_of, pair_of, profile_file, profile_key
 from pixelpen.tomltext import read_toml
 from pixelpen.urls import check_path
 
@@ -479,14 +479,12 @@ _NAME = re.compile(r"^([a-z0-9]+)_(\d{1,4})x(\d{1,4})$")
 
 def load_panel_profile(name_or_path: str | Path) -> PanelProfile:
     """A built-in panel profile by name (``st7789_240x240``; ``ili9341_320x240`` finds 240x320) or a TOML file."""
-    text = str(name_or_path)
-    path = check_path(text, "panel profile file name").expanduser()
-    if isinstance(name_or_path, Path) or text.endswith(".toml") or path.is_file():
-        if not path.is_file():
-            raise ConfigError(f"panel profile file {quote_token(text)} does not exist")
+    path = profile_file(name_or_path, "panel profile")
+    if path is not None:
         return _read_path(path)
+    text = str(name_or_path)
     builtins = builtin_panel_profiles()
-    key = text.strip().lower().replace("-", "_")
+    key = profile_key(text)
     if key in builtins:
         return builtins[key]
     match = _NAME.match(key)

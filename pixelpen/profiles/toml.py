@@ -34,7 +34,7 @@ from pixelpen.profiles.model import (
 from pixelpen.tomltext import read_toml
 from pixelpen.urls import check_path
 
-__all__ = ["Table", "builtin_profiles", "load_profile", "read_file"]
+__all__ = ["Table", "builtin_profiles", "load_profile", "profile_file", "profile_key", "read_file"]
 
 _COLOUR = re.compile(r"^#[0-9a-fA-F]{6}$")
 
@@ -279,16 +279,30 @@ def builtin_profiles() -> dict[str, DeviceProfile]:
     return out
 
 
-def load_profile(name_or_path: str | Path) -> DeviceProfile:
-    """A built-in profile by name (``hp7475a``, ``axidraw_v3``, …) or a user profile from a TOML file path."""
+def profile_file(name_or_path: str | Path, what: str = "profile") -> Path | None:
+    """The TOML file ``name_or_path`` names (ConfigError when it is missing), or None when it is a built-in's name."""
     text = str(name_or_path)
-    path = check_path(text, "profile file name").expanduser()
+    path = check_path(text, f"{what} file name").expanduser()
     if isinstance(name_or_path, Path) or text.endswith(".toml") or path.is_file():
         if not path.is_file():
-            raise ConfigError(f"profile file {quote_token(text)} does not exist")
+            raise ConfigError(f"{what} file {quote_token(text)} does not exist")
+        return path
+    return None
+
+
+def profile_key(name: str | Path) -> str:
+    """A built-in profile's name as the tables key it (``HP-7475A`` -> ``hp_7475a``)."""
+    return str(name).strip().lower().replace("-", "_")
+
+
+def load_profile(name_or_path: str | Path) -> DeviceProfile:
+    """A built-in profile by name (``hp7475a``, ``axidraw_v3``, …) or a user profile from a TOML file path."""
+    path = profile_file(name_or_path)
+    if path is not None:
         return _profile(read_file(path), str(path))
+    text = str(name_or_path)
     builtins = builtin_profiles()
-    key = text.strip().lower().replace("-", "_")
+    key = profile_key(text)
     if key in builtins:
         return builtins[key]
     raise ConfigError(
