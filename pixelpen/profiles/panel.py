@@ -26,6 +26,7 @@ from types import MappingProxyType
 from typing import Any, TypeGuard
 
 from pixelpen.errors import ConfigError, ParseError, quote_token
+from pixelpen.options import I2C_ADDRESSES
 from pixelpen.profiles.toml import Table, one_of, pair_of, profile_file, profile_key
 from pixelpen.tomltext import read_toml
 from pixelpen.urls import check_path
@@ -72,6 +73,11 @@ __all__ = [
     "PanelGeometry", "PanelProfile", "RotationSetup", "builtin_panel_profiles", "load_panel_profile",
     "panel_profile_for", "read_panel_profile",
 ]
+
+
+def _is_i2c_address(value: object) -> bool:
+    """An int in the non-reserved 7-bit I2C range (options.I2C_ADDRESSES)."""
+    return _is_int(value, I2C_ADDRESSES.start, I2C_ADDRESSES.stop - 1)
 
 
 def _is_int(v: object, low: int, high: int) -> TypeGuard[int]:
@@ -184,7 +190,7 @@ class PanelProfile:
             value = getattr(self, key)
             if not (isinstance(value, tuple) and len(value) == 2 and all(_is_int(v, 1, MAX_SIDE) for v in value)):
                 raise ConfigError(f"{where}: {key} must be (width, height) of 1..{MAX_SIDE}, got {quote_token(value)}")
-        formats = ("mono-pages",) if self.oled else ("rgb565be", "rgb666")
+        formats = ("mono-pages",) if self.oled else tuple(COLMOD)
         if self.pixel_format not in formats:
             raise ConfigError(f"{where}: pixel_format must be {' or '.join(formats)} for a {self.controller}, "
                               f"got {quote_token(self.pixel_format)}")
@@ -253,7 +259,7 @@ class PanelProfile:
                               f"got {quote_token(self.com_pins)}")
         if not (self.contrast is None or _is_int(self.contrast, 0, 255)):
             raise ConfigError(f"{where}: contrast must be 0..255, got {quote_token(self.contrast)}")
-        if not (self.i2c_address is None or _is_int(self.i2c_address, 0x08, 0x77)):
+        if not (self.i2c_address is None or _is_i2c_address(self.i2c_address)):
             raise ConfigError(f"{where}: i2c_address must be 0x08..0x77, got {quote_token(self.i2c_address)}")
         expected = {0xA8: self.multiplex - 1, 0xDA: self.com_pins, 0x81: self.contrast,
                     0x8D: None if self.charge_pump is None else (0x14 if self.charge_pump else 0x10)}
@@ -300,7 +306,7 @@ class PanelProfile:
 
 _MIN_DELAY_MS = {0x01: 5, 0x11: 5}
 """MIPI DCS commands the controller needs time after: SWRESET and SLPOUT, 5 ms before the next command."""
-_COLMOD_FORMATS = {5: "rgb565be", 6: "rgb666"}
+_COLMOD_FORMATS = {value & 7: name for name, value in COLMOD.items()}
 """COLMOD's MCU-interface bits D[2:0] and the pixel format they select."""
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -411,7 +417,7 @@ def _profile(data: dict[str, Any], source: str, folder: Traversable | None) -> P
         bgr=t.get("bgr", *_BOOL, False),
         invert=t.get("invert", *_BOOL, False),
         te=t.get("te", *_BOOL, False),
-        i2c_address=t.get("i2c_address", lambda v: _is_int(v, 0x08, 0x77), "an I2C address 0x08..0x77"),
+        i2c_address=t.get("i2c_address", _is_i2c_address, "an I2C address 0x08..0x77"),
         clock_hz=_clocks(t, "clock_hz"),
         max_clock_hz=_clocks(t, "max_clock_hz"),
         rotations=_rotations(t),

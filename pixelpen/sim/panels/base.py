@@ -31,7 +31,6 @@ log = logging.getLogger(__name__)
 WireBytes = bytes | bytearray | memoryview | NDArray[np.uint8]
 """What the bus calls take (numpy arrays of other dtypes, ints, str and sequences are refused)."""
 
-"""7-bit addresses a part may answer (0x00..0x07 and 0x78..0x7F are reserved by the I2C specification)."""
 EVENT_LOG_LIMIT = 10_000
 """Events a simulator keeps (the latest); older ones are dropped and counted in ``events_dropped``."""
 

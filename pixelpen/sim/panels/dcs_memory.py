@@ -18,8 +18,8 @@ from numpy.typing import NDArray
 
 from pixelpen.sim.panels.dcs_pixels import Pixels
 
-MY, MX, MV, ML, BGR, MH = 0x80, 0x40, 0x20, 0x10, 0x08, 0x04
-"""MADCTL bits (D7..D2)."""
+MY, MX, MV = 0x80, 0x40, 0x20
+"""MADCTL bits D7..D5: row and column order, row/column exchange (the others do not move the address)."""
 
 
 @dataclass(frozen=True)
