@@ -42,6 +42,7 @@ from pixelpen.drivers.trace import (
     trace_lines,
 )
 from pixelpen.errors import InvalidArgument, LinkError, ParseError, TraceMismatch
+from pixelpen.profiles.panel import BUS_KINDS
 
 COMMAND: Final = "C"
 """A frame of command bytes (D/C low)."""
@@ -51,7 +52,6 @@ MORE: Final = "+"
 """More bytes of the frame on the line above."""
 RESET: Final = "R"
 """A pulse on the reset line."""
-BUS_KINDS: Final = ("spi", "i2c")
 _LEVEL_NAMES: Final = {COMMAND: "command (D/C low)", DATA: "data (D/C high)"}
 
 

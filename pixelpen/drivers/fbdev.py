@@ -26,7 +26,7 @@ import numpy as np
 
 from pixelpen.drivers.devnode import node_open_error
 from pixelpen.errors import ConfigError, LinkError
-from pixelpen.raster.colour import CHUNK_PIXELS
+from pixelpen.raster.colour import CHUNK_PIXELS, luma
 
 log = logging.getLogger(__name__)
 
@@ -175,9 +175,7 @@ class PixelLayout:
         h, w = rgb.shape[:2]
         bpp = self.bytes_per_pixel
         if self.grey:
-            luma = rgb[..., 0].astype(np.uint32) * 299 + rgb[..., 1].astype(np.uint32) * 587
-            luma += rgb[..., 2].astype(np.uint32) * 114
-            return ((luma + 500) // 1000).astype(np.uint8)
+            return luma(rgb)
         channels = (self.red, self.green, self.blue)
         if all(c.length == 8 and c.offset % 8 == 0 for c in channels) and self.transp.length in (0, 8):
             out = np.zeros((h, w, bpp), dtype=np.uint8)

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, ClassVar, Final
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.drivers.bus import FourWireBus
+from pixelpen.drivers.bus import DEFAULT_MAX_TRANSFER, FourWireBus
 from pixelpen.drivers.devnode import node_open_error, require_module
 from pixelpen.drivers.gpio import OutputLine, open_output_line
 from pixelpen.errors import ConfigError, LinkError
@@ -25,7 +25,7 @@ BUFSIZ_PATH: Final = Path("/sys/module/spidev/parameters/bufsiz")
 """The spidev module parameter: the most bytes of one transfer (4096 unless the kernel was told otherwise)."""
 SPIDEV_MAX_BLOCK: Final = 65535
 """py-spidev splits ``writebytes2`` into blocks of at most this many bytes whatever ``bufsiz`` says."""
-SPIDEV_DEFAULT_BUFSIZ: Final = 4096
+SPIDEV_DEFAULT_BUFSIZ: Final = DEFAULT_MAX_TRANSFER
 """spidev's ``bufsiz`` when the module parameter cannot be read."""
 
 
