@@ -36,9 +36,13 @@ class PanelStats:
     bytes: int = 0
     host_seconds: float = 0.0
     bus_seconds: float = 0.0
-    last: FrameStats = dataclasses.field(default_factory=FrameStats)
     history: deque[FrameStats] = dataclasses.field(default_factory=lambda: deque(maxlen=HISTORY))
-    """The last :data:`HISTORY` frames, oldest first (``last`` is ``history[-1]``)."""
+    """The last :data:`HISTORY` frames, oldest first."""
+
+    @property
+    def last(self) -> FrameStats:
+        """The latest frame (an empty FrameStats before the first)."""
+        return self.history[-1] if self.history else FrameStats()
 
     @property
     def host_seconds_per_frame(self) -> float:
@@ -53,5 +57,4 @@ class PanelStats:
         self.bytes += frame.bytes
         self.host_seconds += frame.host_seconds
         self.bus_seconds += frame.bus_seconds
-        self.last = frame
         self.history.append(frame)
