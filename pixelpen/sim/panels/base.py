@@ -138,6 +138,11 @@ class PanelSim(SimulatedDevice):
         """What the controller flagged, oldest first: the latest ``EVENT_LOG_LIMIT`` (see ``events_dropped``)."""
         return list(self._events)
 
+    @property
+    def event_count(self) -> int:
+        """Every event flagged since construction, the dropped ones included (no copy of the log)."""
+        return len(self._events) + self.events_dropped
+
     def command(self, data: WireBytes) -> None:
         """Bytes with D/C low, one chip-select frame (unless chip select is held)."""
         self._spi(wire_bytes(data, "command"), dc=False)
