@@ -80,6 +80,12 @@ class Rect(NamedTuple):
         )
 
 
+def bounding(rects: Iterable[Rect]) -> Rect:
+    """The bounding rectangle of one or more rectangles."""
+    rects = list(rects)
+    return Rect(min(r.x0 for r in rects), min(r.y0 for r in rects), max(r.x1 for r in rects), max(r.y1 for r in rects))
+
+
 def merge_rects(
     rects: Iterable[Rect], merge_cost: float, bytes_per_pixel: float, max_count: int | None = None
 ) -> list[Rect]:

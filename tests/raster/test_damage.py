@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from pixelpen.errors import ConfigError
 from pixelpen.raster.canvas import Canvas
-from pixelpen.raster.damage import FEW_RECTS, DamageTracker, Rect, merge_rects, tile_damage
+from pixelpen.raster.damage import FEW_RECTS, DamageTracker, Rect, bounding, merge_rects, tile_damage
 
 
 def covered(rects: list[Rect], shape: tuple[int, int]) -> np.ndarray:
@@ -173,3 +173,9 @@ def test_changed_pixels_is_any_channel_differing(h, w, channels, seed):
     b = rng.integers(0, 2, shape, dtype=np.uint8)
     expected = (a != b).any(axis=2) if channels else a != b
     assert np.array_equal(changed_pixels(a, b), expected)
+
+
+def test_bounding_is_the_union_of_every_rectangle():
+    rects = [Rect(5, 2, 9, 4), Rect(1, 7, 3, 8), Rect(4, 0, 6, 1)]
+    assert bounding(rects) == Rect(1, 0, 9, 8) == rects[0].union(rects[1]).union(rects[2])
+    assert bounding([Rect(2, 3, 4, 5)]) == Rect(2, 3, 4, 5)

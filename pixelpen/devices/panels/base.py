@@ -34,7 +34,7 @@ from pixelpen.errors import ConfigError, InvalidArgument, LinkError, URLError
 from pixelpen.options import OptionSpec, OptionValues, boolean, choice, integer, pixels, positive, text
 from pixelpen.profiles.panel import InitStep, PanelProfile, load_panel_profile, panel_profile_for
 from pixelpen.raster.canvas import Canvas
-from pixelpen.raster.damage import Rect
+from pixelpen.raster.damage import Rect, bounding
 from pixelpen.sim.base import BusDevice, create_simulator
 from pixelpen.sim.base import simulator_options as simulator_specs
 from pixelpen.urls import DeviceURL
@@ -528,8 +528,7 @@ class PanelDisplay(RasterDisplay):
 
         if self.canvas_mode == "1":
             native = native.view(np.bool_)
-        box = Rect(min(w.x0 for w in windows), min(w.y0 for w in windows), max(w.x1 for w in windows),
-                   max(w.y1 for w in windows))
+        box = bounding(windows)
         if len(windows) == 1 or box.area > max(2 * sum(w.area for w in windows), PACK_ONCE):
             return [pack(native[w.slices], self.pixel_format) for w in windows]
         unit_rows = self.cost.align[1] if self.pixel_format == "mono-pages" else 1

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from pixelpen.devices.panels.windows import WindowCost
-from pixelpen.raster.damage import Rect, pixel_mask, tile_damage
+from pixelpen.raster.damage import Rect, bounding, pixel_mask, tile_damage
 
 EXACT_TRIM = 1 / 16
 """Damage of at most this share of the panel is cut exactly (bands of identical rows, runs of columns)."""
@@ -38,8 +38,7 @@ def trim_damage(rects: list[Rect], native: np.ndarray, shadow: np.ndarray, cost:
     if not exact:
         ax, ay = -(-TRIM_TILE // ax) * ax, -(-TRIM_TILE // ay) * ay
     elif len(rects) > 1:
-        box = Rect(min(r.x0 for r in rects), min(r.y0 for r in rects), max(r.x1 for r in rects),
-                   max(r.y1 for r in rects))
+        box = bounding(rects)
         if box.area <= 2 * sum(r.area for r in rects):
             rects = [box]  # one pass over their bounding box (outside the damage the canvas is the shadow)
     out: list[Rect] = []

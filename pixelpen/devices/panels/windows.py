@@ -26,7 +26,7 @@ from typing import NamedTuple
 
 from pixelpen.errors import ConfigError
 from pixelpen.profiles.panel import BYTES_PER_PIXEL, OLED_CONTROLLERS
-from pixelpen.raster.damage import FEW_RECTS, Rect, merge_rects
+from pixelpen.raster.damage import FEW_RECTS, Rect, bounding, merge_rects
 
 MIPI_WINDOW_BYTES = 11
 """CASET 2Ah + 4 parameter bytes, RASET 2Bh + 4, RAMWR 2Ch."""
@@ -98,16 +98,15 @@ def plan_windows(
             boxes.append(clipped.aligned(align[0], align[1], width, height))
     if not boxes:
         return []
-    bounding = Rect(min(b.x0 for b in boxes), min(b.y0 for b in boxes), max(b.x1 for b in boxes),
-                    max(b.y1 for b in boxes))
+    whole = bounding(boxes)
     if len(boxes) > MAX_RECTS:
-        boxes = [bounding]
+        boxes = [whole]
     one_band = band_rows is None or len({b.y0 // band_rows for b in boxes} | {(b.y1 - 1) // band_rows
                                                                               for b in boxes}) == 1
     if len(boxes) <= min(FEW_RECTS, max_windows) and one_band:
         few = merge_rects(boxes, window_overhead, bytes_per_pixel)
         few_bytes = sum(b.area for b in few) * bytes_per_pixel + len(few) * window_overhead
-        return [bounding] if bounding.area * bytes_per_pixel + window_overhead < few_bytes else few
+        return [whole] if whole.area * bytes_per_pixel + window_overhead < few_bytes else few
     strips = [s for b in boxes for s in _bands(b, band_rows)]
     band = band_rows or height
     damaged_bands = {s.y0 // band for s in strips}
@@ -119,8 +118,7 @@ def plan_windows(
     windows = [Rect(m.x0, m.y0 - (m.y0 // (band + _BAND_GAP)) * _BAND_GAP, m.x1,
                     m.y1 - (m.y0 // (band + _BAND_GAP)) * _BAND_GAP) for m in merged]
     per_band = {k: [s for s in strips if s.y0 // band == k] for k in damaged_bands}
-    bounding_strips = [Rect(min(s.x0 for s in v), min(s.y0 for s in v), max(s.x1 for s in v), max(s.y1 for s in v))
-                       for v in per_band.values()]
+    bounding_strips = [bounding(v) for v in per_band.values()]
 
     def cost(ws: list[Rect]) -> float:
         """Bytes of a plan under the merge model."""
