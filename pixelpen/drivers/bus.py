@@ -261,6 +261,12 @@ class FramedBus(abc.ABC):
         return LinkError(f"{self.name}: write of {nbytes} bytes failed: {error}")
 
 
+def check_spi_mode(name: str, mode: int) -> None:
+    """ConfigError unless ``mode`` is an SPI mode (0..3: clock polarity and phase)."""
+    if mode not in (0, 1, 2, 3):
+        raise ConfigError(f"{name}: SPI mode must be 0, 1, 2 or 3, got {mode!r}")
+
+
 class FourWireBus(FramedBus):
     """A 4-wire SPI panel bus: command frames with D/C low, data frames with D/C high (subclasses drive D/C)."""
 

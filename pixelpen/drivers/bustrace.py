@@ -80,16 +80,7 @@ class BusTrace:
 
     def stream(self, level: str) -> bytes:
         """Every byte sent at ``level`` (``C`` or ``D``) in order, continuation lines included."""
-        out = bytearray()
-        current = ""
-        for event in self.events:
-            if event.op in (COMMAND, DATA):
-                current = event.op
-            elif event.op == RESET:
-                current = ""
-            if current == level and event.data:
-                out += event.data
-        return bytes(out)
+        return b"".join(bytes(run.data) for run in _runs(self.events) if run.op == level)
 
 
 def bus_settings(bus: PanelBus) -> dict[str, object]:

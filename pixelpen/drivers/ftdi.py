@@ -18,7 +18,7 @@ import logging
 from typing import Any, ClassVar, Final
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.drivers.bus import FourWireBus
+from pixelpen.drivers.bus import FourWireBus, check_spi_mode
 from pixelpen.drivers.devnode import require_module
 from pixelpen.errors import ConfigError, LinkError
 
@@ -144,8 +144,7 @@ def _check_options(
     if not 0 < clock_hz <= MAX_CLOCK_HZ:
         raise ConfigError(f"{name}: SPI clock {clock_hz:g} Hz is outside 0..30 MHz (the FT232H's limit, "
                           "60 MHz / 2)")
-    if mode not in (0, 1, 2, 3):
-        raise ConfigError(f"{name}: SPI mode must be 0, 1, 2 or 3, got {mode!r}")
+    check_spi_mode(name, mode)
     if not 1 <= max_transfer <= MAX_TRANSFER:
         raise ConfigError(f"{name}: max_transfer must be 1..{MAX_TRANSFER} (pyftdi's limit), got {max_transfer}")
     if not 0 <= cs <= 4:

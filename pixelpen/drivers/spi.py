@@ -14,10 +14,10 @@ from pathlib import Path
 from typing import Any, ClassVar, Final
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.drivers.bus import DEFAULT_MAX_TRANSFER, FourWireBus
+from pixelpen.drivers.bus import DEFAULT_MAX_TRANSFER, FourWireBus, check_spi_mode
 from pixelpen.drivers.devnode import node_open_error, require_module
 from pixelpen.drivers.gpio import OutputLine, open_output_line
-from pixelpen.errors import ConfigError, LinkError
+from pixelpen.errors import LinkError
 
 log = logging.getLogger(__name__)
 
@@ -55,8 +55,8 @@ class SpiBus(FourWireBus):
         clock: Clock = REAL_CLOCK,
         name: str = "spi",
     ) -> None:
-        if mode is not None and mode not in (0, 1, 2, 3):
-            raise ConfigError(f"{name}: SPI mode must be 0, 1, 2 or 3, got {mode!r}")
+        if mode is not None:
+            check_spi_mode(name, mode)
         limit = spidev_bufsiz() if max_transfer is None else max_transfer
         super().__init__(name, clock_hz=clock_hz, max_transfer=limit, reset=reset, clock=clock,
                          closers=(spi.close, dc.close))
