@@ -25,9 +25,9 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, TypeGuard
 
-from pixelpen.errors import ConfigError, ParseError, quote_token
+from pixelpen.errors import ConfigError, quote_token
 from pixelpen.options import I2C_ADDRESSES
-from pixelpen.profiles.toml import Table, one_of, pair_of, profile_file, profile_key
+from pixelpen.profiles.toml import Table, one_of, pair_of, profile_file, profile_key, read_file, read_text
 from pixelpen.tomltext import read_toml
 from pixelpen.urls import check_path
 
@@ -429,23 +429,13 @@ def _profile(data: dict[str, Any], source: str, folder: Traversable | None) -> P
 
 def read_panel_profile(text: str, source: str, folder: Traversable | None = None) -> PanelProfile:
     """A panel profile from TOML text (``folder``: where a relative ``init_file`` is looked for)."""
-    if len(text) > MAX_BYTES:
-        raise ParseError(f"file of {len(text)} characters is larger than the {MAX_BYTES} allowed", source=source)
-    return _profile(read_toml(text, source, max_depth=MAX_DEPTH), source, folder)
+    return _profile(read_text(text, source, max_bytes=MAX_BYTES, max_depth=MAX_DEPTH), source, folder)
 
 
 def _read_path(path: Path) -> PanelProfile:
     """A panel profile file; errors name it."""
-    try:
-        size = path.stat().st_size
-        if size > MAX_BYTES:
-            raise ParseError(f"file of {size} bytes is larger than the {MAX_BYTES} allowed", source=str(path))
-        text = path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise ParseError("panel profile is not UTF-8 text", source=str(path), offset=exc.start) from None
-    except OSError as exc:
-        raise ConfigError(f"cannot read panel profile {str(path)!r}: {exc.strerror or exc}") from None
-    return read_panel_profile(text, str(path), path.parent)
+    tables = read_file(path, max_bytes=MAX_BYTES, max_depth=MAX_DEPTH, what="panel profile")
+    return _profile(tables, str(path), path.parent)
 
 
 @functools.lru_cache(maxsize=1)

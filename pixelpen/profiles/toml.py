@@ -242,25 +242,28 @@ def _profile(data: dict[str, Any], source: str) -> DeviceProfile:
     )
 
 
-def read_text(text: str, source: str) -> dict[str, Any]:
-    """TOML text as tables, refused when longer than MAX_BYTES or nested deeper than MAX_DEPTH."""
-    if len(text) > model.MAX_BYTES:
-        raise ParseError(f"file of {len(text)} characters is larger than the {model.MAX_BYTES} allowed", source=source)
-    return read_toml(text, source, max_depth=model.MAX_DEPTH)
+def read_text(text: str, source: str, *, max_bytes: int | None = None, max_depth: int | None = None) -> dict[str, Any]:
+    """TOML text as tables, refused beyond ``max_bytes`` or ``max_depth`` (default: model's limits, read now)."""
+    max_bytes = model.MAX_BYTES if max_bytes is None else max_bytes
+    if len(text) > max_bytes:
+        raise ParseError(f"file of {len(text)} characters is larger than the {max_bytes} allowed", source=source)
+    return read_toml(text, source, max_depth=model.MAX_DEPTH if max_depth is None else max_depth)
 
 
-def read_file(path: Path) -> dict[str, Any]:
-    """A TOML file as tables; errors name the file (size and nesting limits as :func:`read_text`)."""
+def read_file(path: Path, *, max_bytes: int | None = None, max_depth: int | None = None,
+              what: str = "profile") -> dict[str, Any]:
+    """A TOML file as tables; errors name the file and call it ``what`` (limits as :func:`read_text`)."""
+    max_bytes = model.MAX_BYTES if max_bytes is None else max_bytes
     try:
         size = path.stat().st_size
-        if size > model.MAX_BYTES:
-            raise ParseError(f"file of {size} bytes is larger than the {model.MAX_BYTES} allowed", source=str(path))
+        if size > max_bytes:
+            raise ParseError(f"file of {size} bytes is larger than the {max_bytes} allowed", source=str(path))
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
-        raise ParseError("profile is not UTF-8 text", source=str(path), offset=exc.start) from None
+        raise ParseError(f"{what} is not UTF-8 text", source=str(path), offset=exc.start) from None
     except OSError as exc:
-        raise ConfigError(f"cannot read profile {str(path)!r}: {exc.strerror or exc}") from None
-    return read_text(text, str(path))
+        raise ConfigError(f"cannot read {what} {str(path)!r}: {exc.strerror or exc}") from None
+    return read_text(text, str(path), max_bytes=max_bytes, max_depth=max_depth)
 
 
 def _builtin_dir() -> Traversable:
