@@ -240,11 +240,20 @@ def tile_damage(
         raise ConfigError(
             f"previous frame is {previous.shape} {previous.dtype}, the canvas is {current.shape} {current.dtype}"
         )
+    return mask_damage(changed_pixels(current, previous), tile, merge_cost, bytes_per_pixel)
+
+
+def mask_damage(
+    mask: np.ndarray,
+    tile: int | tuple[int, int] = 16,
+    merge_cost: float = DEFAULT_MERGE_COST,
+    bytes_per_pixel: float = 1.0,
+) -> list[Rect]:
+    """:func:`tile_damage` of an HxW mask of changed pixels already computed (``changed_pixels``)."""
     tw, th = _tile_size(tile)
-    height, width = current.shape[:2]
-    diff = changed_pixels(current, previous)
+    height, width = mask.shape[:2]
     changed = np.logical_or.reduceat(
-        np.logical_or.reduceat(diff, np.arange(0, height, th), axis=0), np.arange(0, width, tw), axis=1
+        np.logical_or.reduceat(mask, np.arange(0, height, th), axis=0), np.arange(0, width, tw), axis=1
     )
     return merge_rects(_tile_runs(changed, tw, th, width, height), merge_cost, bytes_per_pixel, _MAX_PENDING)
 

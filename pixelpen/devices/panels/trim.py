@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from pixelpen.devices.panels.windows import WindowCost
-from pixelpen.raster.damage import Rect, bounding, pixel_mask, tile_damage
+from pixelpen.raster.damage import Rect, bounding, mask_damage, pixel_mask
 
 EXACT_TRIM = 1 / 16
 """Damage of at most this share of the panel is cut exactly (bands of identical rows, runs of columns)."""
@@ -53,9 +53,10 @@ def trim_damage(rects: list[Rect], native: np.ndarray, shadow: np.ndarray, cost:
         if changed > SEND_WHOLE * diff.size:
             out.append(a)
             continue
-        cut = _bands(_units(pixel_mask(diff), ax, ay)) if exact else None
+        mask = pixel_mask(diff)
+        cut = _bands(_units(mask, ax, ay)) if exact else None
         if cut is None:
-            found = tile_damage(np.ascontiguousarray(now), before, (ax, ay), cost.window_bytes, cost.bytes_per_pixel)
+            found = mask_damage(mask, (ax, ay), cost.window_bytes, cost.bytes_per_pixel)
             out.extend(Rect(a.x0 + f.x0, a.y0 + f.y0, min(a.x0 + f.x1, width), min(a.y0 + f.y1, height))
                        for f in found)
             continue
