@@ -20,7 +20,8 @@ FORBIDDEN: dict[str, tuple[str, ...]] = {
     "profiles": ("display", "devices", "drivers", "sim", "commands", "cli", "raster", "vector"),
     "drivers": ("devices", "display", "sim", "commands", "cli"),
     "display": ("devices", "drivers", "sim", "commands", "cli"),
-    "devices": ("commands", "cli"),
+    "devices": ("commands", "cli", "input"),
+    "input": ("sim", "commands", "cli"),
 }
 """Room -> rooms (first component below ``pixelpen``) it must never import, not even inside a function."""
 
