@@ -9,32 +9,12 @@ fields are keyword-only after ``time`` and ``device``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
+from pixelpen.drivers.identity import DeviceId
 
-@dataclass(frozen=True, slots=True)
-class DeviceId:
-    """Who sent an event: bus, vendor/product IDs, serial, name, interface, and where it is now."""
-
-    bus: str
-    """``usb``, ``bluetooth``, ``i2c``, ``virtual`` (simulators and recordings) or ``unknown``."""
-    vendor_id: int
-    product_id: int
-    serial: str = ""
-    name: str = ""
-    interface: int = -1
-    """The USB interface number (-1 when the transport does not say)."""
-    path: str = field(default="", compare=False)
-    """Where the device is reached now (a hidraw node, a libusb path); it changes across replug."""
-
-    @property
-    def key(self) -> str:
-        """The identity that survives unplugging and plugging in again (``usb:046d:c52b:SERIAL:1``)."""
-        return f"{self.bus}:{self.vendor_id:04x}:{self.product_id:04x}:{self.serial}:{self.interface}"
-
-    def __str__(self) -> str:
-        serial = f" {self.serial}" if self.serial else ""
-        return f"{self.name or 'HID device'} ({self.bus} {self.vendor_id:04x}:{self.product_id:04x}{serial})"
+__all__ = ["Axis", "Button", "Contact", "DeviceAdded", "DeviceId", "DeviceRemoved", "Hat", "InputEvent", "Key",
+           "Motion", "Pen", "TouchFrame", "Wheel"]
 
 
 @dataclass(frozen=True, slots=True)
