@@ -277,7 +277,7 @@ def layouts(draw: st.DrawFn) -> ReportLayout:
             fields.append(Field(IN, rid, 0xFF00, usages, offset, size, count, lmin, lmax, 0, 0, 0, 0, VAR))
         else:
             lmin = draw(st.integers(-(1 << (size - 1)) if size > 1 else 0, 1))
-            n = draw(st.integers(1, min(1 << size, 300)))
+            n = draw(st.integers(1, min((1 << size) - 1, 300)))  # one value left to mean "no usage"
             lmax = min(lmin + n - 1 + draw(st.integers(0, 2)), (1 << (size - 1)) - 1 if lmin < 0 else (1 << size) - 1)
             usages = tuple(0x00090000 + next_usage + i for i in range(n))
             next_usage += n
