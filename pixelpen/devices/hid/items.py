@@ -1,0 +1,104 @@
+"""The items of a HID report descriptor: short items (0, 1, 2 or 4 data bytes) and long items, with their offsets.
+
+A short item's prefix is ``bTag(4) bType(2) bSize(2)`` (HID 1.11 §6.2.2.2); size code 3 means four data
+bytes, little-endian.  A long item is ``prefix, bDataSize, bLongItemTag, data`` (§6.2.2.3): the spec's prefix
+is 0xFE, and like the kernel's ``fetch_item`` (drivers/hid/hid-core.c) every prefix whose tag nibble is 15
+(0xF0..0xFF) is read as one.  :func:`tokenize` cuts the bytes into :class:`Item` tuples; a truncated item is
+a ParseError naming its offset.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+from pixelpen.errors import ParseError
+
+MAIN, GLOBAL, LOCAL, RESERVED = 0, 1, 2, 3
+"""The item types (bType)."""
+LONG_ITEM_TAG = 15
+"""The tag nibble that makes a prefix a long item (0xFE in the spec; 0xF0..0xFF in the kernel)."""
+
+TYPE_NAMES = ("Main", "Global", "Local", "Reserved")
+"""Item type names by bType."""
+
+ITEM_NAMES: dict[tuple[int, int], str] = {
+    (MAIN, 8): "Input", (MAIN, 9): "Output", (MAIN, 10): "Collection", (MAIN, 11): "Feature",
+    (MAIN, 12): "End Collection",
+    (GLOBAL, 0): "Usage Page", (GLOBAL, 1): "Logical Minimum", (GLOBAL, 2): "Logical Maximum",
+    (GLOBAL, 3): "Physical Minimum", (GLOBAL, 4): "Physical Maximum", (GLOBAL, 5): "Unit Exponent",
+    (GLOBAL, 6): "Unit", (GLOBAL, 7): "Report Size", (GLOBAL, 8): "Report ID", (GLOBAL, 9): "Report Count",
+    (GLOBAL, 10): "Push", (GLOBAL, 11): "Pop",
+    (LOCAL, 0): "Usage", (LOCAL, 1): "Usage Minimum", (LOCAL, 2): "Usage Maximum",
+    (LOCAL, 3): "Designator Index", (LOCAL, 4): "Designator Minimum", (LOCAL, 5): "Designator Maximum",
+    (LOCAL, 7): "String Index", (LOCAL, 8): "String Minimum", (LOCAL, 9): "String Maximum",
+    (LOCAL, 10): "Delimiter",
+}
+"""Item names by (type, tag) (HID 1.11 §6.2.2.4–6.2.2.8)."""
+
+_SIZES = (0, 1, 2, 4)
+
+
+class Item(NamedTuple):
+    """One item: where it starts and ends, its prefix byte, type, tag, data size and unsigned value."""
+
+    offset: int
+    end: int
+    prefix: int
+    type: int
+    tag: int
+    size: int
+    """Data bytes: 0, 1, 2 or 4 for a short item; bDataSize for a long one."""
+    value: int
+    """The data as an unsigned little-endian number (0 for a long item)."""
+    long: bool = False
+
+    @property
+    def signed(self) -> int:
+        """The data as a two's complement number of its size (the kernel's ``item_sdata``)."""
+        bits = 8 * self.size
+        if self.long or not bits or self.value < 1 << (bits - 1):
+            return 0 if self.long else self.value
+        return self.value - (1 << bits)
+
+    @property
+    def name(self) -> str:
+        """The item's name ("Usage Page", "Input", ...; "Long item" or "Reserved" otherwise)."""
+        if self.long:
+            return "Long item"
+        return ITEM_NAMES.get((self.type, self.tag)) or f"{TYPE_NAMES[self.type]} item tag {self.tag}"
+
+    def data(self, descriptor: bytes) -> bytes:
+        """The item's data bytes, cut from the descriptor it came from."""
+        return bytes(descriptor[self.end - self.size:self.end])
+
+
+def tokenize(data: bytes, *, source: str | None = None) -> list[Item]:
+    """The items of ``data`` in order; a ParseError names the offset of an item cut short by the end."""
+    items: list[Item] = []
+    append = items.append
+    new = tuple.__new__  # Item(...) without the generated __new__'s extra call: tokenizing is the parser's hot loop
+    n = len(data)
+    i = 0
+    while i < n:
+        b = data[i]
+        if b >> 4 == LONG_ITEM_TAG:
+            if n - i < 3:
+                raise ParseError(f"long item 0x{b:02X} cut short: its header needs 3 bytes, {n - i} left",
+                                 source=source, offset=i)
+            size = data[i + 1]
+            end = i + 3 + size
+            if end > n:
+                raise ParseError(f"long item cut short: {size} data bytes announced, {n - i - 3} left",
+                                 source=source, offset=i)
+            append(new(Item, (i, end, b, (b >> 2) & 3, data[i + 2], size, 0, True)))
+        else:
+            size = _SIZES[b & 3]
+            end = i + 1 + size
+            if end > n:
+                name = ITEM_NAMES.get(((b >> 2) & 3, b >> 4), f"item 0x{b:02X}")
+                raise ParseError(f"{name} cut short: {size} data bytes needed, {n - i - 1} left",
+                                 source=source, offset=i)
+            value = data[i + 1] if size == 1 else int.from_bytes(data[i + 1:end], "little") if size else 0
+            append(new(Item, (i, end, b, (b >> 2) & 3, b >> 4, size, value, False)))
+        i = end
+    return items
