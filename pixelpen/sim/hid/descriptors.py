@@ -364,6 +364,9 @@ TOUCHSCREEN = bytes([
     0x09, 0x55,        #   Usage (Contact Count Maximum)
     0x25, 0x0A,        #   Logical Maximum (10)
     0xB1, 0x02,        #   Feature (Data, Variable, Absolute): how many contacts the screen tracks
+    0x85, 0x03,        #   Report ID (3)
+    0x09, 0x52,        #   Usage (Input Mode)
+    0xB1, 0x02,        #   Feature (Data, Variable, Absolute): 0 mouse, 1 single-input, 2 multi-input
     0xC0,              # End Collection
 ])
 """A multitouch screen, 200 x 125 mm at 16 counts/mm, two fingers per report (hybrid mode beyond two).
@@ -373,6 +376,10 @@ confidence, bits 2-7 padding; a contact id uint8 0..127; X uint16 0..3200 (cm, e
 uint16 0..2000 (0..12.5 cm); bytes 13-14 scan time uint16 in 100 µs; byte 15 contact count uint8 (hybrid
 mode: the frame's count in its first report, 0 in the others).
 Feature report 2, 2 bytes: byte 0 = 0x02; byte 1 Contact Count Maximum 0..10.
+Feature report 3, 2 bytes: byte 0 = 0x03; byte 1 Input Mode 0..10 (0 mouse, 1 single-input, 2 multi-input, as
+Microsoft's touch devices have it; the kernel's hid-multitouch finds the usage in any feature report and sets 2).
+Windows samples put Input Mode in a Device Configuration (0x0D 0x0E) application of its own; here it stays in the
+touch screen's application so the device has one kind.
 """
 
 BOOT_KEYBOARD = bytes([
