@@ -1,0 +1,1 @@
+"""Recorded input devices, read and written in the formats of the tools that record them (hid-recorder, evemu)."""
