@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from pixelpen.errors import ParseError
+from pixelpen.errors import InvalidArgument, ParseError
 
 if TYPE_CHECKING:
     from pixelpen.devices.hid.events import DeviceId
@@ -61,6 +61,11 @@ AXIS_MIN, AXIS_MAX = -32768, 32767
 MAX_LINE = 8192
 MAX_INDEX = 1023
 MAX_DATABASE_BYTES = 16 << 20
+GUID_BYTES = 16
+VIRTUAL_BUS = 0xFF
+"""SDL_HARDWARE_BUS_VIRTUAL."""
+NAME_BYTES_WITH_SIGNATURE = 9
+"""A name-form GUID's name beside a driver signature: 10 bytes of room, NUL included."""
 
 BUS_IDS = {"usb": 0x03, "bluetooth": 0x05, "virtual": 0x06, "i2c": 0x18, "unknown": 0x00}
 """DeviceId.bus -> the Linux bus type (``linux/input.h`` BUS_*) SDL's Linux backend puts in the GUID."""
@@ -97,20 +102,34 @@ class SdlGuid:
 
     @classmethod
     def from_bytes(cls, data: bytes) -> SdlGuid:
-        """The fields of 16 GUID bytes (standard form when words 3 and 5 are zero, else the name form)."""
+        """The fields of 16 GUID bytes, as ``SDL_GetJoystickGUIDInfo`` reads them.
+
+        With a bus number (below 0x20, or 0xFF virtual): the standard form when words 3 and 5 are zero,
+        else the name form (a driver signature in bytes 14-15 when the name leaves them free).  Other
+        GUIDs (SDL's legacy forms) give only their bus, CRC 0; :meth:`MappingDatabase.find` compares the
+        bytes themselves, so nothing is lost for matching.
+        """
+        if len(data) != GUID_BYTES:
+            raise InvalidArgument(f"an SDL GUID is {GUID_BYTES} bytes, not {len(data)}")
         words = struct.unpack("<8H", data)
+        bus = words[0]
+        if not _is_bus(bus):
+            return cls(bus, 0, 0, 0, 0)
         if words[3] == 0 and words[5] == 0:
-            return cls(words[0], words[1], words[2], words[4], words[6], data[14], data[15])
-        return cls(words[0], words[1], 0, 0, 0, name=data[4:].split(b"\0")[0].decode("latin-1"))
+            return cls(bus, words[1], words[2], words[4], words[6], data[14], data[15])
+        name = data[4:].split(b"\0")[0]
+        signature = data[14:16] if len(name) <= NAME_BYTES_WITH_SIGNATURE and data[14] else b"\0\0"
+        return cls(bus, words[1], 0, 0, 0, signature[0], signature[1], name.decode("utf-8", "surrogateescape"))
 
     def to_bytes(self) -> bytes:
-        """The 16 bytes (``SDL_CreateJoystickGUID``'s layout)."""
-        if self.vendor:
+        """The 16 bytes in ``SDL_CreateJoystickGUID``'s layout: the standard form, or the name form when
+        ``name`` is set (the name's UTF-8 bytes cut to 11, or 9 beside a driver signature, NUL-terminated)."""
+        if not self.name:
             return struct.pack("<7H2B", self.bus, self.crc, self.vendor, 0, self.product, 0, self.version,
                                self.driver_signature, self.driver_data)
         head = struct.pack("<2H", self.bus, self.crc)
         space = 12 - (2 if self.driver_signature else 0)
-        body = self.name.encode("latin-1", "replace")[: space - 1].ljust(space, b"\0")
+        body = self.name.encode("utf-8", "surrogateescape")[: space - 1].ljust(space, b"\0")
         tail = bytes([self.driver_signature, self.driver_data]) if self.driver_signature else b""
         return head + body + tail
 
@@ -129,6 +148,21 @@ class SdlGuid:
         return bool(self.vendor and self.product)
 
 
+def _is_bus(word: int) -> bool:
+    """Whether a GUID's first word is a bus number (``SDL_GetJoystickGUIDInfo``: below 0x20, or 0xFF virtual)."""
+    return word < 0x20 or word == VIRTUAL_BUS
+
+
+def _cleared(data: bytes, *, version: bool) -> bytes:
+    """GUID bytes with the CRC word (and the version word) zeroed, as SDL's ``SDL_SetJoystickGUIDCRC`` and
+    ``SDL_SetJoystickGUIDVersion`` write them before comparing."""
+    out = bytearray(data)
+    out[2:4] = b"\0\0"
+    if version:
+        out[12:14] = b"\0\0"
+    return bytes(out)
+
+
 def parse_guid(text: str, *, source: str | None = None, line: int | None = None) -> SdlGuid:
     """32 hex digits -> :class:`SdlGuid`; a ParseError names the GUID field otherwise."""
     if len(text) != 32 or not all(c in "0123456789abcdefABCDEF" for c in text):
@@ -141,8 +175,10 @@ def sdl_guid(device: DeviceId, *, version: int = 0, name: str | None = None, bus
              driver_signature: int = 0, driver_data: int = 0, with_crc: bool = True) -> SdlGuid:
     """The GUID SDL's Linux backend gives ``device``: its bus, the CRC16 of its name, vendor, product, version.
 
-    ``name`` defaults to the device's (SDL uses the evdev name); ``with_crc=False`` gives the
-    CRC-less form the database uses.  The DeviceId has no version: pass the USB ``bcdDevice``.
+    ``SDL_CreateJoystickGUID``: the standard form when both vendor and product IDs are known, else the
+    name form (the name's first 11 bytes instead of the IDs and the version).  ``name`` defaults to the
+    device's (SDL uses the evdev name); ``with_crc=False`` gives the CRC-less form the database uses.
+    The DeviceId has no version: pass the USB ``bcdDevice``.
     """
     product_name = device.name if name is None else name
     checksum = crc16(product_name.encode("utf-8")) if with_crc and product_name else 0
@@ -151,8 +187,9 @@ def sdl_guid(device: DeviceId, *, version: int = 0, name: str | None = None, bus
                               driver_signature, 8), ("driver_data", driver_data, 8)):
         if not 0 <= value < 1 << bits:
             raise ValueError(f"{what} {value} does not fit in {bits} bits")
-    return SdlGuid(bus_type, checksum, device.vendor_id, device.product_id, version if device.vendor_id else 0,
-                   driver_signature, driver_data, "" if device.vendor_id else product_name)
+    if device.vendor_id and device.product_id:
+        return SdlGuid(bus_type, checksum, device.vendor_id, device.product_id, version, driver_signature, driver_data)
+    return SdlGuid(bus_type, checksum, 0, 0, 0, driver_signature, driver_data, product_name)
 
 
 @dataclass(frozen=True)
@@ -366,7 +403,7 @@ def parse_mapping(text: str, *, source: str | None = None, line: int | None = No
     ints = {key: _meta_int(meta[key], 16 if key == "crc" else 10, error(numbers[key]))
             for key in ("crc", "sdk>=", "sdk<=") if key in meta}
     crc = ints.get("crc")
-    if crc is None and info is not None and info.crc:
+    if info is not None and info.crc:  # SDL_PrivateAddMappingForGUID: a CRC in the GUID replaces the crc field
         crc = info.crc
     return GamepadMapping(guid, parts[1], tuple(bindings), meta.get("platform"), crc, tuple(hints),
                           ints.get("sdk>="), ints.get("sdk<="), meta.get("type"), meta.get("face"))
@@ -429,8 +466,8 @@ class MappingDatabase:
 
     @staticmethod
     def _key(mapping: GamepadMapping) -> str:
-        info = mapping.guid_info
-        guid = mapping.guid if info is None else info.replace(crc=0).hex
+        guid = mapping.guid if mapping.guid in SPECIAL_GUIDS else _cleared(bytes.fromhex(mapping.guid),
+                                                                           version=False).hex()
         return f"{guid}/{mapping.crc or 0:04x}"
 
     def __len__(self) -> int:
@@ -468,24 +505,29 @@ class MappingDatabase:
 
     def find(self, guid: SdlGuid | str) -> GamepadMapping | None:
         """The mapping for a device's GUID, or None (SDL's ``SDL_PrivateGetGamepadMappingForGUID``)."""
-        info = parse_guid(guid) if isinstance(guid, str) else guid
-        found = self._match(info, match_version=True)
+        if isinstance(guid, str):
+            parse_guid(guid)  # a ParseError names the GUID when it is not 32 hex digits
+            data = bytes.fromhex(guid)
+        else:
+            data = guid.to_bytes()
+        info = SdlGuid.from_bytes(data)
+        found = self._match(data, info.crc, match_version=True)
         if found is None and info.uses_version:
-            found = self._match(info, match_version=False)
+            found = self._match(data, info.crc, match_version=False)
         return found
 
-    def _match(self, info: SdlGuid, *, match_version: bool) -> GamepadMapping | None:
-        wanted = info.replace(crc=0) if match_version else info.replace(crc=0, version=0)
+    def _match(self, data: bytes, crc: int, *, match_version: bool) -> GamepadMapping | None:
+        """SDL's ``SDL_PrivateMatchGamepadMappingForGUID``: the bytes compared with the CRC (and the version)
+        cleared; a mapping whose ``crc`` is the device's wins, else the first without one."""
+        wanted = _cleared(data, version=not match_version)
         best = None
         for mapping in self._mappings.values():
-            other = mapping.guid_info
-            if other is None:
+            if mapping.guid in SPECIAL_GUIDS or _cleared(bytes.fromhex(mapping.guid),
+                                                         version=not match_version) != wanted:
                 continue
-            other = other.replace(crc=0) if match_version else other.replace(crc=0, version=0)
-            if other != wanted:
-                continue
-            if (mapping.crc or 0) == info.crc:
-                return mapping
-            if not mapping.crc:
+            if mapping.crc:
+                if mapping.crc == crc:
+                    return mapping
+            elif best is None:
                 best = mapping
         return best
