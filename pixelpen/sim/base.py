@@ -341,6 +341,13 @@ BUILTIN_SIMULATORS: dict[str, str] = {
     "ili9341": "pixelpen.sim.panels.mipidcs",
     "st7735": "pixelpen.sim.panels.mipidcs",
     "fbdev": "pixelpen.sim.panels.fbdev",
+    "mouse": "pixelpen.sim.hid.models",
+    "trackball": "pixelpen.sim.hid.models",
+    "joystick": "pixelpen.sim.hid.models",
+    "gamepad": "pixelpen.sim.hid.models",
+    "tablet": "pixelpen.sim.hid.models",
+    "touchscreen": "pixelpen.sim.hid.models",
+    "keyboard": "pixelpen.sim.hid.models",
 }
 """Model -> the module that registers its simulator when imported (only that module is loaded)."""
 

@@ -6,6 +6,7 @@ gets/sends feature reports.  A model's ``Firmware`` (``pixelpen.sim.hid.models``
 when its interrupt endpoint is polled — one report per polling interval at most, as on USB: a firmware that
 has several reports to send for one sample (a touch screen in hybrid mode) queues them and sends one per
 interval.  ``HidSim.from_descriptor`` builds a device from a descriptor and timed reports (a recording).
+``Layout`` is how a firmware packs a report: fields at bit offsets, little endian, two's complement where signed.
 
 Faults: ``power-loss`` stops the reports (nothing more is sent; ``connected`` turns False, and the host
 calls raise ``Disconnected`` as the host's own calls on a removed device fail); ``power-restore`` brings it
@@ -17,11 +18,13 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Any, ClassVar
 
 from pixelpen.clock import Clock
-from pixelpen.errors import ConfigError, Disconnected, InvalidArgumentType, ProtocolError, quote_token
+from pixelpen.errors import ConfigError, Disconnected, InvalidArgument, InvalidArgumentType, ProtocolError, quote_token
 from pixelpen.sim.base import Fault, SimulatedDevice
 
 HZ_RANGE = (1.0, 8000.0)
@@ -48,6 +51,60 @@ def numbered(descriptor: bytes) -> bool:
             return True
         i += 1 + (0, 1, 2, 4)[prefix & 0x03]
     return False
+
+
+@dataclass(frozen=True)
+class Layout:
+    """One report's layout as ``descriptors`` documents it: its length, report ID and fields by bit position.
+
+    ``fields`` maps a name to (bit offset from bit 0 of byte 0, the ID byte included; size in bits; signed).
+    """
+
+    length: int
+    report_id: int | None
+    fields: Mapping[str, tuple[int, int, bool]]
+
+    def pack(self, **values: int) -> bytes:
+        """The report with ``values`` (fields not named are 0), little-endian, two's complement where signed."""
+        word = 0 if self.report_id is None else self.report_id
+        for name, value in values.items():
+            offset, size, signed = self.fields[name]
+            low, high = (-(1 << (size - 1)), (1 << (size - 1)) - 1) if signed else (0, (1 << size) - 1)
+            if not low <= value <= high:
+                raise InvalidArgument(f"field {name} = {value} does not fit {size} bits "
+                                      f"({'signed' if signed else 'unsigned'})")
+            word |= (value & ((1 << size) - 1)) << offset
+        return word.to_bytes(self.length, "little")
+
+    def value(self, report: bytes, name: str) -> int:
+        """Field ``name`` of ``report`` (a host's output or feature report of this layout)."""
+        offset, size, signed = self.fields[name]
+        raw = (int.from_bytes(report, "little") >> offset) & ((1 << size) - 1)
+        return raw - (1 << size) if signed and raw >> (size - 1) else raw
+
+
+def layout(length: int, report_id: int | None, *fields: tuple[str, int] | tuple[str, int, bool]) -> Layout:
+    """A Layout from its fields in report order: (name, bits[, signed]); a name starting with ``_`` is padding."""
+    offset = 0 if report_id is None else 8
+    table: dict[str, tuple[int, int, bool]] = {}
+    for item in fields:
+        name, size = item[0], item[1]
+        if not name.startswith("_"):
+            table[name] = (offset, size, len(item) > 2 and bool(item[2]))
+        offset += size
+    if offset != 8 * length:
+        raise AssertionError(f"layout of {offset} bits is not {length} bytes")  # pragma: no cover - a typo here
+    return Layout(length, report_id, MappingProxyType(table))
+
+
+def clamp(value: float, low: int, high: int) -> int:
+    """``value`` rounded to the nearest integer, limited to low..high (what a firmware's saturating maths does)."""
+    return min(max(round(value), low), high)
+
+
+def bit_set(bits: Sequence[bool]) -> int:
+    """The integer whose bit i is ``bits[i]``."""
+    return sum(1 << i for i, b in enumerate(bits) if b)
 
 
 class Firmware:
