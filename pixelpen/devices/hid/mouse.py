@@ -12,11 +12,12 @@ trackball) or absolute (a virtual machine's tablet pointer):
 * **Wheel** — Generic Desktop Wheel (vertical, + away from the user) and Consumer AC Pan
   (0x0C0238, horizontal, + right), in detents.  A hi-res wheel declares a Resolution Multiplier
   (0x00010048) in a feature report: :meth:`Mouse.output_reports` gives the feature report that sets
-  it to its logical maximum (as the kernel's ``hid_setup_resolution_multiplier`` does), and the
-  wheels in the multiplier's logical collection (else its physical, else its application
-  collection; HUT §4.3.1) then report ``value / multiplier`` detents, the multiplier being the
-  kernel's ``hid_calculate_multiplier``: ``(v - lmin) / (lmax - lmin) * (pmax - pmin) + pmin``,
-  0 taken as 1.  ``hires=false`` leaves it at its minimum (usually 1).
+  it to its logical maximum (as the kernel's ``hidinput_change_resolution_multipliers`` does), and the
+  wheels in the multiplier's logical collection (without one, every wheel of its application: HUT
+  §4.3.1 "all controls in the report", the kernel's ``hid_apply_multiplier``) then report
+  ``value / multiplier`` detents, the multiplier being the kernel's ``hid_calculate_multiplier``:
+  ``(v - lmin) / (lmax - lmin) * (pmax - pmin) + pmin`` in integers, 0 and beyond ±255 taken as 1.
+  ``hires=false`` leaves it at its minimum (usually 1).
 * **Buttons** — Button page usages, press and release edges (1 left, 2 right, 3 middle, 4 side,
   5 extra as the kernel's BTN_LEFT..BTN_EXTRA).
 * **Absolute pointers** — absolute X/Y give :class:`~pixelpen.devices.hid.events.Axis` events
@@ -55,6 +56,8 @@ GD_X, GD_Y, GD_WHEEL, GD_RESOLUTION_MULTIPLIER = 0x00010030, 0x00010031, 0x00010
 CONSUMER_AC_PAN = 0x000C0238
 BUTTON_PAGE = 0x09
 MM_PER_INCH = 25.4
+MAX_MULTIPLIER = 255
+"""The kernel takes a larger Resolution Multiplier as a broken descriptor and uses 1 ("no devices with > 255")."""
 DEFAULT_DPI = 1000.0
 """libinput's DEFAULT_MOUSE_DPI: what velocities are normalised to, and the dpi assumed when none is known."""
 
@@ -101,12 +104,18 @@ def _check_speed(speed: float) -> None:
 
 
 def effective_multiplier(field: Field, value: int) -> int:
-    """The kernel's ``hid_calculate_multiplier`` for a Resolution Multiplier field set to ``value``."""
+    """The kernel's ``hid_calculate_multiplier`` for a Resolution Multiplier field set to ``value``.
+
+    ``(v - lmin) / (lmax - lmin) * (pmax - pmin) + pmin`` in C integer arithmetic (the division truncates
+    towards zero); an empty logical range, 0 and anything beyond ±255 give 1, as the kernel has it.
+    """
     span = field.logical_max - field.logical_min
     if span == 0:
         return 1
-    multiplier = (value - field.logical_min) // span * (field.physical_max - field.physical_min) + field.physical_min
-    return multiplier or 1
+    offset = value - field.logical_min
+    quotient = abs(offset) // abs(span) * (1 if (offset < 0) == (span < 0) else -1)
+    multiplier = quotient * (field.physical_max - field.physical_min) + field.physical_min
+    return multiplier if multiplier and -MAX_MULTIPLIER <= multiplier <= MAX_MULTIPLIER else 1
 
 
 @dataclass(frozen=True)
