@@ -26,9 +26,9 @@ def replay_device(recording: HidRecording | str | os.PathLike[str], *, clock: Cl
                   realtime: bool = False, device: int = 0) -> HidSim:
     """A HidSim sending ``recording``'s reports (a HidRecording, or device ``device`` of a hid-recorder file).
 
-    ``clock``: a simulated clock (the default: a new one) replays as fast as the host reads; with ``realtime``
-    the real clock (the default then) paces the reports as recorded.  A simulated clock with ``realtime``, or
-    a real one without, is an InvalidArgument.
+    ``clock``: by default a new simulated clock (the replay runs as fast as the host reads), or with
+    ``realtime`` the real clock (the reports are paced as recorded); a clock given is used as it is, except
+    that a simulated one with ``realtime`` is an InvalidArgument.
     """
     if isinstance(recording, (str, os.PathLike)):
         recordings = read_hid_recording(recording)
@@ -39,9 +39,8 @@ def replay_device(recording: HidRecording | str | os.PathLike[str], *, clock: Cl
         raise InvalidArgumentType(f"replay_device() takes a HidRecording or a file, not {type(recording).__name__}")
     if clock is None:
         clock = REAL_CLOCK if realtime else SimulatedClock()
-    elif isinstance(clock, SimulatedClock) == bool(realtime):
-        raise InvalidArgument("a real-time replay needs the real clock" if realtime else
-                              "replaying as fast as possible needs a simulated clock (realtime=True for a real one)")
+    elif realtime and isinstance(clock, SimulatedClock):
+        raise InvalidArgument("a real-time replay needs a real clock, not a SimulatedClock")
     return HidSim.from_descriptor(recording.descriptor, recording.reports, clock=clock, model="replay",
                                   info=hidapi_info(recording))
 
