@@ -26,7 +26,8 @@ logical minimum and rotated ranges all work.  Buttons are Button page usages wit
 
 Axes are indexed as SDL's Linux backend sees a HID joystick (for GameControllerDB mappings): in
 the order of the kernel's ABS codes (X, Y, Z, Rx, Ry, Rz, Throttle/Slider, Rudder/Dial,
-Wheel/Steering, Gas, Brake; repeated usages in descriptor order), buttons by usage number, hats in
+Wheel/Steering, Gas, Brake; a usage whose code is already taken gets no SDL index, as the kernel
+drops it, though it still gives its own ``x2``-style events), buttons by usage number, hats in
 descriptor order.  With the ``mapping`` option (an SDL GameControllerDB mapping string) the events
 are the named gamepad's instead: ``Axis("leftx")``, ``Button(name="a")``, see
 :mod:`pixelpen.devices.hid.gamecontrollerdb`.
@@ -118,7 +119,10 @@ def axial_deadzone(value: float, deadzone: float) -> float:
 
 
 def radial_deadzone(x: float, y: float, deadzone: float) -> tuple[float, float]:
-    """A stick's dead zone on its magnitude: zero inside the circle, rescaled outside (direction kept, |v| ≤ 1)."""
+    """A stick's dead zone on its magnitude: zero inside the circle, rescaled outside (direction kept, |v| ≤ 1).
+
+    ``deadzone`` 0 turns it off: ``x, y`` come back as they are (a square gate's corners stay beyond 1).
+    """
     if deadzone <= 0.0:
         return x, y
     magnitude = math.hypot(x, y)
@@ -272,17 +276,17 @@ class Joystick:
         order = 0
         for report_id, fields in self.descriptor.input_reports.items():
             report_buttons: list[int] = []
+            repeats: dict[int, int] = {}  # per report: the decoder lists a repeated usage's values report-wide
             for f in fields:
                 if f.is_constant:
                     continue
-                repeats: dict[int, int] = {}
                 for usage in (f.usages if f.is_array else f.usages[:f.count]):
                     if usage >> 16 == BUTTON_PAGE and usage & 0xFFFF:
                         report_buttons.append(usage & 0xFFFF)
                         continue
-                    index = repeats[usage] = repeats.get(usage, -1) + 1
                     if f.is_array:
                         continue
+                    index = repeats[usage] = repeats.get(usage, -1) + 1
                     if usage == GD_HAT_SWITCH:
                         self._hats_by_report.setdefault(report_id, []).append((hats, f, index))
                         hats += 1
@@ -303,8 +307,13 @@ class Joystick:
         if unknown:
             raise ConfigError(f"{where}: option calibration names axes the device lacks: {', '.join(unknown)} "
                               f"(it has {', '.join(a.name for _, _, a in axes) or 'none'})")
-        self.axes: tuple[_Axis, ...] = tuple(a for _, _, a in sorted(axes, key=lambda t: (t[0], t[1])))
+        ordered = sorted(axes, key=lambda t: (t[0], t[1]))
+        self.axes: tuple[_Axis, ...] = tuple(a for _, _, a in ordered)
         """The axes in SDL's order (by the kernel's ABS code)."""
+        self.sdl_axes: tuple[_Axis, ...] = tuple(a for i, (code, _, a) in enumerate(ordered)
+                                                 if i == 0 or ordered[i - 1][0] != code)
+        """The axes SDL's Linux backend sees: the first per ABS code (the kernel ignores a usage whose code is
+        taken, ``HID_STAT_DUP_DETECTED``; a second X, or Slider beside Throttle, has no SDL index)."""
         self.buttons: tuple[int, ...] = tuple(sorted(buttons))
         """Button-page usages in SDL's order (by usage number)."""
         self.hat_count = hats
@@ -385,7 +394,7 @@ class Joystick:
     def state(self) -> JoystickState:
         """The current state in SDL's indexing (axes not yet reported are at rest: centre, or minimum for 0..1)."""
         axes = []
-        for a in self.axes:
+        for a in self.sdl_axes:
             value = self._values.get(a.name, 0.0)
             axes.append(value if a.calibration.centre is not None else 2.0 * value - 1.0)
         return JoystickState(tuple(axes), tuple(b in self._pressed for b in self.buttons),
