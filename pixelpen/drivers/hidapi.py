@@ -217,31 +217,30 @@ def parse_hid_spec(spec: str) -> HidSpec:
     """``/dev/hidraw3``, ``1-2:1.0``, ``sim:mouse:0`` (paths), ``046d:c52b``, ``046d:c52b:SERIAL``, each ``@interface``.
 
     A spec whose first ``:``-separated field is 1-4 hex digits is VID:PID; anything else is a path
-    (``@`` is then part of the path).  Errors name the field and its column.
+    (``@`` is then part of the path).  Errors name the field and its offset in the spec.
     """
     if not isinstance(spec, str):
         raise InvalidArgumentType(f"a HID device spec is a str, not {type(spec).__name__}")
     if not spec.strip():
         raise ParseError("empty HID device spec (a path, VID:PID, VID:PID:SERIAL, each optionally @interface)",
-                         source=_SPEC_SOURCE, column=1, token=spec)
+                         source=_SPEC_SOURCE, offset=0, token=spec)
     head, colon, rest = spec.partition(":")
     if not colon or not _HEX_ID.fullmatch(head):
         return HidSpec(path=spec)
     body, at, iface_text = rest.rpartition("@") if "@" in rest else (rest, "", "")
     interface = None
     if at:
-        column = len(head) + 2 + len(body) + 1
         if not iface_text.isdigit() or int(iface_text) > 255:
             raise ParseError("interface after '@' must be a USB interface number 0..255", source=_SPEC_SOURCE,
-                             column=column + 1, token=iface_text)
+                             offset=len(head) + len(body) + 2, token=iface_text)
         interface = int(iface_text)
     pid_text, colon2, serial = body.partition(":")
     if not _HEX_ID.fullmatch(pid_text):
         raise ParseError(f"product ID after vendor ID {head} must be 1-4 hex digits", source=_SPEC_SOURCE,
-                         column=len(head) + 2, token=pid_text)
+                         offset=len(head) + 1, token=pid_text)
     if colon2 and not serial:
         raise ParseError("serial number after the second ':' is empty", source=_SPEC_SOURCE,
-                         column=len(head) + len(pid_text) + 3, token=spec)
+                         offset=len(head) + len(pid_text) + 2, token=spec)
     return HidSpec(vendor_id=int(head, 16), product_id=int(pid_text, 16), serial=serial if colon2 else None,
                    interface=interface)
 
