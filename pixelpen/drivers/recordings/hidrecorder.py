@@ -36,7 +36,9 @@ from contextlib import ExitStack
 from dataclasses import dataclass, field
 from typing import TextIO
 
+from pixelpen.clock import REAL_CLOCK, Clock
 from pixelpen.drivers.identity import DeviceId
+from pixelpen.drivers.reports import ReportLink
 from pixelpen.errors import InvalidArgument, InvalidArgumentType, ParseError, quote_token
 
 BUS_NAMES = {0x03: "usb", 0x05: "bluetooth", 0x06: "virtual", 0x18: "i2c", 0x1C: "spi"}
@@ -425,6 +427,43 @@ def write_hid_recording(recording: HidRecording | Sequence[HidRecording],
         out.flush()
 
 
+def record_link(link: ReportLink, file: TextIO, device: DeviceId, *, name: str | None = None,
+                duration: float | None = None, count: int | None = None, clock: Clock | None = None) -> int:
+    """Record ``link``'s input reports into ``file`` as hid-recorder does, each flushed as it comes; the count.
+
+    The header comes from ``device`` (``name`` instead of its name: hidraw names a device "Manufacturer
+    Product") and the link's descriptor; times are ``clock`` seconds after the first report.  Recording stops
+    after ``duration`` seconds, ``count`` reports, Ctrl-C (KeyboardInterrupt, taken as the end) or when the
+    device goes away (Disconnected, raised after what came before it is written).
+    """
+    if duration is not None and not (isinstance(duration, (int, float)) and duration >= 0 and math.isfinite(duration)):
+        raise InvalidArgument(f"duration {quote_token(duration)}: a finite number of seconds >= 0")
+    if count is not None and not (isinstance(count, int) and count >= 0):
+        raise InvalidArgument(f"count {quote_token(count)}: a whole number >= 0")
+    clock = clock if clock is not None else REAL_CLOCK
+    writer = HidRecordingWriter(file)
+    writer.device(HidRecording(device.name if name is None else name, "", BUS_NUMBERS.get(device.bus, 0),
+                               device.vendor_id, device.product_id, link.report_descriptor))
+    end = None if duration is None else clock.now() + duration
+    first: float | None = None
+    done = 0
+    try:
+        while count is None or done < count:
+            wait = None if end is None else end - clock.now()
+            if wait is not None and wait <= 0:
+                break
+            report = link.read_report(wait)
+            if report is None:
+                continue
+            now = clock.now()
+            first = now if first is None else first
+            writer.report(max(0.0, now - first), report)
+            done += 1
+    except KeyboardInterrupt:
+        pass
+    return done
+
+
 def _merged(recordings: Sequence[HidRecording]) -> Iterator[tuple[float, int, bytes]]:
     """Every device's reports as (time, device index, bytes), in time order (a device's own order kept)."""
     def stream(index: int, rec: HidRecording) -> Iterator[tuple[float, int, bytes]]:
@@ -434,4 +473,4 @@ def _merged(recordings: Sequence[HidRecording]) -> Iterator[tuple[float, int, by
 
 
 __all__ = ["BUS_NAMES", "LIMITS", "HidRecording", "HidRecordingWriter", "Limits", "RecordingWarning",
-           "read_hid_recording", "write_hid_recording"]
+           "read_hid_recording", "record_link", "write_hid_recording"]

@@ -18,6 +18,7 @@ from pixelpen.drivers.recordings.hidrecorder import (
     Limits,
     RecordingWarning,
     read_hid_recording,
+    record_link,
     write_hid_recording,
 )
 from pixelpen.errors import InvalidArgument, ParseError
@@ -340,3 +341,29 @@ def test_fuzzed_recordings_give_clean_errors():
 @pytest.mark.slow
 def test_fuzzed_recordings_give_clean_errors_long_campaign():
     campaign("hid-recorder", _target, _seeds(), SLOW_CASES, seed=random.Random(1102).randrange(10**6)).check()
+
+
+def test_record_link_writes_each_report_and_what_came_before_an_unplug():
+    from pixelpen.clock import SimulatedClock
+    from pixelpen.drivers.hidapi import open_hid
+    from pixelpen.errors import Disconnected
+    from pixelpen.sim.hid.replay import replay_device
+    from pixelpen.sim.transports.hidapi import SimHidapi
+
+    clock = SimulatedClock()
+    source = HidRecording("M", "", 3, 1, 2, BOOT_MOUSE, [(0.5, b"\x01\x00\x00"), (0.75, b"\x00\x00\x00"),
+                                                         (9.0, b"\x02\x00\x00")])
+    sim = replay_device(source, clock=clock)
+    module = SimHidapi([sim])
+    link = open_hid(module.paths()[0], module=module, clock=clock)
+    out = io.StringIO()
+    assert record_link(link, out, link.device_id, count=2, clock=clock) == 2
+    (rec,) = read_hid_recording(out.getvalue())
+    assert rec.reports == [(0.0, b"\x01\x00\x00"), (0.25, b"\x00\x00\x00")]  # times from the first report
+    sim.inject("power-loss")
+    out = io.StringIO()
+    with pytest.raises(Disconnected):
+        record_link(link, out, link.device_id, clock=clock)
+    assert read_hid_recording(out.getvalue())[0].reports == []
+    with pytest.raises(InvalidArgument):
+        record_link(link, io.StringIO(), link.device_id, duration=math.nan)
