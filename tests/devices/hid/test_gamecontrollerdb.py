@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import struct
 
 import pytest
 from hypothesis import given
@@ -188,9 +189,11 @@ def test_guid_fields_read_back():
     assert parse_guid("6d6963726f736f66742058626f782033").crc == 0
 
 
-@given(st.binary(min_size=16, max_size=16).filter(lambda b: b[0] < 0x20 and b[1] == 0 and b[6:8] == b"\0\0"
-                                                  and b[10:12] == b"\0\0"))
-def test_standard_form_round_trips(data):
+@given(st.integers(0, 0x1F), st.integers(0, 0xFFFF), st.integers(0, 0xFFFF), st.integers(0, 0xFFFF),
+       st.integers(0, 0xFFFF), st.binary(min_size=2, max_size=2))
+def test_standard_form_round_trips(bus, crc, vendor, product, version, tail):
+    # words: bus, crc, vendor, 0, product, 0, version (little endian), then driver signature and data bytes
+    data = struct.pack("<7H", bus, crc, vendor, 0, product, 0, version) + tail
     assert SdlGuid.from_bytes(data).to_bytes() == data
 
 
