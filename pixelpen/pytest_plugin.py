@@ -1,4 +1,4 @@
-"""pytest plugin ``pixelpen``: simulated plotters and panels for testing the applications that drive them.
+"""pytest plugin ``pixelpen``: simulated plotters, panels and input devices for testing the applications that use them.
 
 Installed with pixelpen (entry point ``pytest11``), it offers:
 
@@ -19,7 +19,18 @@ Installed with pixelpen (entry point ``pytest11``), it offers:
   ``recording()`` (the command and data frames on the bus).  ``st7789`` 240x240 unless parametrised
   indirectly like ``sim_plotter``; ``make_sim_panel(model, **options)`` is the factory;
 * ``--pixelpen-glass-dir DIR`` - save the glass of every simulated panel a failed test used, as
-  ``DIR/<test name>-<model>[-N].png``.
+  ``DIR/<test name>-<model>[-N].png``;
+* ``sim_input`` - a factory: ``sim_input(source, clock=None, **options)`` opens a simulated HID input device as
+  a ``pixelpen.input.InputDevice`` (``read(timeout)``, ``events()``) on a SimulatedClock of its own (or
+  ``clock``).  ``source`` is a model name (``"tablet"``: the ``sim:`` URL an application would open, options
+  the simulator declares, e.g. ``script="signature"``, go to it, the others to the device semantics), report
+  descriptor bytes (a device with that descriptor sending the ``reports=[(seconds, bytes), ...]`` given), or a
+  ``HidRecording``.  ``sim_input.simulator(device)`` is the simulated device behind it (``HidSim``: faults,
+  LEDs, feature settings), reached through the fake hidapi module just as the hardware would be;
+* ``replay_input`` - a factory: ``replay_input(path, clock=None, **options)`` opens a hid-recorder file
+  (``replay:`` URL; ``device=N``, ``realtime=``) the same way, as fast as it is read.
+
+Input devices opened by the two input fixtures are closed when the test ends.
 
 The simulated device is created when the application first opens the URL and reached again by its ``id``
 (also after a reconnect); it lives in the test's process, so the application must run in that process
@@ -46,7 +57,10 @@ if TYPE_CHECKING:
     from pixelpen.devices.panels.frames import FrameStats
     from pixelpen.display.kinds import RasterDisplay
     from pixelpen.drivers.bustrace import BusTrace
+    from pixelpen.drivers.recordings.hidrecorder import HidRecording
+    from pixelpen.input.device import InputDevice
     from pixelpen.sim.base import StreamDevice
+    from pixelpen.sim.hid.device import HidSim
 
 DEFAULT_MODEL = "hp7475a"
 """The model ``sim_plotter`` and ``sim_port`` simulate unless parametrised."""
@@ -330,6 +344,92 @@ class _PanelSession:
                 forget_simulator(panel.id)
 
 
+class SimInput:
+    """The ``sim_input`` factory of one test: opens simulated input devices, closes them when the test ends."""
+
+    def __init__(self) -> None:
+        self._opened: list[tuple[InputDevice, HidSim | None]] = []
+        self._named: list[str] = []
+
+    def __call__(self, source: str | bytes | HidRecording, *, clock: Any = None, **options: Any) -> InputDevice:
+        """An opened InputDevice over the simulated ``source`` (a model, descriptor bytes or a HidRecording)."""
+        from pixelpen.clock import SimulatedClock
+        from pixelpen.drivers.recordings.hidrecorder import HidRecording
+        from pixelpen.sim.hid.device import HidSim
+
+        clock = clock if clock is not None else SimulatedClock()
+        if isinstance(source, str):
+            return self._model(source, clock, options)
+        if isinstance(source, (bytes, bytearray, memoryview)):
+            sim = HidSim.from_descriptor(bytes(source), options.pop("reports", ()), clock=clock, model="hid")
+            where = "sim_input(descriptor)"
+        elif isinstance(source, HidRecording):
+            from pixelpen.sim.hid.replay import replay_device
+
+            sim = replay_device(source, clock=clock)
+            where = f"sim_input(recording {source.name!r})"
+        else:
+            raise pytest.UsageError(f"pixelpen: sim_input takes a model name, descriptor bytes or a HidRecording, "
+                                    f"not {type(source).__name__}")
+        device = _open_report_device(sim, clock, options, where)
+        self._opened.append((device, sim))
+        return device
+
+    def _model(self, model: str, clock: Any, options: dict[str, Any]) -> InputDevice:
+        """``sim:MODEL?...`` opened as an application opens it; the simulator's options in the URL."""
+        from pixelpen.input.registry import open_input
+        from pixelpen.sim.base import named_simulator, simulator_options
+        from pixelpen.urls import format_url
+
+        if "id" in options:
+            raise pytest.UsageError("pixelpen: option 'id' is set by sim_input (a unique id)")
+        names = {spec.name for spec in simulator_options(model)}
+        name = _new_id()
+        query = {"id": name, **{k: str(v) for k, v in options.items() if k in names}}
+        self._named.append(name)
+        device = open_input(format_url("sim", model, query), clock=clock,
+                            **{k: v for k, v in options.items() if k not in names})
+        self._opened.append((device, named_simulator(name)))
+        return device
+
+    def simulator(self, device: InputDevice) -> HidSim:
+        """The simulated HID device behind ``device`` (one this factory opened)."""
+        for opened, sim in self._opened:
+            if opened is device and sim is not None:
+                return sim
+        raise LookupError(f"{device!r} was not opened by sim_input")
+
+    def track(self, device: InputDevice) -> InputDevice:
+        """Close ``device`` when the test ends."""
+        self._opened.append((device, None))
+        return device
+
+    def finish(self) -> None:
+        """Close every device opened, forget the named simulators."""
+        from pixelpen.sim.base import forget_simulator
+
+        try:
+            for device, _ in self._opened:
+                device.close()
+        finally:
+            for name in self._named:
+                forget_simulator(name)
+
+
+def _open_report_device(sim: HidSim, clock: Any, options: dict[str, Any], where: str) -> InputDevice:
+    """``sim`` behind the fake hidapi module and the real HidapiLink, through the semantics its descriptor picks."""
+    from pixelpen.drivers.hidapi import open_hid
+    from pixelpen.input.device import InputDevice
+    from pixelpen.input.sources import report_source
+    from pixelpen.sim.transports.hidapi import SimHidapi
+
+    bus = SimHidapi([sim], clock=clock)
+    link = open_hid(bus.paths()[0], module=bus, clock=clock)
+    source = report_source(link, link.device_id, clock=clock, options=options, where=where)
+    source.bus = bus
+    return InputDevice(source, url=where)
+
+
 def _image_paths(folder: Path, request: pytest.FixtureRequest, made: list[Any]) -> list[tuple[Any, Path]]:
     """``folder/<test name>-<model>[-N].png`` for each device of ``made`` that was opened (folder created)."""
     folder.mkdir(parents=True, exist_ok=True)
@@ -413,3 +513,33 @@ def sim_panel(request: pytest.FixtureRequest, make_sim_panel: Callable[..., SimP
     """A simulated panel (ST7789 240x240 unless parametrised) whose ``url`` the application opens."""
     model, options = _parse_param(getattr(request, "param", DEFAULT_PANEL), DEFAULT_PANEL.partition("?")[0])
     return make_sim_panel(model, **options)
+
+
+@pytest.fixture
+def sim_input() -> Iterator[SimInput]:
+    """Factory ``sim_input(model | descriptor bytes | HidRecording, clock=None, **options) -> InputDevice`` on a
+    simulated clock; ``sim_input.simulator(device)`` is the simulated device.  Devices are closed after the test."""
+    factory = SimInput()
+    try:
+        yield factory
+    finally:
+        factory.finish()
+
+
+@pytest.fixture
+def replay_input(sim_input: SimInput) -> Callable[..., InputDevice]:
+    """Factory ``replay_input(path, clock=None, **options) -> InputDevice`` replaying a hid-recorder file (the
+    ``replay:`` URL: ``device=N`` picks a device of the file, ``realtime=True`` paces it; other options go to the
+    semantics), as fast as it is read on a simulated clock.  Devices are closed after the test."""
+    from pixelpen.input.registry import open_input
+    from pixelpen.input.sources import REPLAY_OPTIONS
+    from pixelpen.urls import format_url
+
+    names = {spec.name for spec in REPLAY_OPTIONS}
+
+    def replay(path: str | Path, *, clock: Any = None, **options: Any) -> InputDevice:
+        query = {k: str(v) for k, v in options.items() if k in names}
+        url = format_url("replay", str(path), query)
+        return sim_input.track(open_input(url, clock=clock, **{k: v for k, v in options.items() if k not in names}))
+
+    return replay
