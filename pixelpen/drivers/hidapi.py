@@ -36,7 +36,7 @@ import importlib.util
 import math
 import os
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -294,6 +294,41 @@ def _open_failure(info: HidInfo, backend: str, exc: OSError, present: list[HidIn
 
 # ---- the link ------------------------------------------------------------------------------------
 
+TOLERANCE = 1e-6
+"""A deadline this close (seconds) counts as reached (float sums of slices fall just short of it)."""
+
+
+def read_in_slices(read_once: Callable[[int], bytes | None], clock: Clock, timeout: float | None,
+                   what: str) -> bytes | None:
+    """Call ``read_once(ms)`` with waits of at most READ_SLICE until it returns a report or ``timeout`` passes.
+
+    ``timeout`` None waits forever (in slices, so Ctrl-C is seen between them), 0 polls once.  The number of
+    slices is bounded by the timeout as well as the clock, so a clock that does not move (a simulated clock
+    over real hardware) cannot make a read hang.
+    """
+    if timeout is not None and (not isinstance(timeout, (int, float)) or math.isnan(timeout)):
+        raise InvalidArgument(f"{what}: read timeout must be seconds or None, got {timeout!r}")
+    deadline = None if timeout is None or math.isinf(timeout) else clock.now() + max(0.0, timeout)
+    slices = None if deadline is None else math.ceil(max(0.0, float(timeout or 0)) / READ_SLICE) + 1
+    first = True
+    while True:
+        wait = READ_SLICE
+        if deadline is not None:
+            remaining = deadline - clock.now()
+            if not first and remaining <= TOLERANCE:
+                return None
+            wait = min(READ_SLICE, max(0.0, remaining))
+        first = False
+        report = read_once(max(0, math.ceil(wait * 1000 - TOLERANCE * 1000)))
+        if report is not None:
+            return report
+        if slices is not None:
+            slices -= 1
+            if slices <= 0:
+                return None
+
+
+
 class HidapiLink:
     """A ReportLink over an open hidapi device: reads with timeouts in slices, the report-ID rules, errors mapped."""
 
@@ -308,9 +343,10 @@ class HidapiLink:
         self._descriptor: bytes | None = None
         self._numbered = numbered
         self._closed = False
+        setter = getattr(device, "set_nonblocking", None)
         try:
-            self._nonblocking = device.set_nonblocking(1) == 0
-        except (AttributeError, OSError, ValueError):
+            self._nonblocking = callable(setter) and setter(1) == 0
+        except (OSError, ValueError):
             self._nonblocking = False
 
     @property
@@ -360,34 +396,20 @@ class HidapiLink:
 
     # ---- reports ---------------------------------------------------------------------------------
     def read_report(self, timeout: float | None = None) -> bytes | None:
-        """The next input report, or None after ``timeout`` seconds on the clock (None: wait, 0: poll).
-
-        Waits in slices of at most READ_SLICE inside hidapi; the number of slices is bounded by the timeout,
-        so a clock that does not move (a simulated clock over real hardware) cannot make it hang.
-        """
+        """The next input report, or None after ``timeout`` seconds on the clock (None: wait, 0: poll)."""
         self._check_open()
-        if timeout is not None and (not isinstance(timeout, (int, float)) or math.isnan(timeout)):
-            raise InvalidArgument(f"{self.info.path}: read timeout must be seconds or None, got {timeout!r}")
-        deadline = None if timeout is None or math.isinf(timeout) else self.clock.now() + max(0.0, timeout)
-        slices = None if deadline is None else math.ceil(max(0.0, float(timeout or 0)) / READ_SLICE) + 1
-        while True:
-            wait = READ_SLICE if deadline is None else min(READ_SLICE, deadline - self.clock.now())
-            ms = max(0, math.ceil(wait * 1000)) if wait > 0 else 0
-            if ms == 0 and not self._nonblocking:
-                ms = 1  # 0 would block forever on a blocking handle
-            try:
-                data = self.device.read(MAX_REPORT, ms)
-            except OSError as exc:
-                raise Disconnected(f"{self.info.path}: the device was removed during a read "
-                                   f"(hidapi: {self._detail(str(exc))})") from None
-            except ValueError as exc:  # cython-hidapi: "not open"
-                raise LinkError(f"{self.info.path}: read on a closed device ({exc})") from None
-            if data:
-                return bytes(data)
-            if deadline is not None:
-                slices = (slices or 1) - 1
-                if slices <= 0 or self.clock.now() >= deadline:
-                    return None
+        return read_in_slices(self._read_once, self.clock, timeout, self.info.path)
+
+    def _read_once(self, ms: int) -> bytes | None:
+        """One hidapi read waiting at most ``ms`` (0 only on a non-blocking handle, where it returns at once)."""
+        try:
+            data = self.device.read(MAX_REPORT, ms if ms > 0 or self._nonblocking else 1)
+        except OSError as exc:
+            raise Disconnected(f"{self.info.path}: the device was removed during a read "
+                               f"(hidapi: {self._detail(str(exc))})") from None
+        except ValueError as exc:  # cython-hidapi: "not open"
+            raise LinkError(f"{self.info.path}: read on a closed device ({exc})") from None
+        return bytes(data) if data else None
 
     def write_report(self, report: bytes) -> None:
         """Send an output report: ID first when numbered; hidapi's 0x00 is put in front for an unnumbered device."""

@@ -23,7 +23,6 @@ Appendix B layouts, which the report descriptor no longer describes (``protocol`
 from __future__ import annotations
 
 import errno as _errno
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -31,7 +30,7 @@ import usb.core
 import usb.util
 
 from pixelpen.clock import REAL_CLOCK, Clock
-from pixelpen.drivers.hidapi import READ_SLICE, numbered_reports, parse_hid_spec
+from pixelpen.drivers.hidapi import numbered_reports, parse_hid_spec, read_in_slices
 from pixelpen.drivers.identity import DeviceId
 from pixelpen.drivers.udev import permission_diagnosis
 from pixelpen.errors import (
@@ -266,24 +265,17 @@ class UsbHidLink:
     def read_report(self, timeout: float | None = None) -> bytes | None:
         """The next input report from the interrupt IN endpoint, or None after ``timeout`` clock seconds."""
         self._check_open()
-        if timeout is not None and (not isinstance(timeout, (int, float)) or math.isnan(timeout)):
-            raise InvalidArgument(f"{self.path}: read timeout must be seconds or None, got {timeout!r}")
-        deadline = None if timeout is None or math.isinf(timeout) else self.clock.now() + max(0.0, timeout)
-        slices = None if deadline is None else math.ceil(max(0.0, float(timeout or 0)) / READ_SLICE) + 1
-        while True:
-            wait = READ_SLICE if deadline is None else min(READ_SLICE, deadline - self.clock.now())
-            try:
-                data = self.device.read(self.target.in_endpoint, self.target.in_packet, max(1, math.ceil(wait * 1000)))
-            except usb.core.USBTimeoutError:
-                data = None
-            except usb.core.USBError as exc:
-                raise self._failure(exc, "interrupt IN read") from None
-            if data is not None and len(data):
-                return bytes(data)
-            if deadline is not None:
-                slices = (slices or 1) - 1
-                if slices <= 0 or self.clock.now() >= deadline:
-                    return None
+        return read_in_slices(self._read_once, self.clock, timeout, self.path)
+
+    def _read_once(self, ms: int) -> bytes | None:
+        """One interrupt IN transfer waiting at most ``ms`` (at least 1: libusb's 0 waits forever)."""
+        try:
+            data = self.device.read(self.target.in_endpoint, self.target.in_packet, max(1, ms))
+        except usb.core.USBTimeoutError:
+            return None
+        except usb.core.USBError as exc:
+            raise self._failure(exc, "interrupt IN read") from None
+        return bytes(data) if len(data) else None
 
     def write_report(self, report: bytes) -> None:
         """An output report: on the interrupt OUT endpoint if there is one, else SET_REPORT(Output)."""
