@@ -432,7 +432,7 @@ def _hint(value: str, error: FieldError) -> Hint:
 
 def _binding(key: str, value: str, error: FieldError) -> Binding:
     half = key[0] if key[:1] in ("+", "-") else ""
-    target = key[1:] if half else key
+    target = (key[1:] if half else key).lower()  # SDL compares target names with SDL_strcasecmp
     if target not in AXES and target not in BUTTONS:
         raise error(f"unknown gamepad target {target!r} (buttons: {' '.join(BUTTONS)}; axes: {' '.join(AXES)})")
     if half and target not in AXES:

@@ -29,8 +29,8 @@ the order of the kernel's ABS codes (X, Y, Z, Rx, Ry, Rz, Throttle/Slider, Rudde
 Wheel/Steering, Gas, Brake; a usage whose code is already taken gets no SDL index, as the kernel
 drops it, though it still gives its own ``x2``-style events), buttons by usage number, hats in
 descriptor order.  With the ``mapping`` option (an SDL GameControllerDB mapping string) the events
-are the named gamepad's instead: ``Axis("leftx")``, ``Button(name="a")``, see
-:mod:`pixelpen.devices.hid.gamecontrollerdb`.
+are the named gamepad's instead: ``Axis("leftx")``, ``Button(name="a")`` (press and release edges, as
+for raw buttons), see :mod:`pixelpen.devices.hid.gamecontrollerdb`.
 """
 
 from __future__ import annotations
@@ -410,7 +410,7 @@ class Joystick:
         events: list[InputEvent] = [Axis(time, self.device, axis=name, value=value, raw=round(value * 32767))
                                     for name, value in new.axes.items() if self._gamepad.axes.get(name) != value]
         events.extend(Button(time, self.device, button=new.button_number(name), pressed=down, name=name)
-                      for name, down in new.buttons.items() if self._gamepad.buttons.get(name) != down)
+                      for name, down in new.buttons.items() if self._gamepad.buttons.get(name, False) != down)
         self._gamepad = new
         return events
 

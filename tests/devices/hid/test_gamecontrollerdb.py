@@ -94,6 +94,11 @@ def test_half_axis_targets():
     assert joycon.platform == "Windows"
 
 
+def test_target_names_ignore_case_as_sdl_strcasecmp():
+    m = parse_mapping("030000005e0400008e02000004010000,Pad,A:b0,LeftX:a0,+LEFTY:a1,platform:Linux,")
+    assert [str(b) for b in m.bindings] == ["a:b0", "leftx:a0", "+lefty:a1"]
+
+
 def test_special_guid_and_text_round_trip():
     m = parse_mapping(XINPUT)
     assert m.guid == "xinput" and m.guid_info is None

@@ -254,8 +254,8 @@ def test_gamepad_with_the_ps4_mapping_gives_named_events():
     buttons = {e.name: (e.pressed, e.button) for e in events if isinstance(e, Button)}
     assert axes["leftx"] == 1.0 and axes["lefty"] == -1.0
     assert axes["lefttrigger"] == 1.0 and axes["righttrigger"] == 0.0
-    assert buttons["a"] == (True, 1) and buttons["dpup"] == (True, 12)
-    assert not buttons["x"][0] and not buttons["b"][0]
+    # edges only: the pressed buttons, no "released" for buttons never pressed
+    assert buttons == {"a": (True, 1), "dpup": (True, 12)}
     # the d-pad released: only dpup changes
     released = j.feed(report[:5] + bytes([0x28]) + report[6:], 5.1)
     assert [(e.name, e.pressed) for e in released if isinstance(e, Button)] == [("dpup", False)]
