@@ -10,6 +10,8 @@ import itertools
 from typing import Any
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from pixelpen.clock import SimulatedClock
 from pixelpen.errors import ConfigError, Disconnected, ProtocolError
@@ -387,3 +389,32 @@ def test_scripts_default_per_model_and_follow_the_surface() -> None:
     defaults = {m: next(s.default for s in simulator_options(m) if s.name == "script") for m in MODELS}
     assert defaults == {"mouse": "circle", "trackball": "circle", "joystick": "sweep", "gamepad": "sweep",
                         "tablet": "signature", "touchscreen": "pinch", "keyboard": "typing:hello"}
+
+
+@settings(max_examples=60, deadline=None)
+@given(x=st.integers(0, 44800), y=st.integers(0, 28000), pressure=st.integers(0, 8191),
+       tilt=st.tuples(st.integers(-64, 63), st.integers(-64, 63)), serial=st.integers(0, 2**31 - 1),
+       switches=st.lists(st.booleans(), min_size=6, max_size=6))
+def test_the_tablet_layout_packs_what_hid_tools_reads(x: int, y: int, pressure: int, tilt: tuple[int, int],
+                                                       serial: int, switches: list[bool]) -> None:
+    names = ("tip", "barrel", "invert", "eraser", "barrel2", "in_range")
+    report = models.TABLET_IN.pack(x=x, y=y, pressure=pressure, tilt_x=tilt[0], tilt_y=tilt[1], serial=serial,
+                                   **dict(zip(names, map(int, switches), strict=True)))
+    v = hidtools_report(descriptors.PEN_TABLET, report)
+    assert (v["X"], v["Y"], v["Tip Pressure"], v["X Tilt"], v["Y Tilt"]) == ([x], [y], [pressure], [tilt[0]],
+                                                                             [tilt[1]])
+    assert v["Transducer Serial Number"] == [serial]
+    usages = ("Tip Switch", "Barrel Switch", "Invert", "Eraser", "Secondary Barrel Switch", "In Range")
+    assert [v[u][0] for u in usages] == [int(s) for s in switches]
+
+
+@settings(max_examples=60, deadline=None)
+@given(sticks=st.lists(st.integers(0, 255), min_size=6, max_size=6), hat=st.integers(0, 8),
+       buttons=st.integers(0, 2**14 - 1))
+def test_the_gamepad_layout_packs_what_hid_tools_reads(sticks: list[int], hat: int, buttons: int) -> None:
+    names = ("x", "y", "z", "rz", "rx", "ry")
+    report = models.GAMEPAD_IN.pack(hat=hat, buttons=buttons, **dict(zip(names, sticks, strict=True)))
+    v = hidtools_report(descriptors.GAMEPAD, report)
+    assert [v[u][0] for u in ("X", "Y", "Z", "Rz", "Rx", "Ry")] == sticks
+    assert v["Hat switch"] == [hat]
+    assert [v[f"B{i}"][0] for i in range(1, 15)] == [buttons >> (i - 1) & 1 for i in range(1, 15)]
