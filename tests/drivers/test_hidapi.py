@@ -208,7 +208,7 @@ ENTRIES = [
 
 def test_enumerate_filters_each_field():
     module = StubModule(ENTRIES)
-    paths = lambda **f: [i.path for i in enumerate_hid(module=module, **f)]  # noqa: E731
+    paths = lambda **f: [i.path for i in enumerate_hid(module=module, **f)]
     assert paths(vendor_id=0x046D, product_id=0xC52B, usage_page=1, usage=2) == ["/dev/hidraw1", "/dev/hidraw2"]
     assert paths(usage_page=0x0C) == ["/dev/hidraw0"]
     assert paths(serial="BBB") == ["/dev/hidraw2"]
@@ -242,7 +242,7 @@ def test_open_by_ids_serial_and_interface_opens_that_path():
 
 def test_open_of_nothing_matching_lists_what_is_there():
     module = StubModule(ENTRIES)
-    with pytest.raises(LinkError, match="no HID device matches '046d:c52b:CCC'.*hidraw0"):
+    with pytest.raises(LinkError, match=r"no HID device matches '046d:c52b:CCC'.*hidraw0"):
         open_hid("046d:c52b:CCC", module=module)
     with pytest.raises(LinkError, match=r"none with these IDs \(present: 046d:c52b, 056a:0357\)"):
         open_hid("1234:5678", module=module)
@@ -277,20 +277,20 @@ def test_the_link_is_a_report_link():
 
 def test_unnumbered_write_gets_hidapis_leading_zero():
     device = StubDevice(BOOT_MOUSE)
-    l = link(device)
-    l.write_report(b"\x05")
-    l.send_feature(b"\x01\x02")
+    hl = link(device)
+    hl.write_report(b"\x05")
+    hl.send_feature(b"\x01\x02")
     assert device.written == [b"\x00\x05"] and device.features_sent == [b"\x00\x01\x02"]
 
 
 def test_numbered_write_goes_as_is_and_refuses_id_zero():
     device = StubDevice(TRACKBALL)
-    l = link(device)
-    l.write_report(b"\x03\x01")
-    l.send_feature(b"\x02\x04")
+    hl = link(device)
+    hl.write_report(b"\x03\x01")
+    hl.send_feature(b"\x02\x04")
     assert device.written == [b"\x03\x01"] and device.features_sent == [b"\x02\x04"]
-    with pytest.raises(InvalidArgument, match="report ID 1..255"):
-        l.write_report(b"\x00\x01")
+    with pytest.raises(InvalidArgument, match=r"report ID 1\.\.255"):
+        hl.write_report(b"\x00\x01")
 
 
 def test_unnumbered_feature_comes_back_without_hidapis_zero():
@@ -306,7 +306,7 @@ def test_numbered_feature_keeps_its_id():
     device = StubDevice(TRACKBALL)
     device.feature_answer = [0x02, 0x01]
     assert link(device).get_feature(2) == b"\x02\x01"
-    with pytest.raises(InvalidArgument, match="1..255"):
+    with pytest.raises(InvalidArgument, match=r"1\.\.255"):
         link(device).get_feature(0)
 
 
@@ -318,11 +318,11 @@ def test_reads_pass_reports_through():
 def test_numbered_can_be_given_when_there_is_no_descriptor():
     device = StubDevice()
     device.get_report_descriptor = None
-    l = HidapiLink(device, HidInfo("x", 1, 2), numbered=True, sysfs="/nonexistent")
-    l.write_report(b"\x01\x02")
+    hl = HidapiLink(device, HidInfo("x", 1, 2), numbered=True, sysfs="/nonexistent")
+    hl.write_report(b"\x01\x02")
     assert device.written == [b"\x01\x02"]
     with pytest.raises(LinkError, match="report descriptor"):
-        _ = l.report_descriptor
+        _ = hl.report_descriptor
 
 
 # ---- timeouts ---------------------------------------------------------------------------------------
@@ -367,7 +367,7 @@ def test_ctrl_c_inside_a_slice_reaches_the_caller():
 def test_read_error_is_disconnected():
     device = StubDevice(reads=[OSError("read error")])
     device.last_error = "hid_read_timeout: unexpected poll error (device disconnected)"
-    with pytest.raises(Disconnected, match="removed during a read.*device disconnected"):
+    with pytest.raises(Disconnected, match=r"removed during a read.*device disconnected"):
         link(device).read_report(1)
 
 
@@ -391,23 +391,23 @@ def test_failed_get_feature_stall_is_a_protocol_error():
 
 
 def test_bad_arguments():
-    l = link(StubDevice())
+    hl = link(StubDevice())
     with pytest.raises(InvalidArgument, match="empty"):
-        l.write_report(b"")
+        hl.write_report(b"")
     with pytest.raises(InvalidArgument, match="exceeds"):
-        l.write_report(bytes(hidapi.MAX_REPORT + 1))
+        hl.write_report(bytes(hidapi.MAX_REPORT + 1))
     with pytest.raises(InvalidArgument, match="timeout"):
-        l.read_report(float("nan"))
+        hl.read_report(float("nan"))
 
 
 def test_close_is_idempotent_and_final():
     device = StubDevice()
-    l = link(device)
-    l.close()
-    l.close()
+    hl = link(device)
+    hl.close()
+    hl.close()
     assert device.closed == 1
     with pytest.raises(LinkError, match="closed"):
-        l.read_report(0)
+        hl.read_report(0)
 
 
 # ---- descriptor from sysfs --------------------------------------------------------------------------
@@ -418,8 +418,8 @@ def test_descriptor_falls_back_to_sysfs_for_hidraw(tmp_path):
     (node / "report_descriptor").write_bytes(TRACKBALL)
     device = StubDevice()
     device.get_report_descriptor = None  # hidapi < 0.14
-    l = HidapiLink(device, HidInfo("/dev/hidraw7", 1, 2), sysfs=str(tmp_path))
-    assert l.report_descriptor == TRACKBALL and l.numbered
+    hl = HidapiLink(device, HidInfo("/dev/hidraw7", 1, 2), sysfs=str(tmp_path))
+    assert hl.report_descriptor == TRACKBALL and hl.numbered
 
 
 def test_descriptor_falls_back_to_sysfs_for_a_libusb_path(tmp_path):
@@ -432,5 +432,5 @@ def test_descriptor_falls_back_to_sysfs_for_a_libusb_path(tmp_path):
         raise OSError("read error")
 
     device.get_report_descriptor = fails
-    l = HidapiLink(device, HidInfo("1-2.3:1.0", 1, 2), backend="libusb", sysfs=str(tmp_path))
-    assert l.report_descriptor == BOOT_MOUSE and not l.numbered
+    hl = HidapiLink(device, HidInfo("1-2.3:1.0", 1, 2), backend="libusb", sysfs=str(tmp_path))
+    assert hl.report_descriptor == BOOT_MOUSE and not hl.numbered
