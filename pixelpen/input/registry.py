@@ -132,3 +132,18 @@ def open_input(url: str | DeviceURL, *, display: Display | None = None, clock: C
     parsed = url if isinstance(url, DeviceURL) else parse_url(url)
     source = input_opener(parsed.scheme)(parsed, clock=clock, options=dict(options))
     return InputDevice(source, url=str(parsed), display=display)
+
+
+def open_report_device(device: Any, *, display: Display | None = None, clock: Clock | None = None,
+                       **options: Any) -> InputDevice:
+    """An InputDevice over a simulated ReportDevice (a ``HidSim``), reached through the fake hidapi module.
+
+    The path ``sim:`` and ``replay:`` URLs take, for simulators built in code (tests, the pytest plugin);
+    ``clock`` defaults to the device's own.
+    """
+    from pixelpen.input.device import InputDevice
+    from pixelpen.input.sources import simulated_source
+
+    source = simulated_source(device, clock=clock or device.clock, options=dict(options),
+                              where=f"simulated {device.model}")
+    return InputDevice(source, display=display)

@@ -64,7 +64,7 @@ def report_source(link: Any, device_id: DeviceId, *, clock: Clock, options: dict
         raise
 
 
-def _via_fake_hidapi(device: Any, *, clock: Clock, options: dict[str, Any], where: str) -> ReportSource:
+def simulated_source(device: Any, *, clock: Clock, options: dict[str, Any], where: str) -> ReportSource:
     """A simulated ReportDevice reached as hardware is: the fake hidapi module and the real HidapiLink."""
     from pixelpen.drivers.hidapi import open_hid
 
@@ -89,7 +89,7 @@ def open_sim(url: DeviceURL, *, clock: Clock | None, options: dict[str, Any]) ->
     device = sim_base.create_simulator(model, clock=clock,
                                        **{k: v for k, v in url.options.items() if k in sim_names})
     semantics_options = {k: v for k, v in url.options.items() if k not in sim_names} | options
-    return _via_fake_hidapi(device, clock=clock, options=semantics_options, where=str(url))
+    return simulated_source(device, clock=clock, options=semantics_options, where=str(url))
 
 
 def open_hid_source(url: DeviceURL, *, clock: Clock | None, options: dict[str, Any]) -> EventSource:
@@ -114,7 +114,7 @@ def open_replay(url: DeviceURL, *, clock: Clock | None, options: dict[str, Any])
         raise URLError(f"{url}: device={index}, but the recording holds {len(recordings)} device(s)")
     replay = importlib.import_module("pixelpen.sim.hid.replay")
     device = replay.replay_device(recordings[index], clock=clock, realtime=own["realtime"])
-    return _via_fake_hidapi(device, clock=clock, options=rest | options, where=str(url))
+    return simulated_source(device, clock=clock, options=rest | options, where=str(url))
 
 
 class EvdevSource:

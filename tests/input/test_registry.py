@@ -1,0 +1,84 @@
+"""The input URL registry: schemes by module name, sim: and replay: through the real HidapiLink, errors."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from pixelpen.clock import SimulatedClock
+from pixelpen.devices.hid.events import Button, Motion, Pen
+from pixelpen.errors import URLError
+from pixelpen.input import open_input
+from pixelpen.input.registry import BUILTIN_INPUTS, input_opener, input_scheme_names, register_input
+
+
+def test_builtin_schemes_are_listed_without_importing_them() -> None:
+    assert {"sim", "hid", "replay", "evdev", "evemu"} <= set(input_scheme_names())
+    assert all(target.startswith("pixelpen.input.") for target in BUILTIN_INPUTS.values())
+
+
+def test_importing_the_registry_imports_no_simulator_and_no_numpy() -> None:
+    code = ("import sys, pixelpen, pixelpen.input.registry; "
+            "print(any(m.startswith('pixelpen.sim') for m in sys.modules), 'numpy' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["False", "False"]
+
+
+def test_unknown_scheme_lists_the_known() -> None:
+    with pytest.raises(URLError, match="unknown input scheme 'nope'.*evdev.*sim"):
+        input_opener("nope")
+
+
+def test_register_input_refuses_a_second_owner() -> None:
+    def opener(url, *, clock, options):  # type: ignore[no-untyped-def]
+        raise AssertionError
+
+    register_input("test-scheme-x")(opener)
+    assert input_opener("test-scheme-x") is opener
+    with pytest.raises(URLError, match="already registered"):
+        register_input("test-scheme-x")(lambda url, *, clock, options: None)  # type: ignore[arg-type,misc]
+
+
+def test_sim_url_opens_the_model_with_its_options_and_semantics_options() -> None:
+    clock = SimulatedClock()
+    with open_input("sim:tablet?script=signature&pressure_curve=gamma:2", clock=clock) as dev:
+        assert dev.device_id.path.startswith("sim:tablet:")
+        pens = [e for e in dev.events(timeout=1.0) if isinstance(e, Pen)]
+    assert len(pens) > 100 and any(p.touching for p in pens)
+    assert all(0.0 <= p.x <= 1.0 and 0.0 <= p.y <= 1.0 for p in pens)
+
+
+def test_sim_url_refuses_an_option_nobody_declares() -> None:
+    with pytest.raises(URLError, match="papr"):
+        open_input("sim:trackball?papr=a4", clock=SimulatedClock())
+
+
+RECORDING = """\
+# a boot mouse (HID 1.11 B.2) written by hand: two reports
+R: 50 05 01 09 02 a1 01 09 01 a1 00 05 09 19 01 29 03 15 00 25 01 95 03 75 01 81 02 95 01 75 05 81 01 05 01 09 30 09 31 15 81 25 7f 75 08 95 02 81 06 c0 c0
+N: hand mouse
+I: 3 1209 0001
+E: 000000.000000 3 01 05 fb
+E: 000000.010000 3 00 fd 02
+"""
+
+
+def test_replay_url_plays_a_hid_recorder_file(tmp_path: Path) -> None:
+    path = tmp_path / "mouse.hid"
+    path.write_text(RECORDING)
+    with open_input(f"replay:{path}") as dev:
+        events = list(dev.events(timeout=1.0))
+    motions = [(e.dx, e.dy) for e in events if isinstance(e, Motion)]
+    buttons = [(e.button, e.pressed) for e in events if isinstance(e, Button)]
+    assert motions == [(5, -5), (-3, 2)]  # 0xfb = -5, 0xfd = -3 (int8)
+    assert buttons == [(1, True), (1, False)]
+
+
+def test_replay_url_names_a_missing_device_index(tmp_path: Path) -> None:
+    path = tmp_path / "mouse.hid"
+    path.write_text(RECORDING)
+    with pytest.raises(URLError, match="device=3.*1 device"):
+        open_input(f"replay:{path}?device=3")
