@@ -21,8 +21,6 @@ from pixelpen.sim.hid.device import HidSim
 from pixelpen.sim.hid.motion import Hand, Script
 from tests.sim.hid import hidtools_report
 
-hid = pytest.importorskip("hidtools.hid")
-
 MODELS = ("mouse", "trackball", "joystick", "gamepad", "tablet", "touchscreen", "keyboard")
 
 
@@ -36,7 +34,8 @@ def run(model: str, seconds: float, **options: Any) -> tuple[HidSim, list[tuple[
 
 
 def field(descriptor: bytes, name: str, kind: str = "input_reports") -> Any:
-    """hid-tools' field of usage ``name``."""
+    """hid-tools' field of usage ``name`` (the test skipped without hid-tools)."""
+    hid = pytest.importorskip("hidtools.hid")
     rd = hid.ReportDescriptor.from_bytes(list(descriptor))
     return next(f for r in getattr(rd, kind).values() for f in r.fields if f.usage_name == name)
 
