@@ -13,6 +13,7 @@ from pixelpen.devices.hid.events import Button, Motion, Pen
 from pixelpen.errors import URLError
 from pixelpen.input import open_input
 from pixelpen.input.registry import BUILTIN_INPUTS, input_opener, input_scheme_names, register_input
+from pixelpen.sim.hid.descriptors import BOOT_MOUSE
 
 
 def test_builtin_schemes_are_listed_without_importing_them() -> None:
@@ -28,7 +29,7 @@ def test_importing_the_registry_imports_no_simulator_and_no_numpy() -> None:
 
 
 def test_unknown_scheme_lists_the_known() -> None:
-    with pytest.raises(URLError, match="unknown input scheme 'nope'.*evdev.*sim"):
+    with pytest.raises(URLError, match=r"unknown input scheme 'nope'.*evdev.*sim"):
         input_opener("nope")
 
 
@@ -56,9 +57,9 @@ def test_sim_url_refuses_an_option_nobody_declares() -> None:
         open_input("sim:trackball?papr=a4", clock=SimulatedClock())
 
 
-RECORDING = """\
+RECORDING = f"""\
 # a boot mouse (HID 1.11 B.2) written by hand: two reports
-R: 50 05 01 09 02 a1 01 09 01 a1 00 05 09 19 01 29 03 15 00 25 01 95 03 75 01 81 02 95 01 75 05 81 01 05 01 09 30 09 31 15 81 25 7f 75 08 95 02 81 06 c0 c0
+R: 50 {BOOT_MOUSE.hex(" ")}
 N: hand mouse
 I: 3 1209 0001
 E: 000000.000000 3 01 05 fb
@@ -80,5 +81,5 @@ def test_replay_url_plays_a_hid_recorder_file(tmp_path: Path) -> None:
 def test_replay_url_names_a_missing_device_index(tmp_path: Path) -> None:
     path = tmp_path / "mouse.hid"
     path.write_text(RECORDING)
-    with pytest.raises(URLError, match="device=3.*1 device"):
+    with pytest.raises(URLError, match=r"device=3.*1 device"):
         open_input(f"replay:{path}?device=3")
