@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import re
 import sys
-from pathlib import Path
 
 from pixelpen.devices.hid.descriptor import MAX_DESCRIPTOR_SIZE, parse_descriptor
 from pixelpen.devices.hid.dump import descriptor_dict, dump_descriptor
@@ -70,7 +70,7 @@ def read_source(spec: str, *, device: int = 0) -> tuple[bytes, int | None, int |
     """The descriptor SOURCE names, the device's vendor and product IDs when known, and the source's name."""
     if spec == "-":
         raw, name = sys.stdin.buffer.read(MAX_SOURCE_BYTES + 1), "<stdin>"
-    elif Path(spec).exists():
+    elif os.path.exists(spec):  # False, not an error, for hex text too long to be a file name
         with open(spec, "rb") as f:
             raw, name = f.read(MAX_SOURCE_BYTES + 1), spec
     elif spec.lstrip().startswith("R:"):
