@@ -1,7 +1,8 @@
 """pixelpen: one drawing API for pen plotters, framebuffer panels and files, with wire-level simulators.
 
 ``pixelpen.open(url)`` opens a display (``png:out.png``, ``svg:out.svg?size=a4``, ``sim:hp7475a``);
-pictures are built from the primitives in ``pixelpen.display.picture``.
+pictures are built from the primitives in ``pixelpen.display.picture``.  ``pixelpen.open_input(url)`` opens
+an input device (``sim:tablet?script=signature``, ``hid:046d:c52b``, ``replay:FILE``; see ``docs/input.md``).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from pixelpen import _moved
 from pixelpen.display.registry import known_schemes
 from pixelpen.display.registry import open_display as open
 from pixelpen.errors import ConfigError, LinkError, ParseError, PixelpenError, ProtocolError, URLError
+from pixelpen.input.registry import open_input
 
 if TYPE_CHECKING:
     from pixelpen.display.base import Display
@@ -82,4 +84,5 @@ __all__ = [
     "URLError",
     "known_schemes",
     "open",
+    "open_input",
 ]
