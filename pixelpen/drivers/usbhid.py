@@ -190,10 +190,14 @@ class UsbHidLink:
         self.protocol: str | None = None
         """``boot`` or ``report`` once set with ``set_protocol`` (None: the device's default, report protocol)."""
         self._claim(detach)
-        self.device_id = target.device_id
-        self._descriptor = self._read_descriptor()
-        if protocol is not None:
-            self.set_protocol(protocol)
+        try:
+            self.device_id = target.device_id
+            self._descriptor = self._read_descriptor()
+            if protocol is not None:
+                self.set_protocol(protocol)
+        except BaseException:
+            self._release()  # the kernel driver gets its interface back
+            raise
 
     def _claim(self, detach: bool) -> None:
         dev, number = self.device, self.target.interface
