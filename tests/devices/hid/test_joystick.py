@@ -12,6 +12,7 @@ from pixelpen.devices.hid import parse_descriptor
 from pixelpen.devices.hid.events import Axis, Button, Hat
 from pixelpen.devices.hid.fields import MAIN_NULL_STATE, MAIN_VARIABLE, Field, ReportKind
 from pixelpen.devices.hid.joystick import (
+    AXES,
     HAT_DIRECTIONS,
     AxisCalibration,
     Joystick,
@@ -298,3 +299,16 @@ def test_too_many_buttons_are_refused():
                   0x81, 0x02, 0xC0])
     with pytest.raises(ConfigError, match="buttons"):
         stick(many)
+
+
+def test_axis_codes_are_the_kernels_abs_codes():
+    ecodes = pytest.importorskip("evdev.ecodes")
+    # hid-input.c hidinput_configure_usage: Generic Desktop X..Wheel map to ABS_X + (usage & 0xf); Simulation
+    # Controls Rudder, Throttle, Accelerator, Brake, Steering to ABS_RUDDER, ABS_THROTTLE, ABS_GAS, ABS_BRAKE, ABS_WHEEL
+    kernel = {0x00010030: "ABS_X", 0x00010031: "ABS_Y", 0x00010032: "ABS_Z", 0x00010033: "ABS_RX",
+              0x00010034: "ABS_RY", 0x00010035: "ABS_RZ", 0x00010036: "ABS_THROTTLE", 0x00010037: "ABS_RUDDER",
+              0x00010038: "ABS_WHEEL", 0x000200BA: "ABS_RUDDER", 0x000200BB: "ABS_THROTTLE",
+              0x000200C4: "ABS_GAS", 0x000200C5: "ABS_BRAKE", 0x000200C8: "ABS_WHEEL"}
+    assert set(AXES) == set(kernel)
+    for usage, (name, code, _) in AXES.items():
+        assert code == ecodes.ecodes[kernel[usage]], name

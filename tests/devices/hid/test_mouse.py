@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from pixelpen.devices.hid import parse_descriptor
 from pixelpen.devices.hid.events import Axis, Button, Motion, Wheel
 from pixelpen.devices.hid.fields import MAIN_VARIABLE, Field, ReportKind
-from pixelpen.devices.hid.mouse import AdaptiveProfile, FlatProfile, Mouse, effective_multiplier
+from pixelpen.devices.hid.mouse import BUTTON_NAMES, AdaptiveProfile, FlatProfile, Mouse, effective_multiplier
 from pixelpen.devices.hid.semantics import OutputReport
 from pixelpen.drivers.identity import DeviceId
 from pixelpen.errors import ConfigError, ParseError
@@ -264,3 +264,51 @@ def test_bad_reports_raise_parse_error():
         m.feed(b"", 0.0)
     with pytest.raises(ParseError):
         m.feed(bytes([0x07, 0, 0, 0, 0, 0, 0, 0]), 0.0)  # no input report 7
+
+
+# -- against the simulated trackball (its firmware packs reports itself, from the descriptor's documentation) --
+
+def run_trackball(script: str, *, send_features: bool, **options: object) -> tuple[float, float, float, float]:
+    """Feed a simulated trackball's reports for one script to Mouse; the summed mm and detents."""
+    from pixelpen.clock import SimulatedClock
+    from pixelpen.sim.base import create_simulator
+
+    sim = create_simulator("trackball", clock=SimulatedClock(), script=script)
+    m = Mouse(parse_descriptor(sim.report_descriptor), DEV, **options)
+    if send_features:
+        for report in m.output_reports():
+            sim.send_feature(report.data)
+    x = y = wheel = pan = 0.0
+    while (t := sim.next_event_time()) is not None and t < 60.0:
+        sim.advance_to(t)
+        for report in sim.take_reports():
+            for event in m.feed(report, t):
+                if isinstance(event, Motion):
+                    x, y = x + event.dx_mm, y + event.dy_mm
+                elif isinstance(event, Wheel):
+                    wheel, pan = wheel + event.vertical, pan + event.horizontal
+    return x, y, wheel, pan
+
+
+def test_simulated_trackball_line_in_mm():
+    # the "line" script moves the hand from 20 % to 80 % of the model's 100 mm wide surface: 60 mm right;
+    # the firmware sends it as 400-cpi counts, so the sum is within one count (25.4 / 400 mm) of it
+    x, y, _, _ = run_trackball("line", send_features=True)
+    assert x == pytest.approx(60.0, abs=25.4 / 400) and y == pytest.approx(0.0, abs=25.4 / 400)
+
+
+def test_simulated_trackball_scroll_after_the_multiplier_feature():
+    _, _, wheel, pan = run_trackball("scroll", send_features=True)
+    assert (wheel, pan) == (5.0, 5.0)
+    # without the feature report the device stays at multiplier 1; hires=false reads whole detents
+    _, _, wheel, pan = run_trackball("scroll", send_features=False, hires=False)
+    assert (wheel, pan) == (5.0, 5.0)
+
+
+def test_button_names_follow_the_kernels_btn_codes():
+    ecodes = pytest.importorskip("evdev.ecodes")
+    # hid-input.c: Button page usage u of a mouse is BTN_MOUSE + (u - 1), BTN_MOUSE being BTN_LEFT
+    for usage, name in BUTTON_NAMES.items():
+        kernel = ecodes.BTN[ecodes.BTN_LEFT + usage - 1]
+        kernel = kernel[0] if isinstance(kernel, (tuple, list)) else kernel
+        assert kernel == "BTN_" + name.upper()
