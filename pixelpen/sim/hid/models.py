@@ -441,6 +441,7 @@ class Model:
 
     name: str
     build: Callable[[bytes, Script, OptionValues], ScriptedFirmware]
+    """The firmware from the descriptor, the script and the options (a keyboard's protocol picks its descriptor)."""
     descriptor: bytes
     scripts: tuple[str, ...]
     script: str
@@ -454,7 +455,9 @@ class Model:
     usage: tuple[int, int]
     """The top-level application's usage page and usage (what hidapi's enumerate() lists)."""
     options: tuple[OptionSpec[Any], ...] = ()
-    """The options of this model beyond ``COMMON_OPTIONS``."""
+    """The options of this model beyond the ones every model reads (``specs``)."""
+    buttons: int = motion.SWEEP_BUTTONS
+    """Buttons the ``sweep`` script presses in turn."""
 
     def specs(self) -> tuple[OptionSpec[Any], ...]:
         """Every option the model reads."""
@@ -489,7 +492,7 @@ def build_script(model: Model, values: OptionValues, where: str) -> Script:
         if name == "signature":
             return motion.signature((0.1 * w, 0.6 * h), 0.8 * w)
         if name == "sweep":
-            return motion.sweep(seconds, buttons=14 if model.name == "gamepad" else motion.SWEEP_BUTTONS, repeat=repeat)
+            return motion.sweep(seconds, buttons=model.buttons, repeat=repeat)
         if name == "orbit":
             return motion.orbit(seconds, repeat=repeat)
         if name == "pinch":
@@ -519,7 +522,7 @@ MODELS: dict[str, Model] = {m.name: m for m in (
     Model("joystick", lambda d, s, v: Joystick(d, s), descriptors.JOYSTICK, STICK_SCRIPTS, "sweep", 125.0,
           (0.0, 0.0), 0x0003, "Simulated joystick", (0x01, 0x04)),
     Model("gamepad", lambda d, s, v: Gamepad(d, s), descriptors.GAMEPAD, STICK_SCRIPTS, "sweep", 250.0,
-          (0.0, 0.0), 0x0004, "Simulated game pad", (0x01, 0x05)),
+          (0.0, 0.0), 0x0004, "Simulated game pad", (0x01, 0x05), buttons=14),
     Model("tablet", lambda d, s, v: Tablet(d, s, tool=v["tool"], serial=v["serial"]), descriptors.PEN_TABLET,
           POINTER_SCRIPTS, "signature", 200.0, (224.0, 140.0), 0x0005, "Simulated pen tablet", (0x0D, 0x01),
           (OptionSpec("tool", choice("pen", "eraser"), "pen", "which end of the pen the hand uses"),
@@ -530,7 +533,8 @@ MODELS: dict[str, Model] = {m.name: m for m in (
           (OptionSpec("fingers", integer(1, 10), 2, "fingers of the pinch script"),
            OptionSpec("contacts", integer(1, 10), 10, "Contact Count Maximum at power-up"),
            OptionSpec("mode", choice(*INPUT_MODES), "multi", "Input Mode at power-up: mouse, single or multi"))),
-    Model("keyboard", lambda d, s, v: Keyboard(d, s, nkro=v["protocol"] == "nkro"), descriptors.BOOT_KEYBOARD,
+    Model("keyboard", lambda d, s, v: Keyboard(descriptors.NKRO_KEYBOARD if v["protocol"] == "nkro" else d, s,
+                                               nkro=v["protocol"] == "nkro"), descriptors.BOOT_KEYBOARD,
           ("typing", "idle"), "typing:hello", 125.0, (0.0, 0.0), 0x0007, "Simulated keyboard", (0x01, 0x06),
           (OptionSpec("protocol", choice("boot", "nkro"), "boot", "boot (six keys) or nkro (a bitmap of every key)"),
            OptionSpec("rate", positive, 10.0, "typing speed in keys per second"))),
@@ -543,10 +547,7 @@ def create(name: str, clock: Clock | None = None, **options: str) -> HidSim:
     model = MODELS[name]
     where = f"sim:{name}"
     values = read_options(model.specs(), options, where)
-    descriptor = model.descriptor
-    if name == "keyboard" and values["protocol"] == "nkro":
-        descriptor = descriptors.NKRO_KEYBOARD
-    firmware = model.build(descriptor, build_script(model, values, where), values)
+    firmware = model.build(model.descriptor, build_script(model, values, where), values)
     info = {"vendor_id": VENDOR_ID, "product_id": model.product_id, "serial_number": f"SIM-{name.upper()}",
             "release_number": 0x0100, "manufacturer_string": "pixelpen", "product_string": model.product,
             "usage_page": model.usage[0], "usage": model.usage[1], "interface_number": 0, "bus_type": 1}
