@@ -12,7 +12,8 @@ configuration, claims, strings).  What a USB HID device adds (HID 1.11 §6.2.1, 
   have STALLs (EPIPE); ``SET_IDLE``/``GET_IDLE``; ``SET_PROTOCOL``/``GET_PROTOCOL`` on boot interfaces (the
   device's ``set_protocol(0|1)`` is called when it has one; others keep sending what they send);
 * the kernel's usbhid driver is bound at first: ``claim_interface`` fails with EBUSY until
-  ``detach_kernel_driver`` (``attach_kernel_driver`` binds it again; ``kernel_driver`` tells);
+  ``detach_kernel_driver`` (``attach_kernel_driver`` binds it again; ``kernel_driver`` tells) — and so do
+  requests to the interface, which pyusb (like usbfs) claims first;
 * interrupt IN: the device's reports after ``advance_to(clock.now())``, waiting for the next one up to the
   timeout on the clock (libusb's 0: forever) as the hidapi fake does (``ReportQueue``); none ->
   ``USBTimeoutError`` (errno 110); a report longer than the buffer -> overflow error;
