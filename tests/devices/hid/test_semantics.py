@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import warnings
+
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from pixelpen.devices.hid import parse_descriptor
-from pixelpen.devices.hid.events import Button, Key, Motion
+from pixelpen.devices.hid.codec import ShortReportWarning
+from pixelpen.devices.hid.events import Button, InputEvent, Key, Motion
 from pixelpen.devices.hid.fields import ReportDescriptor, ReportKind
 from pixelpen.devices.hid.joystick import Joystick
 from pixelpen.devices.hid.mouse import Mouse
@@ -232,3 +237,22 @@ def test_python_values_become_url_text():
     assert values["flag"] is True and values["pair"] == "x:y"
     with pytest.raises(ConfigError, match=r"here.*flag"):
         read_semantics_options(specs, {"flag": "perhaps"}, "here")
+
+
+# -- any bytes: events or a ParseError, never another exception ----------------------------------------------
+
+@pytest.mark.parametrize("data", [BOOT_MOUSE, TRACKBALL, JOYSTICK, GAMEPAD, MULTI_AXIS, KEYBOARD_MOUSE_VENDOR],
+                         ids=["boot_mouse", "trackball", "joystick", "gamepad", "multi_axis", "composite"])
+@settings(max_examples=60, deadline=None)
+@given(reports=st.lists(st.tuples(st.binary(max_size=24), st.floats(-1e6, 1e6)), max_size=8))
+def test_random_reports_give_events_or_parse_errors(data, reports):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ShortReportWarning)
+        sem = semantics_for(parse_descriptor(data), DEV, acceleration="adaptive") if data in (
+            BOOT_MOUSE, TRACKBALL) else semantics_for(parse_descriptor(data), DEV)
+        for report, time in reports:  # times in any order: a replay may jump back
+            try:
+                events = sem.feed(report, time)
+            except ParseError:
+                continue
+            assert all(isinstance(e, InputEvent) and e.device == DEV for e in events)
