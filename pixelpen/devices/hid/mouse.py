@@ -34,6 +34,9 @@ Acceleration profiles (option ``acceleration``), after libinput's (``src/filter-
   report is Simpson's average over the previous and the current velocity, as libinput's
   ``calculate_acceleration_simpsons``.  The velocity is this report's distance over the time since
   the previous report (clamped to 0.125 ms..1 s; libinput averages over up to 16 trackers).
+
+The accelerated ``dx``/``dy`` stay in the device's counts (libinput's output is in 1000-dpi units: multiply
+by ``1000 / dpi`` to compare).
 """
 
 from __future__ import annotations
@@ -235,7 +238,10 @@ class Mouse:
         return reports, multipliers
 
     def output_reports(self) -> list[OutputReport]:
-        """The feature reports to send after opening: each Resolution Multiplier set to its maximum."""
+        """The feature reports to send after opening: each Resolution Multiplier set to its maximum.
+
+        Other fields of such a report are sent as 0 (the kernel reads the report first to keep them).
+        """
         return list(self._multiplier_reports)
 
     def describe(self) -> str:
