@@ -72,6 +72,10 @@ BOOT_LEDS = ReportLayout(ReportKind.OUTPUT, None, (
 """The boot keyboard LED output report: Num Lock, Caps Lock, Scroll Lock, Compose, Kana bits, 3 bits padding."""
 
 
+ROLLED_OVER = -1
+"""What an array element reporting ErrorRollOver gives in a plan's table."""
+
+
 @dataclass(frozen=True)
 class _KeyPlan:
     """One input report: its decoder, its Keyboard-page variables and arrays, as element indices."""
@@ -79,8 +83,9 @@ class _KeyPlan:
     decoder: ReportDecoder
     variables: tuple[tuple[int, int], ...]
     """(element index, usage ID) of each Keyboard-page variable (modifier bits, a bitmap's bits)."""
-    arrays: tuple[tuple[Field, tuple[int, ...]], ...]
-    """Each Keyboard-page array field and its elements' indices."""
+    arrays: tuple[tuple[tuple[int, ...], dict[int, int]], ...]
+    """Each Keyboard-page array: its elements' indices, and logical value -> the key usage ID it reports
+    (:data:`ROLLED_OVER` for ErrorRollOver; values reporting no key are absent)."""
 
 
 def _plan(decoder: ReportDecoder) -> _KeyPlan | None:
@@ -94,7 +99,15 @@ def _plan(decoder: ReportDecoder) -> _KeyPlan | None:
             arrays.setdefault(e.field, []).append(index)
     if not variables and not arrays:
         return None
-    return _KeyPlan(decoder, tuple(variables), tuple((f, tuple(i)) for f, i in arrays.items()))
+    tables = []
+    for f, indices in arrays.items():
+        table = {}
+        for value in range(f.logical_min, min(f.logical_max, f.logical_min + len(f.usages) - 1) + 1):
+            key = array_usage(f, value, decoder.variable_keys)  # the codec's rule for what an array reports
+            if key is not None and key[0] == KEYBOARD_PAGE and (key[1] >= FIRST_KEY or key[1] == ERROR_ROLL_OVER):
+                table[value] = ROLLED_OVER if key[1] == ERROR_ROLL_OVER else key[1]
+        tables.append((tuple(indices), table))
+    return _KeyPlan(decoder, tuple(variables), tuple(tables))
 
 
 def _layout_name(text: str) -> str:
@@ -133,7 +146,8 @@ class Keyboard:
         """Whether a lock key changed the lock state since the last :meth:`led_report`."""
         self._modifiers: set[int] = set()
         self._keys: dict[int, None] = {}
-        self._array_keys: dict[Field, tuple[int, ...]] = {}
+        self._array_keys: dict[tuple[int | None, int], list[int]] = {}
+        self._down: list[int] = []
 
     def _leds(self) -> tuple[ReportEncoder | None, int | None]:
         """The encoder of the LED output report (the first output report with LED-page usages)."""
@@ -166,11 +180,12 @@ class Keyboard:
 
     def describe(self) -> str:
         """What was found: the protocol, arrays or bitmap, LEDs and the layout."""
-        kinds = set()
+        kinds: set[str] = set()
         for plan in ([self._boot_plan] if self._boot_plan is not None else self._plans.values()):
-            for f in plan.decoder.layout.fields:
-                if not f.is_constant and any(u >> 16 == KEYBOARD_PAGE for u in f.usages):
-                    kinds.add(f"{f.count}-key array" if f.is_array else "bitmap")
+            kinds.update(f"{len(indices)}-key array" for indices, _ in plan.arrays)
+            keys = sum(1 for _, usage in plan.variables if usage not in MODIFIER_NAMES)
+            if keys:
+                kinds.add(f"{keys}-key bitmap")
         leds = "LEDs" if self._led_encoder is not None else "no LEDs"
         protocol = "boot protocol" if self.boot else "report protocol"
         return (f"{self.device}: keyboard, {protocol}, {', '.join(sorted(kinds))}, {leds}, "
@@ -185,7 +200,7 @@ class Keyboard:
 
     def feed(self, report: bytes, time: float) -> list[InputEvent]:
         """The events of one input report: modifier changes, releases, then presses."""
-        plan = self._boot_plan
+        plan, report_id = self._boot_plan, None
         if plan is None:
             report_id = self.descriptor.report_id_of(report)
             if report_id not in self._plans:
@@ -194,37 +209,43 @@ class Keyboard:
             plan = self._plans[report_id]
         values = plan.decoder.values(report)
         down = [usage for index, usage in plan.variables if values[index]]
-        for f, indices in plan.arrays:
-            reported = [array_usage(f, values[i], plan.decoder.variable_keys) for i in indices]
-            if (KEYBOARD_PAGE, ERROR_ROLL_OVER) not in reported:  # else the kernel ignores the field: its keys stay
-                self._array_keys[f] = tuple(k[1] for k in reported if k is not None and k[0] == KEYBOARD_PAGE
-                                            and k[1] >= FIRST_KEY)
-            down.extend(self._array_keys.get(f, ()))
+        for number, (indices, table) in enumerate(plan.arrays):
+            reported = [table[v] for v in (values[i] for i in indices) if v in table]
+            if ROLLED_OVER not in reported:  # else the kernel ignores the field: its keys stay as they were
+                self._array_keys[report_id, number] = reported
+            down.extend(self._array_keys.get((report_id, number), ()))
+        if down == self._down:
+            return []
+        self._down = down
         modifiers = {u for u in down if u in MODIFIER_NAMES}
         keys = dict.fromkeys(u for u in down if u not in MODIFIER_NAMES)
         events: list[InputEvent] = []
         for usage in sorted(modifiers ^ self._modifiers):
-            held = usage in modifiers
-            (self._modifiers.add if held else self._modifiers.discard)(usage)
-            events.append(self._key(time, usage, held))
+            pressed = usage in modifiers
+            (self._modifiers.add if pressed else self._modifiers.discard)(usage)
+            events.append(self._key(time, usage, pressed, self._held()))
+        held = self._held()
         for usage in [u for u in self._keys if u not in keys]:
             del self._keys[usage]
-            if usage in LOCKING_KEYS:
-                self._lock(LOCKING_KEYS[usage], False)
-            events.append(self._key(time, usage, False))
+            if usage in LOCKING_KEYS and self._lock(LOCKING_KEYS[usage], False):
+                held = self._held()
+            events.append(self._key(time, usage, False, held))
         for usage in [u for u in keys if u not in self._keys]:
             self._keys[usage] = None
-            if usage in TOGGLES:
-                self._lock(TOGGLES[usage], not self.locks[TOGGLES[usage]])
-            elif usage in LOCKING_KEYS:
-                self._lock(LOCKING_KEYS[usage], True)
-            events.append(self._key(time, usage, True))
+            lock = TOGGLES.get(usage)
+            if (lock is not None and self._lock(lock, not self.locks[lock])) or (
+                    usage in LOCKING_KEYS and self._lock(LOCKING_KEYS[usage], True)):
+                held = self._held()
+            events.append(self._key(time, usage, True, held))
         return events
 
-    def _lock(self, name: str, on: bool) -> None:
-        if self.locks[name] != on:
-            self.locks[name] = on
-            self.leds_changed = True
+    def _lock(self, name: str, on: bool) -> bool:
+        """Set a lock; whether it changed."""
+        if self.locks[name] == on:
+            return False
+        self.locks[name] = on
+        self.leds_changed = True
+        return True
 
     def _held(self) -> frozenset[str]:
         """The modifiers held and the locks on."""
@@ -236,8 +257,7 @@ class Keyboard:
         held.update(name for name, on in self.locks.items() if on)
         return frozenset(held)
 
-    def _key(self, time: float, usage: int, pressed: bool) -> Key:
-        held = self._held()
+    def _key(self, time: float, usage: int, pressed: bool, held: frozenset[str]) -> Key:
         char = ""
         if pressed and usage not in MODIFIER_NAMES and not held & {"ctrl", "alt", "gui"}:
             char = self.layout.char(usage, shift="shift" in held, altgr="altgr" in held,

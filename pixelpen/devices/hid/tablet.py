@@ -225,6 +225,8 @@ class _PenPlan:
     usages: frozenset[int]
     barrels: tuple[int, ...]
     pressure: Field | None
+    pressure_table: list[float] | None
+    """The pressure (range and curve applied) of every logical value from the minimum, when there are few enough."""
     tilt: tuple[Field | None, Field | None]
 
 
@@ -251,11 +253,9 @@ class Tablet:
             plan = self._plan(fields, opts["size"])
             if plan is not None:
                 self._plans[report_id] = plan
-        self._tables: dict[Field, np.ndarray] = {}
         self._last: Pen | None = None
 
-    @staticmethod
-    def _plan(fields: Sequence[Field], size: tuple[float, float] | None) -> _PenPlan | None:
+    def _plan(self, fields: Sequence[Field], size: tuple[float, float] | None) -> _PenPlan | None:
         x, y = position_axes(fields, size)
         if x is None or y is None:
             return None
@@ -264,8 +264,13 @@ class Tablet:
         def field_of(usage: int) -> Field | None:
             return next((f for f in fields if usage in f.usages and not f.is_constant), None)
 
-        return _PenPlan(x, y, frozenset(present), tuple(b for b in BARRELS if b in present),
-                        field_of(DG_TIP_PRESSURE), (field_of(DG_X_TILT), field_of(DG_Y_TILT)))
+        pressure = field_of(DG_TIP_PRESSURE)
+        table = None
+        if pressure is not None and 0 < pressure.logical_max - pressure.logical_min < PRESSURE_TABLE_LIMIT:
+            span = pressure.logical_max - pressure.logical_min
+            table = self._through_curve(np.arange(span + 1, dtype=np.float64) / span).tolist()
+        return _PenPlan(x, y, frozenset(present), tuple(b for b in BARRELS if b in present), pressure, table,
+                        (field_of(DG_X_TILT), field_of(DG_Y_TILT)))
 
     def describe(self) -> str:
         """What was found: the area, pressure levels, tilt, switches and the tool serial."""
@@ -322,7 +327,7 @@ class Tablet:
         serial = first_value(values, DG_TRANSDUCER_SERIAL) if DG_TRANSDUCER_SERIAL in plan.usages else None
         return Pen(time, self.device, x_mm=plan.x.mm(raw_x), y_mm=plan.y.mm(raw_y),
                    x=plan.x.normalised(raw_x), y=plan.y.normalised(raw_y),
-                   pressure=self._pressure(plan.pressure, first_value(values, DG_TIP_PRESSURE)),
+                   pressure=self._pressure(plan, first_value(values, DG_TIP_PRESSURE)),
                    tilt_x=_tilt(plan.tilt[0], first_value(values, DG_X_TILT)),
                    tilt_y=_tilt(plan.tilt[1], first_value(values, DG_Y_TILT)),
                    in_range=True, touching=bool(first_value(values, DG_TIP_SWITCH)) or eraser,
@@ -340,16 +345,13 @@ class Tablet:
         low, high = self.pressure_range
         return self.curve.batch(np.clip((fraction - low) / (high - low), 0.0, 1.0))
 
-    def _pressure(self, field: Field | None, raw: int | None) -> float:
+    def _pressure(self, plan: _PenPlan, raw: int | None) -> float:
+        field = plan.pressure
         if field is None or raw is None:
             return 0.0
-        span = field.logical_max - field.logical_min
-        if span <= 0 or span >= PRESSURE_TABLE_LIMIT:
+        if plan.pressure_table is None:
             return self.pressure(field, raw)
-        table = self._tables.get(field)
-        if table is None:
-            table = self._tables[field] = self._through_curve(np.arange(span + 1, dtype=np.float64) / span)
-        return float(table[min(span, max(0, raw - field.logical_min))])
+        return plan.pressure_table[min(len(plan.pressure_table) - 1, max(0, raw - field.logical_min))]
 
 
 def _tilt(field: Field | None, raw: int | None) -> float:

@@ -188,7 +188,7 @@ def test_layouts_and_altgr(keyboard):
 
 def test_nkro_bitmaps_report_any_number_of_keys():
     keyboard = Keyboard(parse_descriptor(NKRO), DEVICE)
-    assert "bitmap" in keyboard.describe()
+    assert "100-key bitmap" in keyboard.describe()  # usages 0x04..0x67
     keys = [0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x0A, 0x0B, 0x2C]  # a..h and space: nine at once
     events = keyboard.feed(nkro(SHIFT, *keys), 0.0)
     assert summary(events) == [("left_shift", True, "")] + [(n, True, n.upper()) for n in "abcdefgh"] + [
