@@ -59,7 +59,7 @@ _INT32 = (-(2**31), 2**31 - 1)
 def _loader(yaml: Any) -> type:
     """PyYAML's safe loader, refusing aliases."""
 
-    class Loader(yaml.SafeLoader):  # type: ignore[misc]
+    class Loader(yaml.SafeLoader):
         def compose_node(self, parent: object, index: object) -> object:
             if self.check_event(yaml.AliasEvent):
                 mark = self.peek_event().start_mark
