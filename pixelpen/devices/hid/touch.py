@@ -297,13 +297,15 @@ class TouchScreen:
 class DeviceConfiguration:
     """A Device Configuration (0x0D000E) application: no input, the mode feature reports to send after opening.
 
-    It cannot see the touch application beside it, so ``input_mode=auto`` means multi-input (2); a
-    precision touch pad wants ``input_mode=touchpad``.
+    It cannot see the touch application beside it, so ``input_mode=auto`` goes by its own features:
+    touchpad (3) when it has the Surface Switch or Button Switch (the selective reporting only
+    precision touch pads define), else multi-input (2).
     """
 
     OPTIONS: ClassVar[tuple[OptionSpec[Any], ...]] = (
         OptionSpec("input_mode", _input_mode, "auto",
-                   "the Input Mode feature value set after opening: auto (multi), mouse, single, multi or touchpad"),
+                   "the Input Mode feature value set after opening: auto (touchpad with surface/button switches, "
+                   "else multi), mouse, single, multi or touchpad"),
     )
 
     def __init__(self, descriptor: ReportDescriptor, device: DeviceId, **options: object) -> None:
@@ -311,7 +313,11 @@ class DeviceConfiguration:
         self.device = device
         where = f"device configuration semantics for {device}"
         opts = read_semantics_options(self.OPTIONS, options, where)
-        self.input_mode = INPUT_MODES["multi" if opts["input_mode"] == "auto" else opts["input_mode"]]
+        mode = opts["input_mode"]
+        if mode == "auto":
+            switches = any(descriptor.fields_with(u, ReportKind.FEATURE) for u in (DG_SURFACE_SWITCH, DG_BUTTON_SWITCH))
+            mode = "touchpad" if switches else "multi"
+        self.input_mode = INPUT_MODES[mode]
         try:
             self._reports = mode_reports(descriptor, self.input_mode)
         except ConfigError as exc:

@@ -258,11 +258,15 @@ def test_touch_pad_in_a_composite_with_its_device_configuration():
     assert frame_and_click[1] == Button(0.002, DEVICE, button=1, pressed=True, name="left")
     # the Device Configuration application, on its own: Input Mode 3, Surface and Button Switch on
     config_app = next(c for c in descriptor.collections if c.parent is None and c.usage == 0x000D000E)
-    config = DeviceConfiguration(application_descriptor(descriptor, config_app), DEVICE, input_mode="touchpad")
+    config = DeviceConfiguration(application_descriptor(descriptor, config_app), DEVICE)  # switches: a touch pad
     assert [(r.report_id, r.data) for r in config.output_reports()] == [(5, bytes([5, 3])), (6, bytes([6, 0b11]))]
     assert config.feed(b"\x05\x03", 0.0) == [] and "input mode 3" in config.describe()
-    auto = DeviceConfiguration(application_descriptor(descriptor, config_app), DEVICE)
-    assert auto.output_reports()[0].data == bytes([5, 2])
+    multi = DeviceConfiguration(application_descriptor(descriptor, config_app), DEVICE, input_mode="multi")
+    assert multi.output_reports()[0].data == bytes([5, 2])
+    # a touch screen's configuration (Microsoft's sample: Input Mode and Device Index only) gets multi-input
+    screen_config = bytes([0x05, 0x0D, 0x09, 0x0E, 0xA1, 0x01, 0x85, 0x07, 0x09, 0x52, 0x09, 0x53, 0x15, 0x00,
+                           0x25, 0x0A, 0x75, 0x08, 0x95, 0x02, 0xB1, 0x02, 0xC0])
+    assert DeviceConfiguration(parse_descriptor(screen_config), DEVICE).output_reports()[0].data == bytes([7, 2, 0])
 
 
 def test_without_contact_count_every_report_is_a_frame():
