@@ -10,6 +10,8 @@ display's current viewing pipeline (``ViewingPipeline.inverse``: device -> norma
 * **absolute devices** (tablet :class:`~pixelpen.devices.hid.events.Pen`, touch screen
   :class:`~pixelpen.devices.hid.events.TouchFrame`, an absolute pointer's ``x``/``y`` axes) map their 0..1
   range (y down, as HID reports it) onto the viewport: (0, 0) is its top-left corner, (1, 1) its bottom-right.
+  With ``preserve_aspect`` (the display's default) that is the part of the viewport the window fills, so the
+  whole tablet is the whole window: a window the size of the tablet in mm gives the pen's position in mm.
 
 The trigger is a press of one of ``buttons`` (default the primary button), the pen tip or a finger touching
 down.  An ``echo`` (:mod:`pixelpen.input.echo`) follows the position on the display.
@@ -126,11 +128,11 @@ class Locator(LogicalDevice):
         self._set(self._clamp(x + ddx, y + (ddy if self.pipeline.y_down else -ddy)), time)
 
     def move_to_unit(self, u: float, v: float, *, time: float | None = None) -> None:
-        """Move to the point (u, v) of the unit square (v down) mapped onto the viewport."""
+        """Move to the point (u, v) of the unit square (v down) mapped onto the viewport the window fills."""
         p = self.pipeline
-        vx0, vy0, vx1, vy1 = p.viewport
-        normalized = (vx0 + u * (vx1 - vx0), vy1 - v * (vy1 - vy0))
-        x, y = geo.apply(p.normalized_to_device, normalized)
+        corners = geo.apply(p.world_to_normalized, p.window_corners)
+        (nx0, ny0), (nx1, ny1) = corners.min(axis=0), corners.max(axis=0)
+        x, y = geo.apply(p.normalized_to_device, (nx0 + u * (nx1 - nx0), ny1 - v * (ny1 - ny0)))
         self._set((float(x), float(y)), time)
 
     def move_to(self, x: float, y: float, *, time: float | None = None) -> None:

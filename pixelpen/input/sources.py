@@ -117,6 +117,10 @@ def open_replay(url: DeviceURL, *, clock: Clock | None, options: dict[str, Any])
     return simulated_source(device, clock=clock, options=rest | options, where=str(url))
 
 
+EV_KEY = 0x01
+"""linux/input-event-codes.h: the key and button event type (the codes a recording declares for it)."""
+
+
 class EvdevSource:
     """evdev events (a live node or a recording) grouped into SYN_REPORT frames by ``devices.hid.evdev``."""
 
@@ -155,8 +159,11 @@ class RecordingReader:
         self.closed = False
 
     def read_event(self, timeout: float | None) -> tuple[float, int, int, int] | None:
-        """The next event once due (waiting on the clock at most ``timeout``); None at the end or on timeout."""
+        """The next event once due, waiting on the clock at most ``timeout``; None on timeout or, at once when
+        ``timeout`` is None, at the end of the recording (nothing more will come)."""
         if self._next >= len(self._events):
+            if timeout is not None:
+                self._clock.sleep(timeout)
             return None
         t, type_, code, value = self._events[self._next]
         wait = self._origin + t - self._clock.now()
@@ -194,8 +201,8 @@ def open_evemu(url: DeviceURL, *, clock: Clock | None, options: dict[str, Any]) 
 
     own, rest = _split(url, EVEMU_OPTIONS)
     clock = clock or (REAL_CLOCK if own["realtime"] else SimulatedClock())
-    recording = read_evemu(url.target)
-    device_id = DeviceId("virtual", recording.vendor_id, recording.product_id, name=recording.name,
-                         path=url.target)
-    semantics = EvdevSemantics(device_id, recording.absinfo, **(rest | options))
+    recording = read_evemu(url.target, source=url.target)
+    device_id = recording.device_id
+    semantics = EvdevSemantics(device_id, recording.absinfo, keys=recording.codes.get(EV_KEY, ()),
+                               **(rest | options))
     return EvdevSource(RecordingReader(recording.events, clock), semantics, device_id, clock=clock)

@@ -74,6 +74,15 @@ def test_absolute_pen_maps_its_unit_square_onto_the_viewport() -> None:
     assert (loc.value().x, loc.value().y) == pytest.approx((10.0, 70.0))
 
 
+def test_with_the_aspect_kept_the_unit_square_is_the_window() -> None:
+    # a 224 x 140 window on a 240 x 240 device: it fills 240 x 150 px, centred; the tablet covers the window
+    loc = Locator(geo.ViewingPipeline((0, 0, 224, 140), device_size=(240, 240), y_down=True))
+    loc.handle(pen(0.0, 0.0))
+    assert loc.position == pytest.approx((0.0, 45.0)) and loc.value()[:2] == pytest.approx((0.0, 140.0))
+    loc.handle(pen(0.5, 0.75))
+    assert loc.value()[:2] == pytest.approx((112.0, 35.0))
+
+
 def test_touch_and_absolute_axes_move_it_too() -> None:
     loc = Locator(PIPELINE)
     loc.handle(TouchFrame(0.0, DEVICE, contacts=(Contact(3, 0, 0, 1.0, 1.0),)))

@@ -83,3 +83,32 @@ def test_replay_url_names_a_missing_device_index(tmp_path: Path) -> None:
     path.write_text(RECORDING)
     with pytest.raises(URLError, match=r"device=3.*1 device"):
         open_input(f"replay:{path}?device=3")
+
+
+EVEMU = """\
+# EVEMU 1.3
+N: hand pen
+I: 0003 056a 0001 0100
+P: 00 00 00 00 00 00 00 00
+B: 00 0b 00 00 00 00 00 00 00
+B: 03 03 00 00 01 00 00 00 00
+A: 00 0 1000 0 0 10
+A: 01 0 500 0 0 10
+A: 18 0 1023 0 0 0
+E: 0.000000 0003 0000 0500
+E: 0.000000 0003 0001 0250
+E: 0.000000 0000 0000 0000
+E: 0.500000 0003 0018 0341
+E: 0.500000 0000 0000 0000
+"""
+
+
+def test_evemu_url_plays_the_recording_on_a_simulated_clock(tmp_path: Path) -> None:
+    path = tmp_path / "pen.evemu"
+    path.write_text(EVEMU)
+    with open_input(f"evemu:{path}") as dev:
+        pens = [e for e in dev.events(timeout=1.0) if isinstance(e, Pen)]
+        assert dev.clock.now() == pytest.approx(1.5)  # the last event at 0.5 s, then the 1 s timeout
+    # ABS_X 500 of 0..1000 at 10 units/mm, ABS_Y 250 of 0..500; pressure 341 of 0..1023 = 1/3
+    assert [(p.x, p.y, p.x_mm, p.y_mm) for p in pens[:1]] == [(0.5, 0.5, 50.0, 25.0)]
+    assert [p.time for p in pens] == [0.0, 0.5] and pens[-1].pressure == pytest.approx(1 / 3)
