@@ -417,3 +417,43 @@ def test_the_gamepad_layout_packs_what_hid_tools_reads(sticks: list[int], hat: i
     assert [v[u][0] for u in ("X", "Y", "Z", "Rz", "Rx", "Ry")] == sticks
     assert v["Hat switch"] == [hat]
     assert [v[f"B{i}"][0] for i in range(1, 15)] == [buttons >> (i - 1) & 1 for i in range(1, 15)]
+
+
+def hidtools_decode(descriptor: bytes, report: bytes) -> dict[tuple[int, int], Any]:
+    """hid-tools' reading of an input report in the shape of pixelpen's ``descriptor.decode`` (the issue's contract):
+    (page, id) -> the value, a list where the usage repeats; an array's reported usages -> 1."""
+    hid = pytest.importorskip("hidtools.hid")
+    reports = hid.ReportDescriptor.from_bytes(list(descriptor)).input_reports
+    out: dict[tuple[int, int], list[int]] = {}
+    arrays: dict[tuple[int, int], int] = {}
+    for f in reports[report[0] if -1 not in reports else -1].fields:
+        if f.is_const:
+            continue
+        values = f.get_values(list(report))
+        if f.is_array:
+            for v in values:
+                index = v - f.logical_min
+                if 0 <= index < len(f.usages) and f.usages[index] & 0xFFFF:
+                    arrays[(f.usages[index] >> 16, f.usages[index] & 0xFFFF)] = 1
+        else:
+            out.setdefault((f.usage >> 16, f.usage & 0xFFFF), []).extend(values)
+    return {**{k: v[0] if len(v) == 1 else v for k, v in out.items()}, **arrays}
+
+
+@pytest.mark.parametrize(("model", "options"), [
+    ("mouse", {"script": "circle"}), ("trackball", {"script": "scroll"}), ("joystick", {"script": "sweep"}),
+    ("gamepad", {"script": "sweep"}), ("tablet", {"script": "signature"}),
+    ("touchscreen", {"script": "pinch", "fingers": 5}), ("keyboard", {"script": "typing:Hello, World!"}),
+    ("keyboard", {"script": "typing:NKRO 42", "protocol": "nkro"}),
+])
+def test_pixelpens_decoder_reads_every_simulated_report_as_hid_tools_does(model: str, options: dict[str, Any]) -> None:
+    from pixelpen.devices.hid import parse_descriptor  # the decoder under test: the simulators are its witness
+
+    clock = SimulatedClock()
+    sim = create_simulator(model, clock=clock, **{k: str(v) for k, v in options.items()})
+    clock.advance(6.0)
+    reports = sim.take_reports()
+    descriptor = parse_descriptor(sim.report_descriptor)
+    assert len(reports) > 5
+    for report in reports:
+        assert descriptor.decode(report) == hidtools_decode(sim.report_descriptor, report), report.hex(" ")
