@@ -312,3 +312,30 @@ def test_axis_codes_are_the_kernels_abs_codes():
     assert set(AXES) == set(kernel)
     for usage, (name, code, _) in AXES.items():
         assert code == ecodes.ecodes[kernel[usage]], name
+
+
+def test_simulated_gamepad_sweep_through_the_ps4_mapping():
+    # the simulated game pad's firmware packs its reports itself; its "sweep" script moves every axis end to
+    # end and presses every button in turn
+    from pixelpen.clock import SimulatedClock
+    from pixelpen.sim.base import create_simulator
+
+    sim = create_simulator("gamepad", clock=SimulatedClock(), script="sweep")
+    j = Joystick(parse_descriptor(sim.report_descriptor), DEV, mapping=PS4_0111)
+    low: dict[str, float] = {}
+    high: dict[str, float] = {}
+    pressed = set()
+    while (t := sim.next_event_time()) is not None and t < 10.0:
+        sim.advance_to(t)
+        for report in sim.take_reports():
+            for event in j.feed(report, t):
+                if isinstance(event, Axis):
+                    low[event.axis] = min(low.get(event.axis, 1.0), event.value)
+                    high[event.axis] = max(high.get(event.axis, -1.0), event.value)
+                elif event.pressed:
+                    pressed.add(event.name)
+    assert low["lefttrigger"] == 0.0 and high["lefttrigger"] == 1.0
+    assert low["righttrigger"] == 0.0 and high["righttrigger"] == 1.0
+    for stick_axis in ("leftx", "lefty", "rightx", "righty"):
+        assert low[stick_axis] == -1.0 and high[stick_axis] >= 0.99
+    assert {"a", "b", "x", "y", "start", "back", "guide", "dpup", "dpdown", "dpleft", "dpright"} <= pressed
