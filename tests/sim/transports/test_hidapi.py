@@ -12,7 +12,7 @@ import pytest
 
 from pixelpen.clock import SimulatedClock
 from pixelpen.drivers.hidapi import enumerate_hid, open_hid
-from pixelpen.errors import Disconnected, ProtocolError
+from pixelpen.errors import Disconnected, LinkError, ProtocolError
 from pixelpen.sim.base import Fault
 from pixelpen.sim.hid.descriptors import BOOT_KEYBOARD, BOOT_MOUSE, TRACKBALL
 from pixelpen.sim.hid.device import HidSim
@@ -242,3 +242,22 @@ def test_enumerate_hid_filters_on_the_fake():
     bus = SimHidapi([mouse(clock), trackball(clock)])
     assert [i.path for i in enumerate_hid(module=bus, product_id=0x0002)] == ["sim:trackball:1"]
     assert [i.path for i in enumerate_hid(module=bus, usage_page=1, usage=2)] == ["sim:mouse:0", "sim:trackball:1"]
+
+
+# ---- the same API as the real modules ----------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["hid", "hidraw"])
+def test_the_fake_has_every_method_of_the_real_module(name):
+    real = pytest.importorskip(name, reason=f"cython-hidapi's {name} module is not installed")
+    public = {n for n in dir(real.device) if not n.startswith("_")}
+    assert public <= {n for n in dir(SimHidapi().device()) if not n.startswith("_")}
+    assert {"enumerate", "device", "version_str"} <= set(dir(SimHidapi()))
+
+
+@pytest.mark.parametrize("backend", ["hidraw", "libusb"])
+def test_the_real_modules_enumerate_and_refuse_a_missing_path(backend):
+    pytest.importorskip("hidraw" if backend == "hidraw" else "hid", reason="cython-hidapi is not installed")
+    found = enumerate_hid(backend=backend)  # whatever this machine has: a list of HidInfo, no exception
+    assert all(info.path for info in found)
+    with pytest.raises(LinkError, match="no HID device at '/dev/hidraw-none'"):
+        open_hid("/dev/hidraw-none", backend=backend)
