@@ -4,7 +4,8 @@
 applications as Microsoft's "Windows 8 touch" / "precision touchpad" protocol and the kernel's
 ``hid-multitouch`` read them:
 
-* **Slots** — each Finger (0x0D0022) collection of an input report is one slot: Tip Switch (0x42;
+* **Slots** — each Finger (0x0D0022) collection of an input report is one slot (a device without
+  Finger collections has one slot, its application's first of each usage): Tip Switch (0x42;
   In Range 0x32 where a device has no tip switch; else always touching), Confidence (0x47, absent:
   confident), Contact Identifier (0x51), X/Y (in mm and 0..1, as :class:`~pixelpen.devices.hid.tablet.PositionAxis`:
   from the physical range and unit, or the ``size`` option).
@@ -112,13 +113,13 @@ class _TouchPlan:
 
 
 def _finger_of(field: Field) -> Collection | None:
-    """The Finger collection a field is in (else its innermost collection)."""
+    """The Finger collection a field is in (else its application: a single-touch device without fingers)."""
     node = field.collection
     while node is not None:
         if node.usage == DG_FINGER:
             return node
         node = node.parent
-    return field.collection
+    return field.collection.application if field.collection is not None else None
 
 
 class TouchScreen:

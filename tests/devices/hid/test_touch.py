@@ -146,6 +146,19 @@ NO_COUNT = bytes([
 ])
 
 
+# A single-touch (resistive) screen without Finger collections: tip and in range at the application level,
+# X/Y in a Pointer physical collection, 0..4095 without units.
+SINGLE = bytes([
+    0x05, 0x0D, 0x09, 0x04, 0xA1, 0x01,  # Usage Page (Digitizers), Usage (Touch Screen), Collection (Application)
+    0x09, 0x42, 0x09, 0x32, 0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x02, 0x81, 0x02,  # tip, in range: bits 0-1
+    0x95, 0x06, 0x81, 0x03,              #   6 bits of padding
+    0x05, 0x01, 0x09, 0x01, 0xA1, 0x00,  #   Usage Page (Generic Desktop), Usage (Pointer), Collection (Physical)
+    0x09, 0x30, 0x09, 0x31, 0x26, 0xFF, 0x0F, 0x75, 0x10, 0x95, 0x02, 0x81, 0x02,  # X, Y 0..4095: bytes 1-4
+    0xC0,
+    0xC0,
+])
+
+
 def slot(tip: bool, contact_id: int, x: int, y: int, confidence: bool = True) -> bytes:
     return struct.pack("<BBHH", int(tip) | int(confidence) << 1, contact_id, x, y)
 
@@ -278,6 +291,18 @@ def test_without_contact_count_every_report_is_a_frame():
     [frame] = screen.feed(bytes([0, 0, 255, 0, 1, 1, 51, 255]), 0.01)
     assert ids(frame) == [(0, False), (1, True)]
     assert frame.contacts[1].x_mm == pytest.approx(20.0) and frame.contacts[1].y_mm == pytest.approx(50.0)
+
+
+def test_a_single_touch_screen_without_fingers_is_one_slot():
+    screen = TouchScreen(parse_descriptor(SINGLE), DEVICE, size="100x60")
+    assert "1 slots per report" in screen.describe()
+    [frame] = screen.feed(struct.pack("<BHH", 0b11, 4095, 2048), 0.0)
+    [contact] = frame.contacts
+    assert (contact.contact_id, contact.touching, contact.x_mm) == (0, True, pytest.approx(100.0))
+    assert contact.y_mm == pytest.approx(2048 / 4095 * 60.0)
+    [frame] = screen.feed(struct.pack("<BHH", 0b10, 4095, 2048), 0.01)  # the tip lifts, still in range
+    assert ids(frame) == [(0, False)]
+    assert screen.feed(struct.pack("<BHH", 0b00, 0, 0), 0.02) == []
 
 
 def test_options_and_descriptors_it_cannot_use():
