@@ -34,10 +34,10 @@ import math
 import os
 import re
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from contextlib import ExitStack
 from dataclasses import dataclass, field
-from typing import NamedTuple, TextIO
+from typing import ClassVar, NamedTuple, TextIO
 
 from pixelpen.drivers.identity import DeviceId
 from pixelpen.drivers.recordings.hidrecorder import BUS_NAMES, RecordingWarning
@@ -50,7 +50,7 @@ EV_SYN, EV_KEY, EV_REL, EV_ABS, EV_MSC, EV_SW, EV_LED, EV_SND, EV_REP, EV_FF, EV
     0x00, 0x01, 0x02, 0x03, 0x04, 0x05, 0x11, 0x12, 0x14, 0x15, 0x16, 0x17)
 EV_MAX = 0x1F
 CODE_MAX: Mapping[int, int] = {EV_SYN: 0x0F, EV_KEY: 0x2FF, EV_REL: 0x0F, EV_ABS: 0x3F, EV_MSC: 0x07,
-                               EV_SW: 0x11, EV_LED: 0x0F, EV_SND: 0x07, EV_REP: 0x01, EV_FF: 0x7F,
+                               EV_SW: 0x10, EV_LED: 0x0F, EV_SND: 0x07, EV_REP: 0x01, EV_FF: 0x7F,
                                EV_PWR: 0x00, EV_FF_STATUS: 0x01}
 """Event type -> its highest code (SYN_MAX, KEY_MAX, REL_MAX, ABS_MAX, ...); other types have no codes."""
 INPUT_PROP_MAX = 0x1F
@@ -212,7 +212,7 @@ class _Reader:
 
     def mask_bits(self, kind: str, tokens: list[str], start: int) -> list[int]:
         """The set bits of 8 hex bytes, numbered from ``start``."""
-        out = []
+        out: list[int] = []
         for i, token in enumerate(tokens):
             byte = self.hex_number(kind, f"byte {i}", token, _HEX2, 0xFF)
             out.extend(start + 8 * i + bit for bit in range(8) if byte >> bit & 1)
@@ -235,7 +235,8 @@ class _Reader:
         if bits and bits[-1] > top:
             raise self.error(f"B: code {bits[-1]:#x} of event type {ev_type:#x} is beyond its highest code "
                              f"({top:#x})", bits[-1])
-        self.codes.setdefault(ev_type, set()).update(bits)
+        if bits:
+            self.codes.setdefault(ev_type, set()).update(bits)
         self.mask_bytes[ev_type] = offset + 8
 
     def abs_line(self, body: str) -> None:
@@ -282,7 +283,7 @@ class _Reader:
         self.last = t
         self.events.append((t, ev_type, code, value))
 
-    _HANDLERS = {
+    _HANDLERS: ClassVar[dict[str, Callable[[_Reader, str], None]]] = {
         "N:": name_line, "I:": ids_line, "P:": props_line, "B:": mask_line, "A:": abs_line, "E:": event_line,
         "L:": lambda self, body: self.state_line("L:", body, EV_LED, self.leds),
         "S:": lambda self, body: self.state_line("S:", body, EV_SW, self.switches),
@@ -300,9 +301,9 @@ class _Reader:
             self.codes[EV_ABS] = set(self.absinfo)
         assert self.name is not None and self.ids is not None
         bus, vendor, product, version = self.ids
-        return EvdevRecording(self.name, bus, vendor, product, version, frozenset(self.properties),
-                              {t: frozenset(c) for t, c in sorted(self.codes.items())}, dict(sorted(self.absinfo.items())),
-                              self.leds, self.switches, self.events, self.node)
+        codes = {t: frozenset(c) for t, c in sorted(self.codes.items())}
+        return EvdevRecording(self.name, bus, vendor, product, version, frozenset(self.properties), codes,
+                              dict(sorted(self.absinfo.items())), self.leds, self.switches, self.events, self.node)
 
 
 def read_text_source(path_or_text: str | bytes | os.PathLike[str] | TextIO, stack: ExitStack, kind: str,

@@ -269,15 +269,15 @@ def _export_evdev(rec: EvdevRecording, out: Path, number: int, realtime: bool, s
         ioctls.append(_ioctl_line(f"EVIOCGBIT({ev_type})", CODE_BITS_BUFFER, _bits(codes, CODE_BITS_BUFFER)))
     for code, info in sorted(rec.absinfo.items()):
         ioctls.append(_ioctl_line(f"EVIOCGABS({code})", 0, struct.pack("<6i", *info)))
-    ioctls += [
-        _ioctl_line("EVIOCGPROP(0)", 4, _bits(rec.properties, (INPUT_PROP_MAX + 7) // 8)),
-        _ioctl_line("EVIOCGKEY(0)", 96, bytes((CODE_MAX[EV_KEY] + 7) // 8)),
-        _ioctl_line("EVIOCGLED(0)", 2, _bits({c for c, s in rec.leds.items() if s}, (CODE_MAX[EV_LED] + 7) // 8)),
-        _ioctl_line("EVIOCGSW(0)", 3, _bits({c for c, s in rec.switches.items() if s}, (CODE_MAX[EV_SW] + 7) // 8)),
-        _ioctl_line("EVIOCGSND(0)", 1, bytes((CODE_MAX[EV_SND] + 7) // 8)),
-        _ioctl_line("EVIOCGEFFECTS", 0, struct.pack("<i", 0)),
-        _ioctl_line("EVIOCGREP", 0, struct.pack("<II", 250, 33)),
-    ]
+    states = (("EVIOCGKEY(0)", EV_KEY, set()), ("EVIOCGLED(0)", EV_LED, {c for c, s in rec.leds.items() if s}),
+              ("EVIOCGSW(0)", EV_SW, {c for c, s in rec.switches.items() if s}), ("EVIOCGSND(0)", EV_SND, set()))
+    for ioctl_name, ev_type, on in states:  # python-evdev's buffers: (TYPE_MAX + 7) / 8 bytes
+        size = (CODE_MAX[ev_type] + 7) // 8
+        ioctls.append(_ioctl_line(ioctl_name, size, _bits(on, size)))
+    prop_size = (INPUT_PROP_MAX + 7) // 8
+    ioctls += [_ioctl_line("EVIOCGPROP(0)", prop_size, _bits(rec.properties, prop_size)),
+               _ioctl_line("EVIOCGEFFECTS", 0, struct.pack("<i", 0)),
+               _ioctl_line("EVIOCGREP", 0, struct.pack("<II", 250, 33))]
     events = replace(rec, events=_event_times(rec.events, realtime), node=node)
     data = out / f"{stem}.events"
     write_evemu(events, data, description=False)
