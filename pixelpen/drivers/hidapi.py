@@ -285,7 +285,7 @@ def _open_failure(info: HidInfo, backend: str, exc: OSError, present: list[HidIn
     node = info.path
     if node.startswith("/dev/") or re.match(r"^\d+-[\d.]+:\d+\.\d+$", node):
         checked = node if node.startswith("/dev/") else ""
-        if not checked or not os.access(checked, os.R_OK | os.W_OK):
+        if not checked or isinstance(exc, PermissionError) or not os.access(checked, os.R_OK | os.W_OK):
             text = permission_diagnosis(node, vendor_id=info.vendor_id or None, product_id=info.product_id or None,
                                         sysfs=sysfs)
             return LinkError(f"cannot open {info}: {text}")
