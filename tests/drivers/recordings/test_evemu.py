@@ -212,13 +212,13 @@ def test_limits_bound_events_lines_and_file_size(tmp_path):
 
 
 def test_truncated_file_gives_a_clean_error_or_its_prefix_at_every_cut():
-    for cut in range(0, len(TABLET), 7):
+    for cut in range(1, len(TABLET), 7):
         try:
-            rec = read_evemu(TABLET[:cut] + ("\n" if cut else ""))
+            rec = read_evemu(TABLET[:cut] + "\n")
         except ParseError as exc:
             assert exc.source == "<evemu text>"
             continue
-        assert rec.name == "Wacom Intuos S Pen" and len(rec.events) <= 2
+        assert "Wacom Intuos S Pen".startswith(rec.name) and len(rec.events) <= 2
 
 
 def test_missing_file_is_a_parse_error(tmp_path):
