@@ -86,6 +86,7 @@ PEN = bytes([
     0xC0,              # End Collection
 ])
 TIP, BARREL, INVERT, ERASER, IN_RANGE, BARREL2 = 1, 2, 4, 8, 16, 32
+PEN_DESCRIPTOR = parse_descriptor(PEN)
 
 # A cheap tablet: unnumbered, no units at all, tilt -127..127 without a unit.
 PLAIN = bytes([
@@ -276,3 +277,13 @@ def test_any_report_gives_events_or_a_parse_error(data):
         except ParseError:
             return
     assert all(isinstance(e, Pen) and 0.0 <= e.pressure <= 1.0 and 0.0 <= e.x <= 1.0 for e in events)
+
+
+@given(st.text(max_size=30), st.text(max_size=12))
+def test_any_option_text_gives_a_tablet_or_a_config_error(curve, pressure_range):
+    try:
+        tablet = Tablet(PEN_DESCRIPTOR, DEVICE, pressure_curve=curve, pressure_range=pressure_range)
+    except ConfigError:
+        return
+    [pen] = tablet.feed(pen_report(IN_RANGE | TIP, 0, 0, 700), 0.0)
+    assert 0.0 <= pen.pressure <= 1.0
