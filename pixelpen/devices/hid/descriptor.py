@@ -28,10 +28,11 @@ Every error is a :class:`~pixelpen.errors.ParseError` whose ``offset`` is the by
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 from pixelpen.devices.hid.fields import Collection, Field, ReportDescriptor, ReportKind, ReportLayout
-from pixelpen.devices.hid.items import GLOBAL, LOCAL, MAIN, Item, tokenize
+from pixelpen.devices.hid.items import GLOBAL, LOCAL, LONG_ITEM_TAG, MAIN, scan, signed_value
 from pixelpen.devices.hid.quirks import fixup
 from pixelpen.errors import ParseError
 
@@ -111,42 +112,33 @@ class _Report:
 class _Parser:
     """One pass over the items, holding the kernel parser's state."""
 
-    def __init__(self, source: str | None) -> None:
+    def __init__(self, data: bytes, source: str | None) -> None:
+        self.data = data
         self.source = source
         self.g = _Globals()
         self.stack: list[_Globals] = []
         self.local = _Locals()
         self.open: list[Collection] = []
         self.collections: list[Collection] = []
-        self.reports: dict[tuple[ReportKind, int], _Report] = {}
+        self.reports: dict[tuple[int, int], _Report] = {}
+        """By (Main item tag, report ID): Input 8, Output 9, Feature 11."""
         self.warnings: list[str] = []
+        self.reject_long_items = False
 
-    def error(self, message: str, item: Item, token: object = None) -> ParseError:
-        """A ParseError at the item's offset."""
-        return ParseError(message, source=self.source, offset=item.offset, token=token)
+    def error(self, message: str, offset: int, token: object = None) -> ParseError:
+        """A ParseError at an item's offset."""
+        return ParseError(message, source=self.source, offset=offset, token=token)
 
-    def run(self, items: list[Item], reject_long_items: bool) -> None:
-        """Process every item, then check that collections and delimiters are closed."""
+    def run(self, items: list[tuple[int, int, int]], reject_long_items: bool) -> None:
+        """Process every item (``(offset, prefix, value)`` from :func:`scan`), then check that collections and
+        delimiters are closed."""
         last = len(items)
-        while last and items[last - 1].prefix == 0:  # trailing zero bytes
+        while last and items[last - 1][1] == 0:  # trailing zero bytes
             last -= 1
-        global_item, local_item, main_item = self.global_item, self.local_item, self.main_item
-        for item in items[:last]:
-            kind = item.type
-            if item.long:
-                if reject_long_items:
-                    raise self.error(f"long item (tag 0x{item.tag:02X}, {item.size} data bytes): the kernel "
-                                     "rejects descriptors with long items", item)
-                self.warnings.append(f"long item (tag 0x{item.tag:02X}, {item.size} data bytes) at offset "
-                                     f"{item.offset} skipped")
-            elif kind == GLOBAL:
-                global_item(item)
-            elif kind == LOCAL:
-                local_item(item)
-            elif kind == MAIN:
-                main_item(item)
-            else:
-                self.warnings.append(f"reserved item 0x{item.prefix:02X} at offset {item.offset} ignored")
+        self.reject_long_items = reject_long_items
+        dispatch = _DISPATCH
+        for offset, prefix, value in items if last == len(items) else items[:last]:
+            dispatch[prefix](self, offset, prefix, value)
         if last < len(items):  # the kernel reads the zeros as unknown Main items, which reset the local state
             self.local = _Locals()
         if self.open:
@@ -155,102 +147,139 @@ class _Parser:
                              f"(the innermost opened here)", source=self.source, offset=inner.offset)
         if self.local.delimiter_depth:
             raise ParseError("unbalanced delimiter at the end of the descriptor", source=self.source,
-                             offset=items[last - 1].offset if last else 0)
+                             offset=items[last - 1][0] if last else 0)
 
-    # -- hid_parser_global -------------------------------------------------------------------------------------
-    def global_item(self, item: Item) -> None:
-        """One global item (the kernel's ``hid_parser_global``)."""
+    def long_item(self, offset: int, prefix: int, size: int) -> None:
+        """A long item: skipped with a warning, or an error with ``reject_long_items``."""
+        what = f"long item (tag 0x{self.data[offset + 2]:02X}, {size} data bytes)"
+        if self.reject_long_items:
+            raise self.error(f"{what}: the kernel rejects descriptors with long items", offset)
+        self.warnings.append(f"{what} at offset {offset} skipped")
+
+    def reserved_item(self, offset: int, prefix: int, value: int) -> None:
+        """An item of the reserved type 3: ignored, as the kernel's ``hid_parser_reserved``."""
+        self.warnings.append(f"reserved item 0x{prefix:02X} at offset {offset} ignored")
+
+    # -- hid_parser_global: one method per tag, dispatched by prefix byte -----------------------------------------
+    def usage_page(self, offset: int, prefix: int, value: int) -> None:
+        """Usage Page."""
+        self.g.usage_page = value
+
+    def logical_min(self, offset: int, prefix: int, value: int) -> None:
+        """Logical Minimum (signed)."""
+        self.g.logical_min = signed_value(prefix, value)
+
+    def logical_max(self, offset: int, prefix: int, value: int) -> None:
+        """Logical Maximum: signed only when the Logical Minimum before it is negative."""
         g = self.g
-        tag = item.tag
-        if tag == 0:
-            g.usage_page = item.value
-        elif tag == 1:
-            g.logical_min = item.signed
-        elif tag == 2:
-            g.logical_max = item.signed if g.logical_min < 0 else item.value
-        elif tag == 3:
-            g.physical_min = item.signed
-        elif tag == 4:
-            g.physical_max = item.signed if g.physical_min < 0 else item.value
-        elif tag == 7:
-            if item.value > MAX_REPORT_SIZE:
-                raise self.error(f"Report Size {item.value} bits is over the kernel's {MAX_REPORT_SIZE}", item)
-            g.report_size = item.value
-        elif tag == 9:
-            if item.value > MAX_USAGES:
-                raise self.error(f"Report Count {item.value} is over the kernel's {MAX_USAGES}", item)
-            g.report_count = item.value
-        elif tag == 8:
-            if item.value == 0 or item.value >= MAX_IDS:
-                raise self.error(f"Report ID {item.value} is invalid (1..{MAX_IDS - 1})", item)
-            g.report_id = item.value
-        elif tag == 5:
-            raw = item.signed
-            g.unit_exponent = (raw - 16 if raw & 8 else raw) if 0 <= raw <= 15 else raw
-        elif tag == 6:
-            g.unit = item.value
-        elif tag == 10:
-            if len(self.stack) == GLOBAL_STACK_SIZE:
-                raise self.error(f"Push: the global stack is full ({GLOBAL_STACK_SIZE} deep)", item)
-            self.stack.append(g.copy())
-        elif tag == 11:
-            if not self.stack:
-                raise self.error("Pop without a Push (global stack underflow)", item)
-            self.g = self.stack.pop()
-        else:
-            raise self.error(f"unknown global item tag {tag}", item, f"0x{item.prefix:02X}")
+        g.logical_max = signed_value(prefix, value) if g.logical_min < 0 else value
+
+    def physical_min(self, offset: int, prefix: int, value: int) -> None:
+        """Physical Minimum (signed)."""
+        self.g.physical_min = signed_value(prefix, value)
+
+    def physical_max(self, offset: int, prefix: int, value: int) -> None:
+        """Physical Maximum: signed only when the Physical Minimum before it is negative."""
+        g = self.g
+        g.physical_max = signed_value(prefix, value) if g.physical_min < 0 else value
+
+    def unit_exponent(self, offset: int, prefix: int, value: int) -> None:
+        """Unit Exponent: 0..15 is the spec's 4-bit two's complement nibble, anything else a signed number."""
+        raw = signed_value(prefix, value)
+        self.g.unit_exponent = (raw - 16 if raw & 8 else raw) if 0 <= raw <= 15 else raw
+
+    def unit(self, offset: int, prefix: int, value: int) -> None:
+        """Unit."""
+        self.g.unit = value
+
+    def report_size(self, offset: int, prefix: int, value: int) -> None:
+        """Report Size, at most 256 bits."""
+        if value > MAX_REPORT_SIZE:
+            raise self.error(f"Report Size {value} bits is over the kernel's {MAX_REPORT_SIZE}", offset)
+        self.g.report_size = value
+
+    def report_id(self, offset: int, prefix: int, value: int) -> None:
+        """Report ID, 1..255."""
+        if value == 0 or value >= MAX_IDS:
+            raise self.error(f"Report ID {value} is invalid (1..{MAX_IDS - 1})", offset)
+        self.g.report_id = value
+
+    def report_count(self, offset: int, prefix: int, value: int) -> None:
+        """Report Count, at most 12288."""
+        if value > MAX_USAGES:
+            raise self.error(f"Report Count {value} is over the kernel's {MAX_USAGES}", offset)
+        self.g.report_count = value
+
+    def push(self, offset: int, prefix: int, value: int) -> None:
+        """Push: a copy of every global, the report ID included, on the stack."""
+        if len(self.stack) == GLOBAL_STACK_SIZE:
+            raise self.error(f"Push: the global stack is full ({GLOBAL_STACK_SIZE} deep)", offset)
+        self.stack.append(self.g.copy())
+
+    def pop(self, offset: int, prefix: int, value: int) -> None:
+        """Pop: every global back from the stack."""
+        if not self.stack:
+            raise self.error("Pop without a Push (global stack underflow)", offset)
+        self.g = self.stack.pop()
+
+    def unknown_global(self, offset: int, prefix: int, value: int) -> None:
+        """Global tags 12..14: an error, as in the kernel."""
+        raise self.error(f"unknown global item tag {prefix >> 4}", offset, f"0x{prefix:02X}")
 
     # -- hid_parser_local --------------------------------------------------------------------------------------
-    def local_item(self, item: Item) -> None:
-        """One local item (the kernel's ``hid_parser_local``)."""
+    def usage(self, offset: int, prefix: int, value: int) -> None:
+        """Usage (the most frequent local item, dispatched on its own)."""
+        if self.local.delimiter_branch <= 1:
+            self.add_usages(offset, prefix, value, 1)
+
+    def local_item(self, offset: int, prefix: int, value: int) -> None:
+        """The other local items (the kernel's ``hid_parser_local``)."""
         local = self.local
-        tag = item.tag
-        if tag == 0:
+        tag = prefix >> 4
+        if tag == 1:
             if local.delimiter_branch <= 1:
-                self.add_usages(item, item.value, 1)
-        elif tag == 1:
-            if local.delimiter_branch <= 1:
-                local.usage_min = item.value
+                local.usage_min = value
         elif tag == 2:
             if local.delimiter_branch <= 1:
-                self.usage_range(item)
+                self.usage_range(offset, prefix, value)
         elif tag == 10:
-            if item.value:
+            if value:
                 if local.delimiter_depth:
-                    raise self.error("nested delimiters", item)
+                    raise self.error("nested delimiters", offset)
                 local.delimiter_depth += 1
                 local.delimiter_branch += 1
             else:
                 if local.delimiter_depth < 1:
-                    raise self.error("close delimiter without an open one", item)
+                    raise self.error("close delimiter without an open one", offset)
                 local.delimiter_depth -= 1
         elif tag in _LOCAL_EXTRAS:
-            local.extra[_LOCAL_EXTRAS[tag]] = item.value
+            local.extra[_LOCAL_EXTRAS[tag]] = value
 
-    def usage_range(self, item: Item) -> None:
+    def usage_range(self, offset: int, prefix: int, top: int) -> None:
         """Usage Maximum: add Usage Minimum..Maximum, clamped at 12288 usages as the kernel does."""
         local = self.local
-        top = item.value
         index = len(local.usages)
         if ((top - local.usage_min) + index) & _M32 >= MAX_USAGES:
-            self.warnings.append(f"Usage Maximum at offset {item.offset}: range cut at {MAX_USAGES} usages")
+            self.warnings.append(f"Usage Maximum at offset {offset}: range cut at {MAX_USAGES} usages")
             top = (MAX_USAGES - index + local.usage_min - 1) & _M32
             if top == 0:
-                raise self.error("no more usages available", item)
+                raise self.error("no more usages available", offset)
         if local.usage_min <= top:
-            self.add_usages(item, local.usage_min, top - local.usage_min + 1)
+            self.add_usages(offset, prefix, local.usage_min, top - local.usage_min + 1)
 
-    def add_usages(self, item: Item, first: int, count: int) -> None:
+    def add_usages(self, offset: int, prefix: int, first: int, count: int) -> None:
         """Add ``count`` usages from ``first`` (the kernel's ``hid_add_usage``, completed with the page if short)."""
         local = self.local
         if len(local.usages) + count > MAX_USAGES:
-            raise self.error(f"more than {MAX_USAGES} usages before one Main item", item)
-        if item.size > 2:
+            raise self.error(f"more than {MAX_USAGES} usages before one Main item", offset)
+        if prefix & 3 == 3:  # a 4-byte (extended) usage carries its page
             local.usages.extend(range(first, first + count))
             local.extended.extend([True] * count)
             return
         page = (self.g.usage_page & 0xFFFF) << 16
-        if first + count <= 0x10000:
+        if count == 1:
+            local.usages.append(page | first)
+        elif first + count <= 0x10000:
             local.usages.extend(range(page | first, page | (first + count)))
         else:
             local.usages.extend(page | (u & 0xFFFF) for u in range(first, first + count))
@@ -270,80 +299,78 @@ class _Parser:
                 break
             usages[i] = prefix | (usages[i] & 0xFFFF)
 
-    def main_item(self, item: Item) -> None:
+    def main_item(self, offset: int, prefix: int, value: int) -> None:
         """One main item (the kernel's ``hid_parser_main``); local state is reset after it."""
-        if self.local.usages:
+        local = self.local
+        if local.usages:
             self.concatenate_last_usage_page()
-        tag = item.tag
+        tag = prefix >> 4
         if tag in _KINDS:
-            self.add_field(item, _KINDS[tag])
+            self.add_field(offset, tag, value)
         elif tag == 10:
             if len(self.open) == MAX_COLLECTION_DEPTH:
-                raise self.error(f"collections nested over {MAX_COLLECTION_DEPTH} deep", item)
-            usages = self.local.usages
-            c = Collection(item.value & 0xFF, usages[0] if usages else 0, item.offset,
-                           self.open[-1] if self.open else None)
+                raise self.error(f"collections nested over {MAX_COLLECTION_DEPTH} deep", offset)
+            usages = local.usages
+            c = Collection(value & 0xFF, usages[0] if usages else 0, offset, self.open[-1] if self.open else None)
             self.open.append(c)
             self.collections.append(c)
         elif tag == 12:
             if not self.open:
-                raise self.error("End Collection without a Collection", item)
+                raise self.error("End Collection without a Collection", offset)
             self.open.pop()
         else:
-            self.warnings.append(f"unknown main item 0x{item.prefix:02X} at offset {item.offset} ignored")
-        if self.local.usages or self.local.usage_min or self.local.delimiter_branch or self.local.extra:
+            self.warnings.append(f"unknown main item 0x{prefix:02X} at offset {offset} ignored")
+        if local.usages or local.usage_min or local.delimiter_branch or local.extra:
             self.local = _Locals()
 
-    def add_field(self, item: Item, kind: ReportKind) -> None:
+    def add_field(self, offset: int, tag: int, flags: int) -> None:
         """An Input, Output or Feature item (the kernel's ``hid_add_field``)."""
         g = self.g
-        key = (kind, g.report_id)
-        report = self.reports.get(key)
+        rid = g.report_id
+        report = self.reports.get((tag, rid))
         if report is None:
-            report = self.reports[key] = _Report(kind, g.report_id or None)
+            report = self.reports[tag, rid] = _Report(_KINDS[tag], rid or None)
         lmin, lmax = g.logical_min, g.logical_max
         if lmin < 0:
             lmax = _s32(lmax)
             if lmax < lmin:
-                raise self.error(f"Logical Maximum {lmax} is below Logical Minimum {lmin}", item)
+                raise self.error(f"Logical Maximum {lmax} is below Logical Minimum {lmin}", offset)
         elif lmax & _M32 < lmin:
-            raise self.error(f"Logical Maximum {lmax & _M32} is below Logical Minimum {lmin}", item)
+            raise self.error(f"Logical Maximum {lmax & _M32} is below Logical Minimum {lmin}", offset)
         else:
             lmax &= _M32
         pmin, pmax = g.physical_min, g.physical_max
         pmax = _s32(pmax) if pmin < 0 else pmax & _M32
-        offset = report.bits
-        report.bits += g.report_size * g.report_count
-        if report.bits > (MAX_BUFFER_SIZE - 1) * 8:
-            raise self.error(f"{kind.value} report {report.report_id} is longer than {MAX_BUFFER_SIZE - 1} "
-                             f"bytes ({report.bits} bits)", item)
-        usages = self.local.usages
+        start = report.bits
         count = g.report_count
+        report.bits += g.report_size * count
+        if report.bits > (MAX_BUFFER_SIZE - 1) * 8:
+            raise self.error(f"{report.kind.value} report {report.report_id} is longer than {MAX_BUFFER_SIZE - 1} "
+                             f"bytes ({report.bits} bits)", offset)
+        usages = self.local.usages
         if usages:
             if report.with_usages == MAX_FIELDS:
-                self.warnings.append(f"{kind.value} report {report.report_id}: field at offset {item.offset} "
+                self.warnings.append(f"{report.kind.value} report {report.report_id}: field at offset {offset} "
                                      f"dropped (the kernel keeps {MAX_FIELDS} fields per report)")
                 return
             report.with_usages += 1
             if count > len(usages):
                 usages = usages + [usages[-1]] * (count - len(usages))
-            if item.value & 2:  # variable: one usage per element
-                kept = tuple(usages[:count])
-            else:  # array: the usages an index lmin..lmax can name
-                kept = tuple(usages[:lmax - lmin + 1])
+            # a variable has one usage per element; an array the usages an index lmin..lmax can name
+            kept = tuple(usages[:count] if flags & 2 else usages[:lmax - lmin + 1])
             page = kept[0] >> 16 if kept else g.usage_page & 0xFFFF
         else:
             kept = ()
             page = g.usage_page & 0xFFFF
         extra = self.local.extra
         report.fields.append(Field(
-            kind, report.report_id, page, kept, offset + (8 if g.report_id else 0), g.report_size, count,
-            lmin, lmax, pmin, pmax, g.unit, g.unit_exponent, item.value, self.open[-1] if self.open else None,
-            item.offset, dict(extra) if extra else {}))
+            report.kind, report.report_id, page, kept, start + (8 if rid else 0), g.report_size, count,
+            lmin, lmax, pmin, pmax, g.unit, g.unit_exponent, flags, self.open[-1] if self.open else None,
+            offset, dict(extra) if extra else {}))
 
     def descriptor(self, data: bytes) -> ReportDescriptor:
         """The parsed descriptor."""
-        numbered = {kind for kind, rid in self.reports if rid}
+        numbered = {_KINDS[tag] for tag, rid in self.reports if rid}
         layouts = []
         for r in self.reports.values():
             fields = tuple(r.fields)
@@ -358,6 +385,30 @@ class _Parser:
         return ReportDescriptor(data, layouts, tuple(self.collections), tuple(self.warnings))
 
 
+def _dispatch_table() -> list[Callable[[_Parser, int, int, int], None]]:
+    """The handler of each prefix byte (the size bits do not matter; tag nibble 15 is a long item)."""
+    p = _Parser
+    by_tag = [p.usage_page, p.logical_min, p.logical_max, p.physical_min, p.physical_max, p.unit_exponent, p.unit,
+              p.report_size, p.report_id, p.report_count, p.push, p.pop]
+    table: list[Callable[[_Parser, int, int, int], None]] = []
+    for prefix in range(256):
+        tag, kind = prefix >> 4, (prefix >> 2) & 3
+        if tag == LONG_ITEM_TAG:
+            table.append(p.long_item)
+        elif kind == MAIN:
+            table.append(p.main_item)
+        elif kind == GLOBAL:
+            table.append(by_tag[tag] if tag < len(by_tag) else p.unknown_global)
+        elif kind == LOCAL:
+            table.append(p.usage if tag == 0 else p.local_item)
+        else:
+            table.append(p.reserved_item)
+    return table
+
+
+_DISPATCH = _dispatch_table()
+
+
 def parse_descriptor(data: bytes, *, reject_long_items: bool = False, vendor_id: int | None = None,
                      product_id: int | None = None, source: str | None = None) -> ReportDescriptor:
     """Parse a report descriptor as the Linux kernel does (quirks applied when the device's IDs are given)."""
@@ -370,7 +421,7 @@ def parse_descriptor(data: bytes, *, reject_long_items: bool = False, vendor_id:
         data, notes = fixup(data, vendor_id, product_id)
     if not data:
         raise ParseError("empty report descriptor", source=source, offset=0)
-    parser = _Parser(source)
+    parser = _Parser(data, source)
     parser.warnings.extend(notes)
-    parser.run(tokenize(data, source=source), reject_long_items)
+    parser.run(scan(data, source=source), reject_long_items)
     return parser.descriptor(data)

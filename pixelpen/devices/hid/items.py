@@ -3,8 +3,9 @@
 A short item's prefix is ``bTag(4) bType(2) bSize(2)`` (HID 1.11 §6.2.2.2); size code 3 means four data
 bytes, little-endian.  A long item is ``prefix, bDataSize, bLongItemTag, data`` (§6.2.2.3): the spec's prefix
 is 0xFE, and like the kernel's ``fetch_item`` (drivers/hid/hid-core.c) every prefix whose tag nibble is 15
-(0xF0..0xFF) is read as one.  :func:`tokenize` cuts the bytes into :class:`Item` tuples; a truncated item is
-a ParseError naming its offset.
+(0xF0..0xFF) is read as one.  :func:`tokenize` cuts the bytes into :class:`Item` tuples (for the dump), :func:`scan`
+into plain ``(offset, prefix, value)`` tuples (for the parser: a named tuple per item costs more than the
+parsing); a truncated item is a ParseError naming its offset.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ ITEM_NAMES: dict[tuple[int, int], str] = {
 """Item names by (type, tag) (HID 1.11 §6.2.2.4–6.2.2.8)."""
 
 _SIZES = (0, 1, 2, 4)
+_BITS = (0, 8, 16, 32)
 
 
 class Item(NamedTuple):
@@ -54,11 +56,8 @@ class Item(NamedTuple):
 
     @property
     def signed(self) -> int:
-        """The data as a two's complement number of its size (the kernel's ``item_sdata``)."""
-        bits = 8 * self.size
-        if self.long or not bits or self.value < 1 << (bits - 1):
-            return 0 if self.long else self.value
-        return self.value - (1 << bits)
+        """The data as a two's complement number of its size (the kernel's ``item_sdata``; 0 for a long item)."""
+        return 0 if self.long else signed_value(self.prefix, self.value)
 
     @property
     def name(self) -> str:
@@ -72,16 +71,23 @@ class Item(NamedTuple):
         return bytes(descriptor[self.end - self.size:self.end])
 
 
-def tokenize(data: bytes, *, source: str | None = None) -> list[Item]:
-    """The items of ``data`` in order; a ParseError names the offset of an item cut short by the end."""
-    items: list[Item] = []
+def signed_value(prefix: int, value: int) -> int:
+    """A short item's unsigned data as two's complement of the size its prefix gives (``item_sdata``)."""
+    bits = _BITS[prefix & 3]
+    return value - (1 << bits) if bits and value >> (bits - 1) else value
+
+
+def scan(data: bytes, *, source: str | None = None) -> list[tuple[int, int, int]]:
+    """``(offset, prefix, value)`` per item, the parser's fast form: a short item's unsigned data, or a long
+    item's data size; a ParseError names the offset of an item cut short by the end."""
+    items: list[tuple[int, int, int]] = []
     append = items.append
-    new = tuple.__new__  # Item(...) without the generated __new__'s extra call: tokenizing is the parser's hot loop
     n = len(data)
     i = 0
     while i < n:
         b = data[i]
-        if b >> 4 == LONG_ITEM_TAG:
+        code = b & 3
+        if b >= 0xF0:  # tag nibble 15: a long item
             if n - i < 3:
                 raise ParseError(f"long item 0x{b:02X} cut short: its header needs 3 bytes, {n - i} left",
                                  source=source, offset=i)
@@ -90,15 +96,32 @@ def tokenize(data: bytes, *, source: str | None = None) -> list[Item]:
             if end > n:
                 raise ParseError(f"long item cut short: {size} data bytes announced, {n - i - 3} left",
                                  source=source, offset=i)
-            append(new(Item, (i, end, b, (b >> 2) & 3, data[i + 2], size, 0, True)))
+            append((i, b, size))
         else:
-            size = _SIZES[b & 3]
-            end = i + 1 + size
+            end = i + 1 + _SIZES[code]
             if end > n:
                 name = ITEM_NAMES.get(((b >> 2) & 3, b >> 4), f"item 0x{b:02X}")
-                raise ParseError(f"{name} cut short: {size} data bytes needed, {n - i - 1} left",
+                raise ParseError(f"{name} cut short: {_SIZES[code]} data bytes needed, {n - i - 1} left",
                                  source=source, offset=i)
-            value = data[i + 1] if size == 1 else int.from_bytes(data[i + 1:end], "little") if size else 0
-            append(new(Item, (i, end, b, (b >> 2) & 3, b >> 4, size, value, False)))
+            if code == 1:
+                append((i, b, data[i + 1]))
+            elif code == 2:
+                append((i, b, data[i + 1] | data[i + 2] << 8))
+            elif code == 3:
+                append((i, b, int.from_bytes(data[i + 1:end], "little")))
+            else:
+                append((i, b, 0))
         i = end
+    return items
+
+
+def tokenize(data: bytes, *, source: str | None = None) -> list[Item]:
+    """The items of ``data`` in order, as :class:`Item` tuples (see :func:`scan` for the errors)."""
+    items = []
+    for offset, b, value in scan(data, source=source):
+        if b >= 0xF0:
+            items.append(Item(offset, offset + 3 + value, b, (b >> 2) & 3, data[offset + 2], value, 0, True))
+        else:
+            size = _SIZES[b & 3]
+            items.append(Item(offset, offset + 1 + size, b, (b >> 2) & 3, b >> 4, size, value))
     return items
