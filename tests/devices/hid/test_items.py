@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from pixelpen.devices.hid.items import GLOBAL, LOCAL, MAIN, RESERVED, tokenize
+from pixelpen.devices.hid.items import GLOBAL, LOCAL, MAIN, RESERVED, scan, signed_value, tokenize
 from pixelpen.errors import ParseError
 
 
@@ -69,3 +69,15 @@ def test_truncated_item_is_an_error_at_its_offset(data, offset):
 
 def test_empty_input_has_no_items():
     assert tokenize(b"") == []
+
+
+def test_scan_gives_offset_prefix_and_value_or_long_size():
+    data = bytes([0x05, 0x01, 0xFE, 0x02, 0x10, 0xAA, 0xBB, 0x27, 0x01, 0x02, 0x03, 0x04, 0xC0])
+    assert scan(data) == [(0, 0x05, 1), (2, 0xFE, 2), (7, 0x27, 0x04030201), (12, 0xC0, 0)]
+
+
+@pytest.mark.parametrize("prefix, value, signed", [
+    (0x15, 0xFF, -1), (0x16, 0xFFFF, -1), (0x17, 0x7FFFFFFF, 2**31 - 1), (0x14, 0, 0), (0x16, 0x8000, -32768),
+])
+def test_signed_value(prefix, value, signed):
+    assert signed_value(prefix, value) == signed
