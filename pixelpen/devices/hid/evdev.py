@@ -95,7 +95,8 @@ ONE_SIDED = frozenset({0x06, 0x09, 0x0A})
 """Axes normalised to 0..1: ABS_THROTTLE, ABS_GAS, ABS_BRAKE."""
 PEN_TOOLS = frozenset(range(BTN_TOOL_PEN, BTN_TOOL_AIRBRUSH + 1))
 PEN_AXES = frozenset({ABS_X, ABS_Y, ABS_PRESSURE, ABS_DISTANCE, ABS_TILT_X, ABS_TILT_Y})
-PEN_KEYS = PEN_TOOLS | {BTN_TOUCH, BTN_STYLUS, BTN_STYLUS2, BTN_STYLUS3}
+DIGITIZER_KEYS = frozenset(range(BTN_DIGI, BTN_DIGI + 0x10))
+"""BTN_TOOL_PEN .. BTN_TOOL_QUADTAP, BTN_TOUCH, BTN_STYLUS*: pen and touch state, never Button or Key events."""
 GAMEPAD_NAMES = ("a", "b", "c", "x", "y", "z", "tl", "tr", "tl2", "tr2", "select", "start", "mode", "thumbl",
                  "thumbr")
 """BTN_SOUTH (BTN_A) .. BTN_THUMBR, as the kernel names them."""
@@ -295,7 +296,7 @@ class EvdevSemantics:
         if pressed == (code in self._keys):
             return
         (self._keys.add if pressed else self._keys.discard)(code)
-        if code in PEN_KEYS:
+        if code in DIGITIZER_KEYS:
             if self.touch:
                 return
             if code in PEN_TOOLS:
