@@ -14,6 +14,9 @@ backend and the kernel do underneath:
   an unnumbered one, fails with ``Broken pipe`` as the device's STALL does; ``get_feature_report`` returns the
   ID first (0 for an unnumbered device); ``read`` returns the report as the device sent it (ID only when
   numbered), cut to ``max_length`` as hidraw does;
+* readers: each open handle gets every report sent after it was opened (none from before), in a buffer
+  like the backend's (``backend="hidraw"``: 63 reports, the arriving ones dropped when full; ``"libusb"``:
+  32, the oldest dropped — ``BUFFERS``), so a slow reader loses reports as it would on Linux;
 * time: a read takes the reports the device sent by ``clock.now()`` (``advance_to``, ``take_reports``); with
   none it waits for the device's next report or the timeout, whichever is first, with ``clock.sleep`` (a
   SimulatedClock jumps there at once).  ``read(n, 0)`` on a blocking handle waits forever as hidapi does —
@@ -26,7 +29,7 @@ backend and the kernel do underneath:
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -51,16 +54,46 @@ def connected(device: ReportDevice) -> bool:
     return bool(flag) if flag is not None else not getattr(device, "closed", False)
 
 
+BUFFERS = {"hidraw": (63, "newest"), "libusb": (32, "oldest")}
+"""Input reports a reader's buffer holds and which are lost when it is full: hidraw's ring of
+HIDRAW_BUFFER_SIZE 64 holds 63 and drops the arriving report (``hidraw_report_event``); hidapi's libusb
+backend keeps 32 and drops the oldest (``read_callback``)."""
+
+
 class ReportQueue:
     """The host's end of a simulated interrupt IN endpoint: reports in order, waits on the clock, unplug noticed.
 
+    ``capacity`` bounds the reports held (None: the device's own bound), dropping the ``newest`` arriving or
+    the ``oldest`` held (``dropped`` counts them).  ``pump`` moves what the device sent into the queue (by
+    default this queue takes the device's reports itself; SimHidapi fans them out to every open handle).
     Shared by this fake and the pyusb one (``usbhid.py``).
     """
 
-    def __init__(self, device: ReportDevice, clock: Clock | None = None) -> None:
+    def __init__(self, device: ReportDevice, clock: Clock | None = None, *, capacity: int | None = None,
+                 drop: str = "newest", pump: Callable[[], None] | None = None) -> None:
         self.device = device
         self.clock = clock if clock is not None else device.clock
+        self.capacity = capacity
+        self.drop = drop
+        self.dropped = 0
+        """Reports lost because the buffer was full (a reader slower than the device)."""
+        self._pump = pump if pump is not None else self.pump
         self._queue: deque[bytes] = deque()
+
+    def pump(self) -> None:
+        """Take what the device sent up to the clock's present into this queue."""
+        self.device.advance_to(self.clock.now())
+        self.extend(self.device.take_reports())
+
+    def extend(self, reports: Iterable[bytes]) -> None:
+        """Reports arriving, in order, into the bounded buffer."""
+        for report in reports:
+            if self.capacity is not None and len(self._queue) >= self.capacity:
+                self.dropped += 1
+                if self.drop == "newest":
+                    continue
+                self._queue.popleft()
+            self._queue.append(report)
 
     def take(self, wait: float | None) -> bytes | None:
         """The next report, waiting up to ``wait`` clock seconds (None: until one comes); Disconnected when unplugged.
@@ -71,8 +104,7 @@ class ReportQueue:
         for _ in range(MAX_WAITS):
             if not connected(self.device):
                 raise Disconnected(f"{self.device.model}: the device was unplugged")
-            self.device.advance_to(self.clock.now())
-            self._queue.extend(self.device.take_reports())
+            self._pump()
             if self._queue:
                 return self._queue.popleft()
             now = self.clock.now()
@@ -88,16 +120,20 @@ class ReportQueue:
                 return None  # a clock that does not move (an idle real-time device ends the wait)
         raise RuntimeError(f"{self.device.model}: read did not converge after {MAX_WAITS} waits")  # pragma: no cover
 
-    def clear(self) -> None:
-        """Forget the reports taken but not yet read."""
-        self._queue.clear()
-
 
 @dataclass
 class _Slot:
     path: bytes
     device: ReportDevice
-    handles: list[SimHidDevice] = field(default_factory=list)
+    clock: Clock
+    queues: list[ReportQueue] = field(default_factory=list)
+
+    def pump(self) -> None:
+        """What the device sent up to now goes to every open handle, as the kernel gives each reader every report."""
+        self.device.advance_to(self.clock.now())
+        reports = self.device.take_reports()
+        for queue in self.queues:
+            queue.extend(reports)
 
 
 class SimHidapi:
@@ -110,9 +146,14 @@ class SimHidapi:
     HID_API_BUS_UNKNOWN, HID_API_BUS_USB, HID_API_BUS_BLUETOOTH, HID_API_BUS_I2C, HID_API_BUS_SPI = 0, 1, 2, 3, 4
     HID_API_BUS_VIRTUAL = BUS_VIRTUAL
 
-    def __init__(self, devices: Iterable[ReportDevice] = (), *, clock: Clock | None = None) -> None:
+    def __init__(self, devices: Iterable[ReportDevice] = (), *, clock: Clock | None = None,
+                 backend: str = "hidraw") -> None:
+        if backend not in BUFFERS:
+            raise ValueError(f"backend must be one of {', '.join(BUFFERS)}, got {backend!r}")
         self.clock = clock
         """The clock reads wait on (default: each device's own)."""
+        self.backend = backend
+        """Whose input buffer the handles have (``BUFFERS``): ``hidraw`` or ``libusb``."""
         self._slots: list[_Slot] = []
         self._plugs = 0
         for device in devices:
@@ -123,7 +164,7 @@ class SimHidapi:
         """Plug a simulated device in; its new path (``sim:<model>:<n>``)."""
         path = f"sim:{device.model}:{self._plugs}"
         self._plugs += 1
-        self._slots.append(_Slot(path.encode(), device))
+        self._slots.append(_Slot(path.encode(), device, self.clock if self.clock is not None else device.clock))
         return path
 
     def unplug(self, which: str | bytes | ReportDevice) -> None:
@@ -209,16 +250,18 @@ class SimHidDevice:
             raise RuntimeError("already open")
         for slot in self._bus._slots:
             if slot.path == path and connected(slot.device):
+                slot.pump()  # what was sent before the open goes to the readers open already, not to this one
+                capacity, drop = BUFFERS[self._bus.backend]
                 self._slot = slot
-                self._queue = ReportQueue(slot.device, self._bus.clock)
-                slot.handles.append(self)
+                self._queue = ReportQueue(slot.device, slot.clock, capacity=capacity, drop=drop, pump=slot.pump)
+                slot.queues.append(self._queue)
                 return
         raise OSError("open failed")
 
     def close(self) -> None:
         """Close the handle (idempotent)."""
-        if self._slot is not None:
-            self._slot.handles.remove(self)
+        if self._slot is not None and self._queue is not None:
+            self._slot.queues.remove(self._queue)
         self._slot = self._queue = None
 
     def set_nonblocking(self, v: int) -> int:

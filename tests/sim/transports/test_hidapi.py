@@ -114,9 +114,9 @@ def test_a_feature_the_device_lacks_stalls():
 def test_reads_have_the_id_only_when_numbered_and_are_cut_to_max_length():
     clock = SimulatedClock()
     bus = SimHidapi([mouse(clock), trackball(clock)])
-    assert opened(bus, "sim:mouse:0").read(64, 1000) == [0x01, 0x05, 0xFB]
-    ball = opened(bus, "sim:trackball:1")
+    plain, ball = opened(bus, "sim:mouse:0"), opened(bus, "sim:trackball:1")
     assert ball.read(3, 1000) == [0x01, 0x02, 0x10]
+    assert plain.read(64, 1000) == [0x01, 0x05, 0xFB]
 
 
 def test_a_read_waits_for_the_next_report_or_the_timeout_on_the_clock():
@@ -128,6 +128,39 @@ def test_a_read_waits_for_the_next_report_or_the_timeout_on_the_clock():
     assert handle.read(64, 0) == [] and clock.now() == pytest.approx(0.5)  # a poll takes no time
     handle.set_nonblocking(0)
     assert handle.read(64) == [0x00, 0x00, 0x00] and clock.now() == pytest.approx(1.0)  # blocks until it comes
+
+
+def test_reports_sent_before_the_open_are_not_read():
+    clock = SimulatedClock()
+    bus = SimHidapi([mouse(clock)])
+    clock.advance(0.7)  # the first move (0.5 s) went out while nobody had the node open
+    assert opened(bus, "sim:mouse:0").read(64, 1000) == [0x00, 0x00, 0x00]
+
+
+def test_every_open_handle_gets_every_report():
+    clock = SimulatedClock()
+    bus = SimHidapi([mouse(clock)])
+    first, second = opened(bus, "sim:mouse:0"), opened(bus, "sim:mouse:0")
+    assert first.read(64, 2000) == [0x01, 0x05, 0xFB]
+    assert second.read(64, 0) == [0x01, 0x05, 0xFB]  # already there: the same report for the second reader
+    first.close()
+    assert second.read(64, 2000) == [0x00, 0x00, 0x00]
+
+
+STREAM = [(i / 100, bytes([i, 0, 0])) for i in range(1, 101)]  # report i carries i in byte 0
+
+
+@pytest.mark.parametrize(("backend", "kept"), [("hidraw", list(range(1, 64))), ("libusb", list(range(69, 101)))])
+def test_a_slow_reader_loses_reports_as_each_backend_does(backend, kept):
+    clock = SimulatedClock()
+    bus = SimHidapi([mouse(clock, reports=STREAM)], backend=backend)
+    handle = opened(bus, "sim:mouse:0")
+    handle.set_nonblocking(1)
+    clock.advance(2.0)  # nobody reads while all 100 arrive
+    got = []
+    while report := handle.read(64, 0):
+        got.append(report[0])
+    assert got == kept  # hidraw: its ring of 64 holds 63, the arriving ones are dropped; libusb: the last 32
 
 
 def test_a_blocking_read_with_nothing_to_come_raises_instead_of_hanging():
@@ -172,13 +205,13 @@ def test_link_reads_reports_and_times_out_on_the_fake_clock():
     clock = SimulatedClock()
     bus = SimHidapi([mouse(clock), trackball(clock)])
     link = open_hid("1234:0001:M1", module=bus, clock=clock)
+    ball = open_hid("sim:trackball:1", module=bus, clock=clock)
     assert link.report_descriptor == BOOT_MOUSE and not link.numbered
     assert link.read_report(0.1) is None and clock.now() == pytest.approx(0.1)
     assert link.read_report(5) == b"\x01\x05\xfb" and clock.now() == pytest.approx(0.5)
     assert link.read_report(None) == b"\x00\x00\x00"
     assert link.read_report(2) is None and clock.now() == pytest.approx(3.0)
     assert link.device_id.key == "virtual:1234:0001:M1:0" and link.device_id.path == "sim:mouse:0"
-    ball = open_hid("sim:trackball:1", module=bus, clock=clock)
     assert ball.numbered and ball.read_report(0) == bytes([0x01, 0x02, 0x10, 0x00, 0xF0, 0xFF])
 
 
