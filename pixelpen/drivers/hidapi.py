@@ -264,9 +264,8 @@ def open_hid(spec: str, *, backend: str = "hidraw", module: Any = None, clock: C
                    and (wanted.interface is None or i.interface == wanted.interface)]
         if not matches:
             same = [str(i) for i in present if i.vendor_id == wanted.vendor_id and i.product_id == wanted.product_id]
-            listed = "; ".join(same) or "none with these IDs" + (
-                f" (present: {', '.join(sorted({f'{i.vendor_id:04x}:{i.product_id:04x}' for i in present}))})"
-                if present else " (no HID devices at all)")
+            ids = sorted({f"{i.vendor_id:04x}:{i.product_id:04x}" for i in present})
+            listed = "; ".join(same) or f"none with these IDs (present: {', '.join(ids) or 'no HID devices at all'})"
             raise LinkError(f"no HID device matches {spec!r} ({backend}); {listed}")
         info = matches[0]
     device = mod.device()
