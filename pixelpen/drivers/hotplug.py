@@ -10,6 +10,8 @@ and plugging in again, while its ``path`` (``/dev/hidraw3`` -> ``/dev/hidraw5``)
 ``Left`` for the old path and ``Arrived`` for the new one with the same ``key`` — also when both happen
 between two polls (the old handle is dead either way and must be reopened).  Two identical devices without a
 serial number share a key; they are told apart by path, but which one came back after a replug cannot be known.
+A replug between two polls that gets the same node back (the kernel reuses hidraw numbers) is invisible to
+polling; a link open on the old node raises Disconnected on its next read all the same, so reopen then.
 
 These are the drivers' own records: drivers must not import devices/, so the input layer (``pixelpen.input``)
 turns them into ``pixelpen.devices.hid.events.DeviceAdded``/``DeviceRemoved`` events.
