@@ -49,7 +49,7 @@ from pixelpen.display.registry import open_display, scheme_names
 from pixelpen.errors import ConfigError, PixelpenError, URLError
 from pixelpen.options import integer
 from pixelpen.scene import show_reference
-from pixelpen.sim.base import Fault, StreamDevice, create_simulator, simulator_models
+from pixelpen.sim.base import Fault, StreamDevice, create_simulator, is_stream_device, reached_through, simulator_models
 from pixelpen.sim.transports.options import TransportOptions, line_baud, split_options
 from pixelpen.sim.transports.port import LinkStats, SimPort
 from pixelpen.sim.view import MAX_FPS, ViewServer, source_for
@@ -315,6 +315,10 @@ def run_sim(args: argparse.Namespace) -> int:
         raise ConfigError("give --pty, --replay FILE or --view")
     speed = args.speed or ("fast" if args.replay is not None else "real")
     device, transport = open_simulator(args.model, parse_options(args.option), speed)
+    if not is_stream_device(device) and not _is_panel(device):
+        device.close()
+        raise ConfigError(f"{device.model} is reached through {reached_through(device)}: `pixelpen sim` serves "
+                          "byte-stream and panel simulators")
     panel = _is_panel(device)
     if panel and (args.pty or args.replay is not None):
         device.close()

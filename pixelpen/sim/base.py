@@ -178,6 +178,23 @@ class ReportDevice(Protocol):
         """Unplug the device."""
 
 
+def reached_through(device: object) -> str:
+    """What a simulator is reached through, for messages: a byte stream, a panel bus, HID reports, or a framebuffer."""
+    model = getattr(device, "model", "MODEL")
+    if isinstance(device, BusDevice):  # checked first: every SimulatedDevice also has the byte-stream methods
+        return f"a panel bus (pixelpen.open('sim:{model}'))"
+    if isinstance(device, ReportDevice):
+        return f"HID reports: an input device (pixelpen.open_input('sim:{model}'))"
+    if isinstance(device, StreamDevice):
+        return f"a byte stream (sim://{model}, a pty)"
+    return f"its own interface (pixelpen.open('sim:{model}'))"
+
+
+def is_stream_device(device: object) -> bool:
+    """True for a simulator reached through a byte stream (panel and HID simulators have those methods too)."""
+    return isinstance(device, StreamDevice) and not isinstance(device, (BusDevice, ReportDevice))
+
+
 class SimulatedDevice(ABC):
     """The base of every simulator: clock and event loop, output queue, closed guard and fault injection.
 

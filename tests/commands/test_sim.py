@@ -348,6 +348,11 @@ def test_a_panel_simulator_is_viewed_and_its_glass_written(tmp_path):
     np.testing.assert_array_equal(np.asarray(Image.open(out)), expected)
 
 
+def test_a_hid_simulator_is_not_served(capsys):
+    assert main(["sim", "keyboard", "--pty"]) == 2
+    assert "keyboard is reached through HID reports" in capsys.readouterr().err
+
+
 def test_a_panel_has_no_pty():
     proc = subprocess.run([sys.executable, "-c", _PANEL_MAIN, "sim", "stubpanel", "--pty"],
                           capture_output=True, text=True, timeout=60)

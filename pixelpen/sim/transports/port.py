@@ -47,7 +47,7 @@ from typing import Final
 
 from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
 from pixelpen.errors import ConfigError, Disconnected, LinkError, LinkTimeout, URLError
-from pixelpen.sim.base import Fault, StreamDevice, create_simulator
+from pixelpen.sim.base import Fault, StreamDevice, create_simulator, is_stream_device, reached_through
 from pixelpen.sim.transports.options import (  # re-exported: these lived here before the options had a module
     DEFAULT_BAUD,
     DEVICE_FAULTS,
@@ -528,6 +528,10 @@ def open_sim_port(
         raise URLError(f"{source or model}: unknown option 'clock' (set the simulator's time with speed=fast|real)")
     if device is None:
         device = create_simulator(model, clock=clock or transport.make_clock(), **device_options)
+        if not is_stream_device(device):
+            device.close()
+            raise URLError(f"{source or model}: the {model} simulator is reached through {reached_through(device)}, "
+                           "not a serial port")
     elif device_options:
         raise URLError(
             f"{source or model}: option(s) {', '.join(sorted(device_options))} are for a simulator factory, "

@@ -184,6 +184,13 @@ def test_unknown_model_lists_known_ones(monkeypatch):
         serial.serial_for_url("sim://no-such-plotter")
 
 
+@pytest.mark.parametrize(("model", "reach"), [("tablet", "open_input('sim:tablet')"), ("st7789", "a panel bus")])
+def test_a_simulator_without_a_byte_stream_is_no_serial_port(model, reach):
+    with pytest.raises(URLError, match=r"not a serial port") as caught:
+        serial.serial_for_url(f"sim://{model}")
+    assert reach in str(caught.value)
+
+
 def test_bad_transport_option_is_a_url_error():
     with pytest.raises(URLError, match="flow"):
         open_echo("sim://echo?flow=sideways")
