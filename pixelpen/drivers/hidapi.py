@@ -246,7 +246,7 @@ def parse_hid_spec(spec: str) -> HidSpec:
 
 
 def open_hid(spec: str, *, backend: str = "hidraw", module: Any = None, clock: Clock | None = None,
-             numbered: bool | None = None, sysfs: str = "/sys") -> HidapiLink:
+             numbered: bool | None = None, max_report: int = MAX_REPORT, sysfs: str = "/sys") -> HidapiLink:
     """Open the HID device ``spec`` names (see :func:`parse_hid_spec`) as a HidapiLink.
 
     LinkError when nothing matches (listing what is there), or when the device cannot be opened (with
@@ -273,7 +273,8 @@ def open_hid(spec: str, *, backend: str = "hidraw", module: Any = None, clock: C
         device.open_path(info.raw_path)
     except OSError as exc:
         raise _open_failure(info, backend, exc, present, sysfs) from None
-    return HidapiLink(device, info, backend=backend, clock=clock, numbered=numbered, sysfs=sysfs)
+    return HidapiLink(device, info, backend=backend, clock=clock, numbered=numbered, max_report=max_report,
+                      sysfs=sysfs)
 
 
 def _open_failure(info: HidInfo, backend: str, exc: OSError, present: list[HidInfo], sysfs: str) -> LinkError:
@@ -332,13 +333,19 @@ class HidapiLink:
     """A ReportLink over an open hidapi device: reads with timeouts in slices, the report-ID rules, errors mapped."""
 
     def __init__(self, device: Any, info: HidInfo, *, backend: str = "hidraw", clock: Clock | None = None,
-                 numbered: bool | None = None, sysfs: str = "/sys") -> None:
+                 numbered: bool | None = None, max_report: int = MAX_REPORT, sysfs: str = "/sys") -> None:
+        if not isinstance(max_report, int) or not 1 <= max_report <= MAX_REPORT:
+            raise InvalidArgument(f"{info.path}: max_report must be 1..{MAX_REPORT} bytes, got {max_report!r}")
         self.device = device
         """The open cython-hidapi ``device`` (or a module-like fake's)."""
         self.info = info
         self.backend = backend
         self.clock = clock if clock is not None else REAL_CLOCK
         self.sysfs = sysfs
+        self.max_report = max_report
+        """The read buffer: the kernel hands out one report per read, cut to this length (the longest input
+        report, when known, saves hidapi a 16 KB buffer per read; an emulated node that is a byte stream, as
+        umockdev's, needs the exact report length)."""
         self._descriptor: bytes | None = None
         self._numbered = numbered
         self._closed = False
@@ -402,7 +409,7 @@ class HidapiLink:
     def _read_once(self, ms: int) -> bytes | None:
         """One hidapi read waiting at most ``ms`` (0 only on a non-blocking handle, where it returns at once)."""
         try:
-            data = self.device.read(MAX_REPORT, ms if ms > 0 or self._nonblocking else 1)
+            data = self.device.read(self.max_report, ms if ms > 0 or self._nonblocking else 1)
         except OSError as exc:
             raise Disconnected(f"{self.info.path}: the device was removed during a read "
                                f"(hidapi: {self._detail(str(exc))})") from None

@@ -9,6 +9,12 @@ report number".  cython-hidapi: ``read(n, 0)`` calls the blocking ``hid_read``; 
 
 from __future__ import annotations
 
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -26,6 +32,8 @@ from pixelpen.drivers.hidapi import (
     short_items,
     top_level_usages,
 )
+from pixelpen.drivers.recordings.hidrecorder import HidRecording
+from pixelpen.drivers.recordings.umockdev import encode_script_data, export_umockdev
 from pixelpen.drivers.reports import ReportLink
 from pixelpen.errors import (
     ConfigError,
@@ -36,7 +44,7 @@ from pixelpen.errors import (
     ParseError,
     ProtocolError,
 )
-from pixelpen.sim.hid.descriptors import BOOT_MOUSE, TRACKBALL
+from pixelpen.sim.hid.descriptors import BOOT_KEYBOARD, BOOT_MOUSE, TRACKBALL
 
 # a keyboard and a consumer-control collection in one descriptor (two top-level collections, numbered 1 and 2)
 COMPOSITE = bytes([
@@ -434,3 +442,55 @@ def test_descriptor_falls_back_to_sysfs_for_a_libusb_path(tmp_path):
     device.get_report_descriptor = fails
     hl = HidapiLink(device, HidInfo("1-2.3:1.0", 1, 2), backend="libusb", sysfs=str(tmp_path))
     assert hl.report_descriptor == BOOT_MOUSE and not hl.numbered
+
+
+# ---- the real hidraw module, against a node umockdev emulates (no root) -----------------------------
+
+REAL_RUN = '''
+import sys
+from pixelpen.drivers.hidapi import enumerate_hid, open_hid
+print(sorted((i.path, i.vendor_id, i.product_id, i.usage_page, i.usage) for i in enumerate_hid()))
+link = open_hid(sys.argv[1], max_report=int(sys.argv[2]))
+print(link.report_descriptor.hex(), link.numbered, link.device_id.key)
+print(link.read_report(2.0).hex())
+if link.numbered:
+    print(link.read_report(2.0).hex())
+else:
+    link.write_report(bytes([0x02]))
+    print("written")
+link.close()
+'''
+
+
+def _umockdev_run(tmp_path, recording, spec, size, writes=b""):
+    if shutil.which("umockdev-run") is None:
+        pytest.skip("umockdev-run is not installed (Debian: umockdev)")
+    pytest.importorskip("hidraw", reason="cython-hidapi's hidraw module is not installed")
+    fixture = export_umockdev(recording, tmp_path)
+    if writes:
+        with open(fixture.data, "ab") as f:  # umockdev checks the bytes the program writes to the node
+            f.write(b"w 0 " + encode_script_data(writes) + b"\n")
+    script = tmp_path / "run.py"
+    script.write_text(REAL_RUN)
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[2]))
+    done = subprocess.run(fixture.command(sys.executable, str(script), spec, str(size)), capture_output=True,
+                          text=True, timeout=60, env=env, check=False)
+    assert done.returncode == 0 and "ERROR" not in done.stderr, done.stderr
+    return done.stdout.splitlines()
+
+
+def test_real_hidraw_unnumbered_reads_and_a_write_with_hidapis_leading_zero(tmp_path):
+    keyboard = HidRecording("Keyboard", "usb-0000:00:14.0-3/input0", 3, 0x1209, 0x0007, BOOT_KEYBOARD,
+                            [(0.0, bytes([0x02, 0, 0x04, 0, 0, 0, 0, 0]))])  # Left Shift + 'a'
+    lines = _umockdev_run(tmp_path, keyboard, "1209:0007", 8, writes=bytes([0x00, 0x02]))
+    assert lines[0] == "[('/dev/hidraw0', 4617, 7, 1, 6)]"  # hidraw read usage page/usage from the descriptor
+    assert lines[1] == f"{BOOT_KEYBOARD.hex()} False usb:1209:0007::0"
+    assert lines[2:] == ["0200040000000000", "written"]  # the node received 00 02 (umockdev checked it)
+
+
+def test_real_hidraw_numbered_reads_keep_the_id(tmp_path):
+    ball = HidRecording("Trackball", "usb-0000:00:14.0-4/input0", 3, 0x1209, 0x0002, TRACKBALL,
+                        [(0.0, bytes([0x01, 0x01, 0x10, 0x00, 0xF0, 0xFF])), (0.01, bytes([0x02, 0x01]))])
+    lines = _umockdev_run(tmp_path, ball, "/dev/hidraw0", 6)
+    assert lines[1].endswith(" True usb:1209:0002::0")
+    assert lines[2:] == ["01011000f0ff", "0201"]
