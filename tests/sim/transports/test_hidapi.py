@@ -9,6 +9,8 @@ Reports are packed by hand from the layouts in pixelpen/sim/hid/descriptors.py.
 from __future__ import annotations
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from pixelpen.clock import SimulatedClock
 from pixelpen.drivers.hidapi import enumerate_hid, open_hid
@@ -294,3 +296,17 @@ def test_the_real_modules_enumerate_and_refuse_a_missing_path(backend):
     assert all(info.path for info in found)
     with pytest.raises(LinkError, match="no HID device at '/dev/hidraw-none'"):
         open_hid("/dev/hidraw-none", backend=backend)
+
+
+@given(st.binary(min_size=1, max_size=64), st.booleans())
+def test_any_report_reaches_the_device_unchanged_through_link_and_fake(report, numbered):
+    clock = SimulatedClock()
+    descriptor = TRACKBALL if numbered else BOOT_KEYBOARD
+    if numbered and report[0] == 0:
+        report = b"\x01" + report[1:]
+    sim = HidSim.from_descriptor(descriptor, clock=clock, model="dev")
+    link = open_hid("sim:dev:0", module=SimHidapi([sim]), clock=clock)
+    link.write_report(report)
+    link.send_feature(report)
+    rid = report[0] if numbered else 0
+    assert sim.firmware.outputs[rid] == report and link.get_feature(rid) == report
