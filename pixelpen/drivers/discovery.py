@@ -143,27 +143,18 @@ def _has_printer_interface(dev: Any) -> bool:
 
 def list_hid_devices() -> list[DiscoveredDevice]:
     """HID devices hidapi enumerates (empty when hidapi is missing or fails)."""
-    try:
-        import hid
+    from pixelpen.drivers.hidapi import enumerate_hid
 
-        entries = hid.enumerate()
+    try:
+        entries = enumerate_hid(backend="libusb")
     except Exception as exc:  # noqa: BLE001 - ImportError, missing hidraw, permissions
         _log.debug("listing HID devices failed: %s", exc)
         return []
     found = []
     for e in entries:
-        path = e.get("path", b"")
-        name = " ".join(s for s in (e.get("manufacturer_string"), e.get("product_string")) if s) or "HID device"
-        found.append(
-            DiscoveredDevice(
-                "hid",
-                path.decode("utf-8", "replace") if isinstance(path, bytes) else str(path),
-                f"{name} (usage page {e.get('usage_page', 0):#06x}, usage {e.get('usage', 0):#06x})",
-                e.get("vendor_id"),
-                e.get("product_id"),
-                e.get("serial_number") or None,
-            )
-        )
+        name = " ".join(s for s in (e.manufacturer, e.product) if s) or "HID device"
+        found.append(DiscoveredDevice("hid", e.path, f"{name} (usage page {e.usage_page:#06x}, usage {e.usage:#06x})",
+                                      e.vendor_id, e.product_id, e.serial or None))
     return found
 
 

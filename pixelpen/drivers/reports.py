@@ -12,7 +12,8 @@ first byte is the report ID; otherwise there is no ID byte at all.
   or as SET_REPORT(Output);
 * ``get_feature(report_id)`` / ``send_feature(report)``: GET_REPORT / SET_REPORT(Feature) on the
   control endpoint (settings such as resolution or the polling rate); ``get_feature`` returns the
-  report with its ID byte first;
+  report as the descriptor lays it out: its ID byte first when numbered; an unnumbered device's only
+  feature report (ID 0) without one;
 * ``report_descriptor``: the HID report descriptor bytes, from which a driver learns the fields;
 * ``close()``.
 
@@ -40,7 +41,7 @@ class ReportLink(Protocol):
         """Send an output report (report ID first when the device numbers its reports)."""
 
     def get_feature(self, report_id: int) -> bytes:
-        """The feature report ``report_id`` as the device answers GET_REPORT (its ID byte first)."""
+        """The feature report ``report_id`` as the device answers GET_REPORT (ID byte first when numbered)."""
 
     def send_feature(self, report: bytes) -> None:
         """Send a feature report (SET_REPORT; its ID byte first)."""

@@ -71,7 +71,7 @@ def test_discovery_with_no_devices_is_empty(nothing_attached):
 
 
 def test_hidapi_failure_gives_an_empty_list(monkeypatch):
-    def broken():
+    def broken(vendor_id=0, product_id=0):
         raise OSError("hidraw not available")
 
     monkeypatch.setitem(sys.modules, "hid", types.SimpleNamespace(enumerate=broken))
@@ -89,7 +89,7 @@ def test_hid_entries_become_records(monkeypatch):
         "usage_page": 1,
         "usage": 2,
     }
-    monkeypatch.setitem(sys.modules, "hid", types.SimpleNamespace(enumerate=lambda: [entry]))
+    monkeypatch.setitem(sys.modules, "hid", types.SimpleNamespace(enumerate=lambda vendor_id=0, product_id=0: [entry]))
     [rec] = list_hid_devices()
     assert (rec.kind, rec.path, rec.vid, rec.pid, rec.serial_number) == ("hid", "/dev/hidraw3", 0x046D, 0xC52B, None)
     assert "Logitech Trackball" in rec.description

@@ -24,6 +24,7 @@ from types import MappingProxyType
 from typing import Any, ClassVar
 
 from pixelpen.clock import Clock
+from pixelpen.drivers.hidapi import numbered_reports as numbered
 from pixelpen.errors import ConfigError, Disconnected, InvalidArgument, InvalidArgumentType, ProtocolError, quote_token
 from pixelpen.sim.base import Fault, SimulatedDevice
 
@@ -33,24 +34,6 @@ every 125 µs microframe; below 1 Hz a device is not an input device any more.""
 
 MAX_UNREAD_REPORTS = 65_536
 """Input reports kept for a host that does not read (the oldest are dropped and counted in ``dropped``)."""
-
-
-def numbered(descriptor: bytes) -> bool:
-    """True when the descriptor holds a Report ID item (every report then starts with its ID byte).
-
-    A walk over the item prefixes only (HID 1.11 §6.2.2.2 short items, §6.2.2.3 long items); a truncated last
-    item ends the walk.
-    """
-    i = 0
-    while i < len(descriptor):
-        prefix = descriptor[i]
-        if prefix == 0xFE:  # long item: bDataSize, bLongItemTag, data
-            i += 3 + (descriptor[i + 1] if i + 1 < len(descriptor) else 0)
-            continue
-        if prefix & 0xFC == 0x84:
-            return True
-        i += 1 + (0, 1, 2, 4)[prefix & 0x03]
-    return False
 
 
 @dataclass(frozen=True)
