@@ -18,6 +18,10 @@
   and while Ctrl, Alt or GUI is held — Right Alt is AltGr on layouts with AltGr), ``modifiers`` the
   modifiers held (``ctrl``, ``shift``, ``alt``, ``altgr``, ``gui``) and the locks on (``caps_lock``,
   ``num_lock``, ``scroll_lock``).  Key repeat is not generated here.
+* **Dead keys** — with ``dead_keys=true`` a dead key types nothing and the next key that types
+  composes with it (:func:`~pixelpen.devices.hid.keymaps.compose`: "â", the dead key's own
+  character before Space, else both characters, so ``char`` may then hold two); otherwise a dead key
+  types its spacing character at once.
 * **Locks** — Caps Lock, Num Lock and Scroll Lock toggle on their key's press (the host keeps lock
   state, as the kernel does); the Locking Caps/Num/Scroll Lock keys (0x82..0x84) are on while held.
   :meth:`Keyboard.led_report` encodes the LED output report (LED page 0x08: Num Lock, Caps Lock,
@@ -34,7 +38,7 @@ from typing import Any, ClassVar
 from pixelpen.devices.hid.codec import ReportDecoder, ReportEncoder, array_usage
 from pixelpen.devices.hid.events import DeviceId, InputEvent, Key
 from pixelpen.devices.hid.fields import MAIN_CONSTANT, MAIN_VARIABLE, Field, ReportDescriptor, ReportKind, ReportLayout
-from pixelpen.devices.hid.keymaps import LAYOUTS, MODIFIER_NAMES, Layout, key_name, layout
+from pixelpen.devices.hid.keymaps import LAYOUTS, MODIFIER_NAMES, Layout, compose, key_name, layout
 from pixelpen.devices.hid.semantics import OutputReport, read_semantics_options
 from pixelpen.errors import ConfigError, InvalidArgument
 from pixelpen.options import OptionSpec, boolean, choice
@@ -120,6 +124,8 @@ class Keyboard:
     OPTIONS: ClassVar[tuple[OptionSpec[Any], ...]] = (
         OptionSpec("layout", _layout_name, "us", f"layout for characters: {', '.join(LAYOUTS)}"),
         OptionSpec("num_lock", boolean, False, "Num Lock on at opening"),
+        OptionSpec("dead_keys", boolean, False,
+                   "compose dead keys with the next character (^ then a: â); else they type their own character"),
         OptionSpec("protocol", choice("report", "boot"), "report",
                    "report: the descriptor's reports; boot: fixed 8-byte boot reports (after SET_PROTOCOL 0)"),
     )
@@ -130,6 +136,8 @@ class Keyboard:
         where = f"keyboard semantics for {device}"
         opts = read_semantics_options(self.OPTIONS, options, where)
         self.layout: Layout = layout(opts["layout"])
+        self.dead_keys = bool(opts["dead_keys"])
+        self._dead = ""
         self.boot = opts["protocol"] == "boot"
         self._boot_plan = _plan(ReportDecoder(BOOT_INPUT)) if self.boot else None
         self._plans: dict[int | None, _KeyPlan] = {}
@@ -159,8 +167,9 @@ class Keyboard:
         return None, None
 
     def set_layout(self, name: str) -> None:
-        """Type characters by another layout from now on (``us``, ``uk``, ``de``, ``fr``)."""
+        """Type characters by another layout from now on (``us``, ``uk``, ``de``, ``fr``); drops a pending dead key."""
         self.layout = layout(name)
+        self._dead = ""
 
     def led_report(self, *, num_lock: bool | None = None, caps_lock: bool | None = None,
                    scroll_lock: bool | None = None, compose: bool = False, kana: bool = False) -> OutputReport:
@@ -260,6 +269,11 @@ class Keyboard:
     def _key(self, time: float, usage: int, pressed: bool, held: frozenset[str]) -> Key:
         char = ""
         if pressed and usage not in MODIFIER_NAMES and not held & {"ctrl", "alt", "gui"}:
-            char = self.layout.char(usage, shift="shift" in held, altgr="altgr" in held,
-                                    caps_lock=self.locks["caps_lock"], num_lock=self.locks["num_lock"])
+            state = {"shift": "shift" in held, "altgr": "altgr" in held, "caps_lock": self.locks["caps_lock"]}
+            char = self.layout.char(usage, num_lock=self.locks["num_lock"], **state)
+            if self.dead_keys and char:
+                if self._dead:
+                    char, self._dead = compose(self._dead, char), ""
+                elif (usage, self.layout.level(usage, **state)) in self.layout.dead:
+                    char, self._dead = "", char
         return Key(time, self.device, usage=usage, key=key_name(usage), pressed=pressed, char=char, modifiers=held)

@@ -10,19 +10,23 @@ Windows's layout tables (KBDUS, KBDUK, KBDGR, KBDFR) give their characters for e
 with Shift, with AltGr (Right Alt; Ctrl+Alt on Windows), "" where the key types nothing at that
 level.  Caps Lock acts as Shift on the keys the table marks for it (its CAP column): the letters on
 every layout, and on the French layout the digit row and most punctuation too (Caps Lock + "é"
-types "2").  Dead keys are given as their spacing character (German "^", "´"; French "^", "¨"; no
-composition).  The keypad's digits and decimal key type only with Num Lock on; Enter, Tab,
-Backspace, Escape and Delete type "\\r", "\\t", "\\b", "\\x1b" and "\\x7f" on every layout.
+types "2").  Dead keys (German "^", "´", "`"; French "^", "¨", AltGr "~" and "`"; :attr:`Layout.dead`)
+type their spacing character; :func:`compose` gives what a dead key then a character type (the
+keyboard semantics do so with ``dead_keys=true``).  The keypad's digits and decimal key type only
+with Num Lock on; Enter, Tab, Backspace, Escape and Delete type "\\r", "\\t", "\\b", "\\x1b" and
+"\\x7f" on every layout.
 """
 
 from __future__ import annotations
 
+import unicodedata
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from pixelpen.errors import ConfigError
 
-__all__ = ["KEY_NAMES", "LAYOUTS", "MODIFIER_NAMES", "NUMLOCK_KEYS", "Layout", "key_name", "layout"]
+__all__ = ["DEAD_MARKS", "KEY_NAMES", "LAYOUTS", "MODIFIER_NAMES", "NUMLOCK_KEYS", "Layout", "compose", "key_name",
+           "layout"]
 
 
 def _names() -> dict[int, str]:
@@ -74,6 +78,19 @@ NUMLOCK_KEYS = frozenset(range(0x59, 0x64))
 """Keypad 1..9, 0 and the decimal key: they type only with Num Lock on."""
 
 
+DEAD_MARKS: Mapping[str, str] = {"^": "\u0302", "´": "\u0301", "`": "\u0300", "¨": "\u0308", "~": "\u0303"}
+"""A dead key's spacing character -> the combining mark it puts on the next letter."""
+
+
+def compose(dead: str, char: str) -> str:
+    """What a dead key then ``char`` type: the accented letter, the dead key's own character before a space,
+    else both characters (as Windows does: "^" then "x" is "^x")."""
+    if char == " ":
+        return dead
+    combined = unicodedata.normalize("NFC", char + DEAD_MARKS[dead])
+    return combined if len(combined) == 1 else dead + char
+
+
 def key_name(usage: int) -> str:
     """The name of a Keyboard-page usage ID (``key_0xNN`` for reserved and vendor ones)."""
     return KEY_NAMES.get(usage, f"key_0x{usage:02x}")
@@ -90,23 +107,28 @@ class Layout:
     """Whether Right Alt is AltGr (else it is a second Alt)."""
     caps: frozenset[int] = field(default=frozenset())
     """Keys besides the letters on which Caps Lock acts as Shift."""
+    dead: frozenset[tuple[int, int]] = field(default=frozenset())
+    """The dead keys, as (usage, level): level 0 plain, 1 Shift, 2 AltGr (see :meth:`level`)."""
 
     def caps_applies(self, usage: int) -> bool:
         """Whether Caps Lock acts as Shift on this key (a letter, or a key the layout marks)."""
         plain, shifted, _ = self.keys.get(usage, ("", "", ""))
         return usage in self.caps or (len(plain) == 1 and plain.isalpha() and shifted == plain.upper() != plain)
 
-    def char(self, usage: int, *, shift: bool = False, altgr: bool = False, caps_lock: bool = False,
-             num_lock: bool = False) -> str:
-        """The character a key types in this state ("" for none)."""
-        if usage in NUMLOCK_KEYS and not num_lock:
-            return ""
-        plain, shifted, third = self.keys.get(usage, ("", "", ""))
+    def level(self, usage: int, *, shift: bool = False, altgr: bool = False, caps_lock: bool = False) -> int:
+        """Which of a key's characters this state types: 0 plain, 1 Shift (or Caps Lock where it applies), 2 AltGr."""
         if altgr:
-            return third
+            return 2
         if caps_lock and self.caps_applies(usage):
             shift = not shift
-        return shifted if shift else plain
+        return 1 if shift else 0
+
+    def char(self, usage: int, *, shift: bool = False, altgr: bool = False, caps_lock: bool = False,
+             num_lock: bool = False) -> str:
+        """The character a key types in this state ("" for none; a dead key's spacing character)."""
+        if usage in NUMLOCK_KEYS and not num_lock:
+            return ""
+        return self.keys.get(usage, ("", "", ""))[self.level(usage, shift=shift, altgr=altgr, caps_lock=caps_lock)]
 
     def strokes(self) -> dict[str, tuple[int, bool, bool]]:
         """For every character the layout types: a key and state typing it, ``(usage, shift, altgr)``.
@@ -168,10 +190,12 @@ _FR = {**_COMMON, **_LETTERS, **_row(0x1E, "&é\"'(-è_çà", "1234567890", " ~#
 LAYOUTS: Mapping[str, Layout] = {
     "us": Layout("us", "US English (ANSI QWERTY)", _US, altgr=False),
     "uk": Layout("uk", "United Kingdom (ISO QWERTY, AltGr)", _UK, altgr=True),
-    "de": Layout("de", "German (ISO QWERTZ, AltGr)", _DE, altgr=True),
+    "de": Layout("de", "German (ISO QWERTZ, AltGr)", _DE, altgr=True,
+                 dead=frozenset({(0x35, 0), (0x2E, 0), (0x2E, 1)})),  # ^, ´ and `
     "fr": Layout("fr", "French (ISO AZERTY, AltGr; Caps Lock shifts the digit row)", _FR, altgr=True,
                  caps=frozenset({*range(0x1E, 0x28), 0x2D, 0x2E, 0x2F, 0x30, 0x31, 0x32, 0x34, 0x10, 0x36, 0x37,
-                                 0x38})),
+                                 0x38}),
+                 dead=frozenset({(0x2F, 0), (0x2F, 1), (0x1F, 2), (0x24, 2)})),  # ^, ¨, AltGr ~ and `
 }
 """The layouts by name."""
 

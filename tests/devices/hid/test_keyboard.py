@@ -186,6 +186,30 @@ def test_layouts_and_altgr(keyboard):
         Keyboard(parse_descriptor(BOOT), DEVICE, layout="xx")
 
 
+def test_dead_keys_compose_with_the_next_character():
+    keyboard = Keyboard(parse_descriptor(BOOT), DEVICE, layout="de", dead_keys=True)
+
+    def typed(*strokes: tuple[int, int]) -> str:
+        text = ""
+        for modifiers, usage in strokes:
+            text += "".join(e.char for e in keyboard.feed(boot(modifiers, usage), 0.0))
+            keyboard.feed(boot(), 0.0)
+        return text
+
+    assert typed((0, 0x35), (0, A)) == "â"  # ^ then a
+    assert typed((0, 0x35), (SHIFT, A)) == "Â"  # the Shift press between does not use the dead key up
+    assert typed((SHIFT, 0x2E), (0, 0x08)) == "è"  # Shift+´ is the dead grave
+    assert typed((0, 0x2E), (0, 0x2C)) == "´"  # then Space: the accent itself
+    assert typed((0, 0x35), (0, 0x1B)) == "^x"  # no x with a circumflex: both
+    assert typed((0, 0x24)) == "7"
+    keyboard.set_layout("fr")
+    assert typed((0, 0x2F), (0, 0x08)) == "ê" and typed((SHIFT, 0x2F), (0, 0x0C)) == "ï"
+    assert typed((RIGHT_ALT, 0x1F), (0, 0x11)) == "ñ"  # AltGr+é is the dead tilde
+    assert typed((RIGHT_ALT, 0x26), (0, 0x08)) == "^e"  # AltGr+ç is a plain ^
+    plain = Keyboard(parse_descriptor(BOOT), DEVICE, layout="de")
+    assert plain.feed(boot(0, 0x35), 0.0)[0].char == "^"  # without dead_keys: the spacing character at once
+
+
 def test_nkro_bitmaps_report_any_number_of_keys():
     keyboard = Keyboard(parse_descriptor(NKRO), DEVICE)
     assert "100-key bitmap" in keyboard.describe()  # usages 0x04..0x67

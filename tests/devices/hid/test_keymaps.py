@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from pixelpen.devices.hid.keymaps import KEY_NAMES, LAYOUTS, NUMLOCK_KEYS, key_name, layout
+from pixelpen.devices.hid.keymaps import DEAD_MARKS, KEY_NAMES, LAYOUTS, NUMLOCK_KEYS, compose, key_name, layout
 from pixelpen.errors import ConfigError
 
 
@@ -85,3 +85,25 @@ def test_us_strokes_cover_printable_ascii_without_altgr():
     assert all(chr(c) in strokes and not strokes[chr(c)][2] for c in range(0x20, 0x7F))
     assert strokes["a"] == (0x04, False, False) and strokes["A"] == (0x04, True, False)
     assert strokes["1"] == (0x1E, False, False)  # the main row before the keypad's 0x59
+
+
+@pytest.mark.parametrize(("dead", "char", "typed"), [
+    ("^", "a", "â"), ("^", "E", "Ê"), ("´", "e", "é"), ("`", "e", "è"), ("`", "A", "À"), ("¨", "u", "ü"),
+    ("¨", "y", "ÿ"), ("~", "n", "ñ"), ("~", "O", "Õ"), ("^", " ", "^"), ("´", " ", "´"), ("^", "x", "^x"),
+    ("^", "^", "^^"), ("¨", "1", "¨1"),
+])
+def test_dead_keys_compose_by_hand(dead, char, typed):
+    assert compose(dead, char) == typed
+
+
+def test_dead_keys_are_the_windows_ones():
+    def spelled(name):
+        lay = LAYOUTS[name]
+        return sorted(lay.keys[usage][level] for usage, level in lay.dead)
+
+    assert spelled("de") == ["^", "`", "´"] and spelled("fr") == ["^", "`", "~", "¨"]
+    assert not LAYOUTS["us"].dead and not LAYOUTS["uk"].dead
+    assert all(LAYOUTS[n].keys[u][lv] in DEAD_MARKS for n in LAYOUTS for u, lv in LAYOUTS[n].dead)
+    # a level as the characters are chosen: AltGr over Shift, Caps Lock as Shift where it applies
+    fr = LAYOUTS["fr"]
+    assert fr.level(0x2F) == 0 and fr.level(0x2F, caps_lock=True) == 1 and fr.level(0x2F, shift=True, altgr=True) == 2
