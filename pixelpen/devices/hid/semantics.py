@@ -42,6 +42,7 @@ SEMANTICS: dict[int, str] = {
     0x000D0002: "pixelpen.devices.hid.tablet:Tablet",  # Digitizers Pen
     0x000D0004: "pixelpen.devices.hid.touch:TouchScreen",  # Digitizers Touch Screen
     0x000D0005: "pixelpen.devices.hid.touch:TouchScreen",  # Digitizers Touch Pad
+    0x000D000E: "pixelpen.devices.hid.touch:DeviceConfiguration",  # Digitizers Device Configuration (Input Mode)
 }
 """Top-level application usage (``page << 16 | id``) -> the semantics class, as ``"module:Class"``."""
 

@@ -13,7 +13,7 @@ from pixelpen.devices.hid.codec import ShortReportWarning
 from pixelpen.devices.hid.descriptor import parse_descriptor
 from pixelpen.devices.hid.events import Button, Contact, DeviceId, TouchFrame
 from pixelpen.devices.hid.fields import ReportKind
-from pixelpen.devices.hid.semantics import CompositeSemantics, application_descriptor, semantics_for
+from pixelpen.devices.hid.semantics import CompositeSemantics, application_descriptor, output_reports_of, semantics_for
 from pixelpen.devices.hid.touch import MAX_CONTACTS, DeviceConfiguration, TouchScreen
 from pixelpen.errors import ConfigError, ParseError
 
@@ -260,6 +260,8 @@ def test_touch_pad_in_a_composite_with_its_device_configuration():
     sem = semantics_for(descriptor, DEVICE)
     assert isinstance(sem, CompositeSemantics)
     [pad] = [p for p in sem.parts if isinstance(p, TouchScreen)]
+    assert any(isinstance(p, DeviceConfiguration) for p in sem.parts)  # the SEMANTICS table routes it
+    assert (5, bytes([5, 3])) in [(r.report_id, r.data) for r in output_reports_of(sem)]  # a precision touch pad
     assert pad.touchpad and pad.input_mode == 3 and "touch pad" in pad.describe() and "1 buttons" in pad.describe()
     # one finger per report, the count in the first: a two-finger frame over two reports, then the click
     assert sem.feed(bytes([4]) + slot(True, 1, 100, 200) + bytes([2]), 0.0) == []
