@@ -32,7 +32,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 from pixelpen.devices.hid.fields import Collection, Field, ReportDescriptor, ReportKind, ReportLayout
-from pixelpen.devices.hid.items import GLOBAL, LOCAL, LONG_ITEM_TAG, MAIN, scan, signed_value
+from pixelpen.devices.hid.items import GLOBAL, LOCAL, LONG_ITEM_TAG, MAIN, exponent_value, scan, signed_value
 from pixelpen.devices.hid.quirks import fixup
 from pixelpen.errors import ParseError
 
@@ -185,8 +185,7 @@ class _Parser:
 
     def unit_exponent(self, offset: int, prefix: int, value: int) -> None:
         """Unit Exponent: 0..15 is the spec's 4-bit two's complement nibble, anything else a signed number."""
-        raw = signed_value(prefix, value)
-        self.g.unit_exponent = (raw - 16 if raw & 8 else raw) if 0 <= raw <= 15 else raw
+        self.g.unit_exponent = exponent_value(prefix, value)
 
     def unit(self, offset: int, prefix: int, value: int) -> None:
         """Unit."""

@@ -25,7 +25,7 @@ from pixelpen.devices.hid.fields import (
     ReportDescriptor,
     ReportLayout,
 )
-from pixelpen.devices.hid.items import GLOBAL, LOCAL, MAIN, Item, tokenize
+from pixelpen.devices.hid.items import GLOBAL, LOCAL, MAIN, Item, exponent_value, tokenize
 from pixelpen.devices.hid.units import describe_unit
 from pixelpen.devices.hid.usages import page_name, usage_name
 
@@ -112,9 +112,7 @@ class _State:
             signed = (self.lmin if tag == 2 else self.pmin) < 0
             return f"{name} ({item.signed if signed else item.value})"
         if tag == 5:
-            raw = item.signed
-            exponent = (raw - 16 if raw & 8 else raw) if 0 <= raw <= 15 else raw
-            return f"{name} ({exponent})"
+            return f"{name} ({exponent_value(item.prefix, item.value)})"
         if tag == 6:
             return f"{name} ({describe_unit(item.value)}, 0x{item.value:X})" if item.value else f"{name} (None)"
         return f"{name} ({item.value})"

@@ -77,6 +77,13 @@ def signed_value(prefix: int, value: int) -> int:
     return value - (1 << bits) if bits and value >> (bits - 1) else value
 
 
+def exponent_value(prefix: int, value: int) -> int:
+    """A Unit Exponent item's value: 0..15 is the spec's 4-bit two's complement nibble (0x0E is -2), anything
+    else the signed value itself (0xFE is -2 too), as the kernel reads both."""
+    raw = signed_value(prefix, value)
+    return (raw - 16 if raw & 8 else raw) if 0 <= raw <= 15 else raw
+
+
 def scan(data: bytes, *, source: str | None = None) -> list[tuple[int, int, int]]:
     """``(offset, prefix, value)`` per item, the parser's fast form: a short item's unsigned data, or a long
     item's data size; a ParseError names the offset of an item cut short by the end."""
