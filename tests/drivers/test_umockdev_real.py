@@ -97,9 +97,9 @@ def test_real_hidraw_module_enumerates_reads_and_times_out(tmp_path):
 
 def test_pixelpen_hidapi_link_and_mouse_semantics_on_the_real_module(tmp_path):
     pytest.importorskip("hidraw", reason="cython-hidapi's hidraw module (PyPI hidapi) is not installed")
-    # HidapiLink reads a whole buffer, as hidraw gives one report a read; the emulated node is a stream, so the
-    # reports start once the program is reading (it writes "go") and come 200 ms apart
-    fixture = export_umockdev(MOUSE, tmp_path, realtime=True, wait_for=b"go")
+    # HidapiLink reads a whole buffer, as hidraw gives one report a read; the emulated node is a stream, so
+    # each report is sent only when the program asks for it (it writes "go" to the node)
+    fixture = export_umockdev(MOUSE, tmp_path, handshake=b"go")
     seen = run_under(fixture, """
         import json, os
         from pixelpen.devices.hid import parse_descriptor
@@ -108,13 +108,14 @@ def test_pixelpen_hidapi_link_and_mouse_semantics_on_the_real_module(tmp_path):
         link = open_hid("046d:c077")
         sem = semantics_for(parse_descriptor(link.report_descriptor), link.device_id)
         out = []
-        with open("/dev/hidraw0", "wb", buffering=0) as node:
-            node.write(b"go")
+        node = open("/dev/hidraw0", "wb", buffering=0)
         for _ in range(3):
-            report = link.read_report(2.0)
+            node.write(b"go")
+            report = link.read_report(5.0)
             out += [type(e).__name__ + ":" + ",".join(f"{k}={getattr(e, k)}" for k in ("dx", "dy", "button", "pressed")
                                                        if hasattr(e, k)) for e in sem.feed(report, 0.0)]
         out.append(repr(link.read_report(0.2)))
+        node.close()
         link.close()
         print(json.dumps(out))
     """, tmp_path)

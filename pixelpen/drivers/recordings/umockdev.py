@@ -12,7 +12,7 @@
   matches the ioctl number, which encodes the size);
 * ``NAME.script`` — the reports as ``r <ms> <data>`` lines (the script format: bytes below 32 as ``^`` +
   chr(b + 64), ``^`` as ``^```), ``ms`` the gap to the previous report (0 without ``realtime``), after a
-  ``w 0 <data>`` line when the replay is to wait for the program (``wait_for``).
+  ``w 0 <data>`` line before each when the replay is to wait for the program (``handshake``).
 
 For an :class:`~pixelpen.drivers.recordings.evemu.EvdevRecording` it writes the ``input``/``eventN``
 tree, the evdev ioctls python-evdev asks (``EVIOCGID``, ``EVIOCGNAME``/``PHYS``/``UNIQ`` of 256 bytes,
@@ -102,23 +102,23 @@ def encode_script_data(data: bytes) -> bytes:
 
 def export_umockdev(recording: HidRecording | EvdevRecording, directory: str | os.PathLike[str], *,
                     number: int = 0, realtime: bool = False, name: str | None = None,
-                    wait_for: bytes = b"") -> UmockdevFixture:
+                    handshake: bytes = b"") -> UmockdevFixture:
     """Write the umockdev files of a recorded hidraw or evdev device into ``directory`` (created if missing).
 
     ``number`` is N of ``/dev/hidrawN`` or ``/dev/input/eventN``; ``realtime`` keeps the recorded gaps
     between reports (else they come back to back); ``name`` is the files' stem (default ``hidrawN``/``eventN``).
-    ``wait_for`` (hidraw only) starts the reports only once the program has written these bytes to the node
-    (a ``w`` line): without it they start when umockdev-run does, and reports sent before the program reads
-    run together in the stream.
+    ``handshake`` (hidraw only) makes the replay send each report only after the program wrote these bytes to
+    the node (a ``w`` line before each ``r``): without it the reports start when umockdev-run does, and those
+    sent before the program reads run together in the stream.
     """
     if not (isinstance(number, int) and 0 <= number < 1024):
         raise InvalidArgument(f"the node number {number!r} is not 0..1023")
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
     if isinstance(recording, HidRecording):
-        return _export_hidraw(recording, out, number, realtime, name or f"hidraw{number}", bytes(wait_for))
-    if wait_for:
-        raise InvalidArgument("wait_for is for hidraw scripts: umockdev's evemu events cannot wait for a write")
+        return _export_hidraw(recording, out, number, realtime, name or f"hidraw{number}", bytes(handshake))
+    if handshake:
+        raise InvalidArgument("handshake is for hidraw scripts: umockdev's evemu events cannot wait for a write")
     if isinstance(recording, EvdevRecording):
         return _export_evdev(recording, out, number, realtime, name or f"event{number}")
     raise InvalidArgumentType(f"export_umockdev() takes a HidRecording or an EvdevRecording, not "
@@ -162,7 +162,7 @@ def _write(path: Path, text: str | bytes) -> Path:
 # ---- hidraw ----------------------------------------------------------------------------------------------
 
 def _export_hidraw(rec: HidRecording, out: Path, number: int, realtime: bool, stem: str,
-                   wait_for: bytes) -> UmockdevFixture:
+                   handshake: bytes) -> UmockdevFixture:
     if not 1 <= len(rec.descriptor) <= HID_MAX_DESCRIPTOR_SIZE:
         raise InvalidArgument(f"a report descriptor of {len(rec.descriptor)} bytes (1 to "
                               f"{HID_MAX_DESCRIPTOR_SIZE} allowed)")
@@ -212,14 +212,14 @@ def _export_hidraw(rec: HidRecording, out: Path, number: int, realtime: bool, st
               _ioctl_line("HIDIOCGRAWPHYS", phys_ret, phys_buffer)]
     return UmockdevFixture(_write(out / f"{stem}.umockdev", "\n".join(blocks)),
                            _write(out / f"{stem}.ioctl", "\n".join(ioctls) + "\n"),
-                           _write(out / f"{stem}.script", _script(rec.reports, realtime, wait_for)), node)
+                           _write(out / f"{stem}.script", _script(rec.reports, realtime, handshake)), node)
 
 
-def _script(reports: Sequence[tuple[float, bytes]], realtime: bool, wait_for: bytes) -> bytes:
-    """The ``r`` lines of the reports (after a ``w`` line for ``wait_for``); one starting with a space is joined
-    to the one before (see the notes)."""
-    if wait_for[:1] == bytes((_SCRIPT_SPACE,)):
-        raise InvalidArgument("wait_for starts with byte 0x20, which a umockdev script line cannot hold")
+def _script(reports: Sequence[tuple[float, bytes]], realtime: bool, handshake: bytes) -> bytes:
+    """The ``r`` lines of the reports, each after a ``w`` line of the handshake; without one, a report starting
+    with a space is joined to the one before (see the notes)."""
+    if handshake[:1] == bytes((_SCRIPT_SPACE,)):
+        raise InvalidArgument("the handshake starts with byte 0x20, which a umockdev script line cannot hold")
     gaps: list[int] = []
     blocks: list[bytes] = []
     previous = reports[0][0] if reports else 0.0
@@ -227,16 +227,16 @@ def _script(reports: Sequence[tuple[float, bytes]], realtime: bool, wait_for: by
         gap = max(0, round((t - previous) * 1000)) if realtime else 0
         previous = t
         if report[:1] == bytes((_SCRIPT_SPACE,)):
-            if not blocks:
-                raise InvalidArgument("the first report starts with byte 0x20, which a umockdev script cannot "
-                                      "hold at the start of its first line")
+            if not blocks or handshake:
+                raise InvalidArgument("a report starts with byte 0x20, which a umockdev script cannot hold at "
+                                      "the start of a line (and it cannot join the report before it)")
             blocks[-1] += report
             continue
         gaps.append(gap)
         blocks.append(bytes(report))
-    start = b"w 0 " + encode_script_data(wait_for) + b"\n" if wait_for else b""
-    return start + b"".join(b"r %d " % gap + encode_script_data(data) + b"\n"
-                            for gap, data in zip(gaps, blocks, strict=True))
+    step = b"w 0 " + encode_script_data(handshake) + b"\n" if handshake else b""
+    return b"".join(step + b"r %d " % gap + encode_script_data(data) + b"\n"
+                    for gap, data in zip(gaps, blocks, strict=True))
 
 
 # ---- evdev -----------------------------------------------------------------------------------------------

@@ -44,6 +44,15 @@ def test_hidraw_script_lines_and_gaps(tmp_path):
     assert export_umockdev(MOUSE, tmp_path / "fast").data.read_bytes() == b"r 0 ^A^E\xfb\nr 0 ^@^`^J\n"
 
 
+def test_handshake_puts_a_write_before_each_report(tmp_path):
+    assert export_umockdev(MOUSE, tmp_path, handshake=b"\x01k").data.read_bytes() == (
+        b"w 0 ^Ak\nr 0 ^A^E\xfb\nw 0 ^Ak\nr 0 ^@^`^J\n")
+    with pytest.raises(InvalidArgument, match="handshake is for hidraw"):
+        export_umockdev(PEN, tmp_path, handshake=b"go")
+    with pytest.raises(InvalidArgument, match="0x20"):
+        export_umockdev(MOUSE, tmp_path, handshake=b" go")
+
+
 def test_a_report_starting_with_a_space_joins_the_one_before(tmp_path):
     rec = HidRecording("m", "", 3, 1, 2, BOOT_MOUSE, [(0.0, b"\x01\x02\x03"), (0.1, b" \x02\x03")])
     assert export_umockdev(rec, tmp_path).data.read_bytes() == b"r 0 ^A^B^C ^B^C\n"
