@@ -53,6 +53,8 @@ __all__ = ["FILE_VERSION", "read_libinput_record"]
 
 FILE_VERSION = 1
 """The libinput record format version this reader knows."""
+MAX_NESTING = 64
+"""Flow brackets (``[``, ``{``) open at once at most (libinput writes 2; deeper YAML only costs recursion)."""
 _INT32 = (-(2**31), 2**31 - 1)
 
 
@@ -107,10 +109,13 @@ def read_libinput_record(path_or_text: str | bytes | os.PathLike[str] | TextIO, 
     where = _Where(source or name)
     if len(text) > limits.file_bytes:
         raise where.error(f"more than the {limits.file_bytes}-byte limit of a file")
+    _check_nesting(where, text)
     try:
         document = yaml.load(text, Loader=_loader(yaml))  # a SafeLoader subclass
     except ParseError as exc:
         raise ParseError(exc.message, source=where.source, line=exc.line) from None
+    except RecursionError:
+        raise where.error("the YAML is nested too deeply") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         raise ParseError(f"not YAML: {getattr(exc, 'problem', None) or exc}", source=where.source,
@@ -124,6 +129,16 @@ def read_libinput_record(path_or_text: str | bytes | os.PathLike[str] | TextIO, 
         raise where.error("devices: no device in the recording")
     budget = [limits.events]
     return [_device(where, i, device, budget) for i, device in enumerate(devices)]
+
+
+def _check_nesting(where: _Where, text: str) -> None:
+    """ParseError where more than MAX_NESTING flow brackets are open (comments after ``#`` not counted)."""
+    for number, line in enumerate(text.splitlines(), 1):
+        depth = 0
+        for char in line.partition("#")[0]:
+            depth += (char in "[{") - (char in "]}")
+            if depth > MAX_NESTING:
+                raise ParseError(f"more than {MAX_NESTING} brackets open at once", source=where.source, line=number)
 
 
 def _device(where: _Where, index: int, raw: object, budget: list[int]) -> EvdevRecording:
