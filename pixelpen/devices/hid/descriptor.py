@@ -28,11 +28,10 @@ Every error is a :class:`~pixelpen.errors.ParseError` whose ``offset`` is the by
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 from pixelpen.devices.hid.fields import Collection, Field, ReportDescriptor, ReportKind, ReportLayout
-from pixelpen.devices.hid.items import GLOBAL, LOCAL, LONG_ITEM_TAG, MAIN, exponent_value, scan, signed_value
+from pixelpen.devices.hid.items import exponent_value, scan, signed_value
 from pixelpen.devices.hid.quirks import fixup
 from pixelpen.errors import ParseError
 
@@ -55,47 +54,16 @@ MAX_COLLECTION_DEPTH = 256
 
 _M32 = 0xFFFFFFFF
 _KINDS = {8: ReportKind.INPUT, 9: ReportKind.OUTPUT, 11: ReportKind.FEATURE}
-_LOCAL_EXTRAS = {3: "designator_index", 4: "designator_minimum", 5: "designator_maximum",
-                 7: "string_index", 8: "string_minimum", 9: "string_maximum"}
+_LOCAL_EXTRAS = {0x38: "designator_index", 0x48: "designator_minimum", 0x58: "designator_maximum",
+                 0x78: "string_index", 0x88: "string_minimum", 0x98: "string_maximum"}
+"""Local items kept for the dump, by prefix without its size bits."""
+_REPORT_BITS = (MAX_BUFFER_SIZE - 1) * 8
+"""Bits a report may hold after its ID byte (``hid_add_field``'s check)."""
 
 
 def _s32(value: int) -> int:
     value &= _M32
     return value - (1 << 32) if value & 0x80000000 else value
-
-
-@dataclass(slots=True)
-class _Globals:
-    """The global state (the kernel's ``struct hid_global``)."""
-
-    usage_page: int = 0
-    logical_min: int = 0
-    logical_max: int = 0
-    physical_min: int = 0
-    physical_max: int = 0
-    unit_exponent: int = 0
-    unit: int = 0
-    report_size: int = 0
-    report_id: int = 0
-    report_count: int = 0
-
-    def copy(self) -> _Globals:
-        """A copy for Push."""
-        return _Globals(self.usage_page, self.logical_min, self.logical_max, self.physical_min, self.physical_max,
-                        self.unit_exponent, self.unit, self.report_size, self.report_id, self.report_count)
-
-
-@dataclass(slots=True)
-class _Locals:
-    """The local state (the kernel's ``struct hid_local``), reset after every Main item."""
-
-    usages: list[int] = field(default_factory=list)
-    extended: list[bool] = field(default_factory=list)
-    """Per usage: given as a 4-byte (extended) usage, so no Usage Page is put in front of it."""
-    usage_min: int = 0
-    delimiter_depth: int = 0
-    delimiter_branch: int = 0
-    extra: dict[str, object] = field(default_factory=dict)
 
 
 @dataclass(slots=True)
@@ -109,303 +77,210 @@ class _Report:
     with_usages: int = 0
 
 
-class _Parser:
-    """One pass over the items, holding the kernel parser's state."""
+def _parse(items: list[tuple[int, int, int]], data: bytes, source: str | None, reject_long_items: bool,
+           warnings: list[str]) -> tuple[dict[tuple[int, int], _Report], list[Collection]]:
+    """The kernel's ``hid_open_report`` over :func:`scan`'s items: the reports by (Main tag, report ID) and the
+    collections.  One loop with the parser state in local variables: ``hid_parser_global``,
+    ``hid_parser_local`` and ``hid_parser_main`` are its three branches (the state as attributes and a
+    method per item cost more than the parsing itself)."""
 
-    def __init__(self, data: bytes, source: str | None) -> None:
-        self.data = data
-        self.source = source
-        self.g = _Globals()
-        self.stack: list[_Globals] = []
-        self.local = _Locals()
-        self.open: list[Collection] = []
-        self.collections: list[Collection] = []
-        self.reports: dict[tuple[int, int], _Report] = {}
-        """By (Main item tag, report ID): Input 8, Output 9, Feature 11."""
-        self.warnings: list[str] = []
-        self.reject_long_items = False
+    def error(message: str, offset: int, token: object = None) -> ParseError:
+        return ParseError(message, source=source, offset=offset, token=token)
 
-    def error(self, message: str, offset: int, token: object = None) -> ParseError:
-        """A ParseError at an item's offset."""
-        return ParseError(message, source=self.source, offset=offset, token=token)
-
-    def run(self, items: list[tuple[int, int, int]], reject_long_items: bool) -> None:
-        """Process every item (``(offset, prefix, value)`` from :func:`scan`), then check that collections and
-        delimiters are closed."""
-        last = len(items)
-        while last and items[last - 1][1] == 0:  # trailing zero bytes
-            last -= 1
-        self.reject_long_items = reject_long_items
-        dispatch = _DISPATCH
-        for offset, prefix, value in items if last == len(items) else items[:last]:
-            dispatch[prefix](self, offset, prefix, value)
-        if last < len(items):  # the kernel reads the zeros as unknown Main items, which reset the local state
-            self.local = _Locals()
-        if self.open:
-            inner = self.open[-1]
-            raise ParseError(f"unbalanced collection: {len(self.open)} still open at the end of the descriptor "
-                             f"(the innermost opened here)", source=self.source, offset=inner.offset)
-        if self.local.delimiter_depth:
-            raise ParseError("unbalanced delimiter at the end of the descriptor", source=self.source,
-                             offset=items[last - 1][0] if last else 0)
-
-    def long_item(self, offset: int, prefix: int, size: int) -> None:
-        """A long item: skipped with a warning, or an error with ``reject_long_items``."""
-        what = f"long item (tag 0x{self.data[offset + 2]:02X}, {size} data bytes)"
-        if self.reject_long_items:
-            raise self.error(f"{what}: the kernel rejects descriptors with long items", offset)
-        self.warnings.append(f"{what} at offset {offset} skipped")
-
-    def reserved_item(self, offset: int, prefix: int, value: int) -> None:
-        """An item of the reserved type 3: ignored, as the kernel's ``hid_parser_reserved``."""
-        self.warnings.append(f"reserved item 0x{prefix:02X} at offset {offset} ignored")
-
-    # -- hid_parser_global: one method per tag, dispatched by prefix byte -----------------------------------------
-    def usage_page(self, offset: int, prefix: int, value: int) -> None:
-        """Usage Page."""
-        self.g.usage_page = value
-
-    def logical_min(self, offset: int, prefix: int, value: int) -> None:
-        """Logical Minimum (signed)."""
-        self.g.logical_min = signed_value(prefix, value)
-
-    def logical_max(self, offset: int, prefix: int, value: int) -> None:
-        """Logical Maximum: signed only when the Logical Minimum before it is negative."""
-        g = self.g
-        g.logical_max = signed_value(prefix, value) if g.logical_min < 0 else value
-
-    def physical_min(self, offset: int, prefix: int, value: int) -> None:
-        """Physical Minimum (signed)."""
-        self.g.physical_min = signed_value(prefix, value)
-
-    def physical_max(self, offset: int, prefix: int, value: int) -> None:
-        """Physical Maximum: signed only when the Physical Minimum before it is negative."""
-        g = self.g
-        g.physical_max = signed_value(prefix, value) if g.physical_min < 0 else value
-
-    def unit_exponent(self, offset: int, prefix: int, value: int) -> None:
-        """Unit Exponent: 0..15 is the spec's 4-bit two's complement nibble, anything else a signed number."""
-        self.g.unit_exponent = exponent_value(prefix, value)
-
-    def unit(self, offset: int, prefix: int, value: int) -> None:
-        """Unit."""
-        self.g.unit = value
-
-    def report_size(self, offset: int, prefix: int, value: int) -> None:
-        """Report Size, at most 256 bits."""
-        if value > MAX_REPORT_SIZE:
-            raise self.error(f"Report Size {value} bits is over the kernel's {MAX_REPORT_SIZE}", offset)
-        self.g.report_size = value
-
-    def report_id(self, offset: int, prefix: int, value: int) -> None:
-        """Report ID, 1..255."""
-        if value == 0 or value >= MAX_IDS:
-            raise self.error(f"Report ID {value} is invalid (1..{MAX_IDS - 1})", offset)
-        self.g.report_id = value
-
-    def report_count(self, offset: int, prefix: int, value: int) -> None:
-        """Report Count, at most 12288."""
-        if value > MAX_USAGES:
-            raise self.error(f"Report Count {value} is over the kernel's {MAX_USAGES}", offset)
-        self.g.report_count = value
-
-    def push(self, offset: int, prefix: int, value: int) -> None:
-        """Push: a copy of every global, the report ID included, on the stack."""
-        if len(self.stack) == GLOBAL_STACK_SIZE:
-            raise self.error(f"Push: the global stack is full ({GLOBAL_STACK_SIZE} deep)", offset)
-        self.stack.append(self.g.copy())
-
-    def pop(self, offset: int, prefix: int, value: int) -> None:
-        """Pop: every global back from the stack."""
-        if not self.stack:
-            raise self.error("Pop without a Push (global stack underflow)", offset)
-        self.g = self.stack.pop()
-
-    def unknown_global(self, offset: int, prefix: int, value: int) -> None:
-        """Global tags 12..14: an error, as in the kernel."""
-        raise self.error(f"unknown global item tag {prefix >> 4}", offset, f"0x{prefix:02X}")
-
-    # -- hid_parser_local --------------------------------------------------------------------------------------
-    def usage(self, offset: int, prefix: int, value: int) -> None:
-        """Usage (the most frequent local item, dispatched on its own)."""
-        if self.local.delimiter_branch <= 1:
-            self.add_usages(offset, prefix, value, 1)
-
-    def local_item(self, offset: int, prefix: int, value: int) -> None:
-        """The other local items (the kernel's ``hid_parser_local``)."""
-        local = self.local
-        tag = prefix >> 4
-        if tag == 1:
-            if local.delimiter_branch <= 1:
-                local.usage_min = value
-        elif tag == 2:
-            if local.delimiter_branch <= 1:
-                self.usage_range(offset, prefix, value)
-        elif tag == 10:
-            if value:
-                if local.delimiter_depth:
-                    raise self.error("nested delimiters", offset)
-                local.delimiter_depth += 1
-                local.delimiter_branch += 1
+    # globals (struct hid_global), pushed and popped as one tuple
+    usage_page = lmin = lmax = pmin = pmax = exponent = unit = report_size = rid = report_count = 0
+    stack: list[tuple[int, ...]] = []
+    # locals (struct hid_local), reset after every Main item
+    usages: list[int] = []
+    extended: set[int] = set()  # indices of 4-byte usages, which keep their own page
+    usage_min = delimiter_depth = delimiter_branch = 0
+    extra: dict[str, object] = {}
+    open_: list[Collection] = []
+    collections: list[Collection] = []
+    reports: dict[tuple[int, int], _Report] = {}
+    last = len(items)
+    while last and items[last - 1][1] == 0:  # trailing zero bytes
+        last -= 1
+    for offset, prefix, value in items if last == len(items) else items[:last]:
+        if prefix >= 0xF0:  # tag nibble 15: a long item
+            what = f"long item (tag 0x{data[offset + 2]:02X}, {value} data bytes)"
+            if reject_long_items:
+                raise error(f"{what}: the kernel rejects descriptors with long items", offset)
+            warnings.append(f"{what} at offset {offset} skipped")
+            continue
+        t = prefix & 0xFC
+        kind = t & 0x0C
+        if kind == 4:  # -- hid_parser_global ----------------------------------------------------------------
+            if t == 0x74:
+                if value > MAX_REPORT_SIZE:
+                    raise error(f"Report Size {value} bits is over the kernel's {MAX_REPORT_SIZE}", offset)
+                report_size = value
+            elif t == 0x94:
+                if value > MAX_USAGES:
+                    raise error(f"Report Count {value} is over the kernel's {MAX_USAGES}", offset)
+                report_count = value
+            elif t == 0x14:
+                lmin = signed_value(prefix, value)
+            elif t == 0x24:  # signed only when the minimum before it is negative
+                lmax = signed_value(prefix, value) if lmin < 0 else value
+            elif t == 0x04:
+                usage_page = value
+            elif t == 0x84:
+                if value == 0 or value >= MAX_IDS:
+                    raise error(f"Report ID {value} is invalid (1..{MAX_IDS - 1})", offset)
+                rid = value
+            elif t == 0x34:
+                pmin = signed_value(prefix, value)
+            elif t == 0x44:
+                pmax = signed_value(prefix, value) if pmin < 0 else value
+            elif t == 0x54:
+                exponent = exponent_value(prefix, value)
+            elif t == 0x64:
+                unit = value
+            elif t == 0xA4:
+                if len(stack) == GLOBAL_STACK_SIZE:
+                    raise error(f"Push: the global stack is full ({GLOBAL_STACK_SIZE} deep)", offset)
+                stack.append((usage_page, lmin, lmax, pmin, pmax, exponent, unit, report_size, rid, report_count))
+            elif t == 0xB4:
+                if not stack:
+                    raise error("Pop without a Push (global stack underflow)", offset)
+                usage_page, lmin, lmax, pmin, pmax, exponent, unit, report_size, rid, report_count = stack.pop()
             else:
-                if local.delimiter_depth < 1:
-                    raise self.error("close delimiter without an open one", offset)
-                local.delimiter_depth -= 1
-        elif tag in _LOCAL_EXTRAS:
-            local.extra[_LOCAL_EXTRAS[tag]] = value
-
-    def usage_range(self, offset: int, prefix: int, top: int) -> None:
-        """Usage Maximum: add Usage Minimum..Maximum, clamped at 12288 usages as the kernel does."""
-        local = self.local
-        index = len(local.usages)
-        if ((top - local.usage_min) + index) & _M32 >= MAX_USAGES:
-            self.warnings.append(f"Usage Maximum at offset {offset}: range cut at {MAX_USAGES} usages")
-            top = (MAX_USAGES - index + local.usage_min - 1) & _M32
-            if top == 0:
-                raise self.error("no more usages available", offset)
-        if local.usage_min <= top:
-            self.add_usages(offset, prefix, local.usage_min, top - local.usage_min + 1)
-
-    def add_usages(self, offset: int, prefix: int, first: int, count: int) -> None:
-        """Add ``count`` usages from ``first`` (the kernel's ``hid_add_usage``, completed with the page if short)."""
-        local = self.local
-        if len(local.usages) + count > MAX_USAGES:
-            raise self.error(f"more than {MAX_USAGES} usages before one Main item", offset)
-        if prefix & 3 == 3:  # a 4-byte (extended) usage carries its page
-            local.usages.extend(range(first, first + count))
-            local.extended.extend([True] * count)
-            return
-        page = (self.g.usage_page & 0xFFFF) << 16
-        if count == 1:
-            local.usages.append(page | first)
-        elif first + count <= 0x10000:
-            local.usages.extend(range(page | first, page | (first + count)))
+                raise error(f"unknown global item tag {prefix >> 4}", offset, f"0x{prefix:02X}")
+        elif kind == 8:  # -- hid_parser_local -----------------------------------------------------------------
+            if t == 0x08 or t == 0x28:  # Usage, Usage Maximum
+                if delimiter_branch > 1:  # an alternative usage set: ignored
+                    continue
+                if t == 0x08:
+                    first, count = value, 1
+                else:
+                    top = value
+                    if ((top - usage_min) + len(usages)) & _M32 >= MAX_USAGES:
+                        warnings.append(f"Usage Maximum at offset {offset}: range cut at {MAX_USAGES} usages")
+                        top = (MAX_USAGES - len(usages) + usage_min - 1) & _M32
+                        if top == 0:
+                            raise error("no more usages available", offset)
+                    if usage_min > top:
+                        continue
+                    first, count = usage_min, top - usage_min + 1
+                if len(usages) + count > MAX_USAGES:
+                    raise error(f"more than {MAX_USAGES} usages before one Main item", offset)
+                if prefix & 3 == 3:  # 4 bytes: an extended usage carries its page
+                    extended.update(range(len(usages), len(usages) + count))
+                    usages.extend(range(first, first + count))
+                elif count == 1:
+                    usages.append((usage_page & 0xFFFF) << 16 | first)
+                else:
+                    page = (usage_page & 0xFFFF) << 16
+                    usages.extend(range(page | first, page | (first + count)) if first + count <= 0x10000
+                                  else (page | (u & 0xFFFF) for u in range(first, first + count)))
+            elif t == 0x18:
+                if delimiter_branch <= 1:
+                    usage_min = value
+            elif t == 0xA8:
+                if value:
+                    if delimiter_depth:
+                        raise error("nested delimiters", offset)
+                    delimiter_depth += 1
+                    delimiter_branch += 1
+                else:
+                    if delimiter_depth < 1:
+                        raise error("close delimiter without an open one", offset)
+                    delimiter_depth -= 1
+            elif t in _LOCAL_EXTRAS:
+                extra[_LOCAL_EXTRAS[t]] = value
+        elif kind == 0:  # -- hid_parser_main ------------------------------------------------------------------
+            if usages:  # hid_concatenate_last_usage_page; the page is compared whole, as the kernel does
+                prefix16 = (usage_page & 0xFFFF) << 16
+                for i in range(len(usages) - 1, -1, -1):
+                    if i in extended:
+                        continue
+                    if usages[i] >> 16 == usage_page:
+                        break
+                    usages[i] = prefix16 | (usages[i] & 0xFFFF)
+            if t == 0x80 or t == 0x90 or t == 0xB0:  # hid_add_field
+                tag = prefix >> 4
+                report = reports.get((tag, rid))
+                if report is None:
+                    report = reports[tag, rid] = _Report(_KINDS[tag], rid or None)
+                lo, hi = lmin, lmax
+                if lo < 0:
+                    hi = _s32(hi)
+                    if hi < lo:
+                        raise error(f"Logical Maximum {hi} is below Logical Minimum {lo}", offset)
+                elif hi & _M32 < lo:
+                    raise error(f"Logical Maximum {hi & _M32} is below Logical Minimum {lo}", offset)
+                else:
+                    hi &= _M32
+                start = report.bits
+                report.bits = start + report_size * report_count
+                if report.bits > _REPORT_BITS:
+                    raise error(f"{report.kind.value} report {report.report_id} is longer than "
+                                f"{MAX_BUFFER_SIZE - 1} bytes ({report.bits} bits)", offset)
+                if usages and report.with_usages == MAX_FIELDS:
+                    warnings.append(f"{report.kind.value} report {report.report_id}: field at offset {offset} "
+                                    f"dropped (the kernel keeps {MAX_FIELDS} fields per report)")
+                else:
+                    if usages:
+                        report.with_usages += 1
+                        listed = usages if report_count <= len(usages) else \
+                            usages + [usages[-1]] * (report_count - len(usages))  # the last usage repeats
+                        # a variable has one usage per element; an array the usages an index lo..hi can name
+                        kept = tuple(listed[:report_count] if value & 2 else listed[:hi - lo + 1])
+                        page = kept[0] >> 16 if kept else usage_page & 0xFFFF
+                    else:  # padding: kept, with no usages (the kernel registers no field for it)
+                        kept = ()
+                        page = usage_page & 0xFFFF
+                    report.fields.append(Field(
+                        report.kind, report.report_id, page, kept, start + 8 if rid else start, report_size,
+                        report_count, lo, hi, pmin, _s32(pmax) if pmin < 0 else pmax & _M32, unit, exponent,
+                        value, open_[-1] if open_ else None, offset, dict(extra) if extra else {}))
+            elif t == 0xA0:
+                if len(open_) == MAX_COLLECTION_DEPTH:
+                    raise error(f"collections nested over {MAX_COLLECTION_DEPTH} deep", offset)
+                c = Collection(value & 0xFF, usages[0] if usages else 0, offset, open_[-1] if open_ else None)
+                open_.append(c)
+                collections.append(c)
+            elif t == 0xC0:
+                if not open_:
+                    raise error("End Collection without a Collection", offset)
+                open_.pop()
+            else:
+                warnings.append(f"unknown main item 0x{prefix:02X} at offset {offset} ignored")
+            if usages or usage_min or delimiter_branch or extra:
+                usages = []
+                extended = set()
+                usage_min = delimiter_depth = delimiter_branch = 0
+                extra = {}
         else:
-            local.usages.extend(page | (u & 0xFFFF) for u in range(first, first + count))
-        local.extended.extend([False] * count)
-
-    # -- hid_parser_main ---------------------------------------------------------------------------------------
-    def concatenate_last_usage_page(self) -> None:
-        """Put the current Usage Page on the last short usages until one already has it (as the kernel)."""
-        usages = self.local.usages
-        page = self.g.usage_page  # compared whole, as the kernel does: a page over 0xFFFF never matches
-        prefix = (page & 0xFFFF) << 16
-        extended = self.local.extended
-        for i in range(len(usages) - 1, -1, -1):
-            if extended[i]:
-                continue
-            if usages[i] >> 16 == page:
-                break
-            usages[i] = prefix | (usages[i] & 0xFFFF)
-
-    def main_item(self, offset: int, prefix: int, value: int) -> None:
-        """One main item (the kernel's ``hid_parser_main``); local state is reset after it."""
-        local = self.local
-        if local.usages:
-            self.concatenate_last_usage_page()
-        tag = prefix >> 4
-        if tag in _KINDS:
-            self.add_field(offset, tag, value)
-        elif tag == 10:
-            if len(self.open) == MAX_COLLECTION_DEPTH:
-                raise self.error(f"collections nested over {MAX_COLLECTION_DEPTH} deep", offset)
-            usages = local.usages
-            c = Collection(value & 0xFF, usages[0] if usages else 0, offset, self.open[-1] if self.open else None)
-            self.open.append(c)
-            self.collections.append(c)
-        elif tag == 12:
-            if not self.open:
-                raise self.error("End Collection without a Collection", offset)
-            self.open.pop()
-        else:
-            self.warnings.append(f"unknown main item 0x{prefix:02X} at offset {offset} ignored")
-        if local.usages or local.usage_min or local.delimiter_branch or local.extra:
-            self.local = _Locals()
-
-    def add_field(self, offset: int, tag: int, flags: int) -> None:
-        """An Input, Output or Feature item (the kernel's ``hid_add_field``)."""
-        g = self.g
-        rid = g.report_id
-        report = self.reports.get((tag, rid))
-        if report is None:
-            report = self.reports[tag, rid] = _Report(_KINDS[tag], rid or None)
-        lmin, lmax = g.logical_min, g.logical_max
-        if lmin < 0:
-            lmax = _s32(lmax)
-            if lmax < lmin:
-                raise self.error(f"Logical Maximum {lmax} is below Logical Minimum {lmin}", offset)
-        elif lmax & _M32 < lmin:
-            raise self.error(f"Logical Maximum {lmax & _M32} is below Logical Minimum {lmin}", offset)
-        else:
-            lmax &= _M32
-        pmin, pmax = g.physical_min, g.physical_max
-        pmax = _s32(pmax) if pmin < 0 else pmax & _M32
-        start = report.bits
-        count = g.report_count
-        report.bits += g.report_size * count
-        if report.bits > (MAX_BUFFER_SIZE - 1) * 8:
-            raise self.error(f"{report.kind.value} report {report.report_id} is longer than {MAX_BUFFER_SIZE - 1} "
-                             f"bytes ({report.bits} bits)", offset)
-        usages = self.local.usages
-        if usages:
-            if report.with_usages == MAX_FIELDS:
-                self.warnings.append(f"{report.kind.value} report {report.report_id}: field at offset {offset} "
-                                     f"dropped (the kernel keeps {MAX_FIELDS} fields per report)")
-                return
-            report.with_usages += 1
-            if count > len(usages):
-                usages = usages + [usages[-1]] * (count - len(usages))
-            # a variable has one usage per element; an array the usages an index lmin..lmax can name
-            kept = tuple(usages[:count] if flags & 2 else usages[:lmax - lmin + 1])
-            page = kept[0] >> 16 if kept else g.usage_page & 0xFFFF
-        else:
-            kept = ()
-            page = g.usage_page & 0xFFFF
-        extra = self.local.extra
-        report.fields.append(Field(
-            report.kind, report.report_id, page, kept, start + (8 if rid else 0), g.report_size, count,
-            lmin, lmax, pmin, pmax, g.unit, g.unit_exponent, flags, self.open[-1] if self.open else None,
-            offset, dict(extra) if extra else {}))
-
-    def descriptor(self, data: bytes) -> ReportDescriptor:
-        """The parsed descriptor."""
-        numbered = {_KINDS[tag] for tag, rid in self.reports if rid}
-        layouts = []
-        for r in self.reports.values():
-            fields = tuple(r.fields)
-            if r.report_id is None and r.kind in numbered:
-                # the kernel reads every report of a numbered kind with an ID byte, 0 for this one
-                self.warnings.append(f"{r.kind.value} items with no Report ID in effect make {r.kind.value} "
-                                     "report 0, read with an ID byte 0 like the numbered ones")
-                r.report_id = 0
-                fields = tuple(replace(f, report_id=0, bit_offset=f.bit_offset + 8) for f in fields)
-            layouts.append(ReportLayout(r.kind, r.report_id, fields,
-                                        (r.bits + 7) // 8 + (1 if r.report_id is not None else 0)))
-        return ReportDescriptor(data, layouts, tuple(self.collections), tuple(self.warnings))
+            warnings.append(f"reserved item 0x{prefix:02X} at offset {offset} ignored")
+    if last < len(items):  # the kernel reads the zeros as unknown Main items, which reset the local state
+        delimiter_depth = 0
+    if open_:
+        raise ParseError(f"unbalanced collection: {len(open_)} still open at the end of the descriptor "
+                         f"(the innermost opened here)", source=source, offset=open_[-1].offset)
+    if delimiter_depth:
+        raise ParseError("unbalanced delimiter at the end of the descriptor", source=source,
+                         offset=items[last - 1][0] if last else 0)
+    return reports, collections
 
 
-def _dispatch_table() -> list[Callable[[_Parser, int, int, int], None]]:
-    """The handler of each prefix byte (the size bits do not matter; tag nibble 15 is a long item)."""
-    p = _Parser
-    by_tag = [p.usage_page, p.logical_min, p.logical_max, p.physical_min, p.physical_max, p.unit_exponent, p.unit,
-              p.report_size, p.report_id, p.report_count, p.push, p.pop]
-    table: list[Callable[[_Parser, int, int, int], None]] = []
-    for prefix in range(256):
-        tag, kind = prefix >> 4, (prefix >> 2) & 3
-        if tag == LONG_ITEM_TAG:
-            table.append(p.long_item)
-        elif kind == MAIN:
-            table.append(p.main_item)
-        elif kind == GLOBAL:
-            table.append(by_tag[tag] if tag < len(by_tag) else p.unknown_global)
-        elif kind == LOCAL:
-            table.append(p.usage if tag == 0 else p.local_item)
-        else:
-            table.append(p.reserved_item)
-    return table
-
-
-_DISPATCH = _dispatch_table()
+def _descriptor(data: bytes, reports: dict[tuple[int, int], _Report], collections: list[Collection],
+                warnings: list[str]) -> ReportDescriptor:
+    """The parsed descriptor from the reports built."""
+    numbered = {_KINDS[tag] for tag, rid in reports if rid}
+    layouts = []
+    for r in reports.values():
+        fields = tuple(r.fields)
+        if r.report_id is None and r.kind in numbered:
+            # the kernel reads every report of a numbered kind with an ID byte, 0 for this one
+            warnings.append(f"{r.kind.value} items with no Report ID in effect make {r.kind.value} "
+                            "report 0, read with an ID byte 0 like the numbered ones")
+            r.report_id = 0
+            fields = tuple(replace(f, report_id=0, bit_offset=f.bit_offset + 8) for f in fields)
+        layouts.append(ReportLayout(r.kind, r.report_id, fields,
+                                    (r.bits + 7) // 8 + (1 if r.report_id is not None else 0)))
+    return ReportDescriptor(data, layouts, tuple(collections), tuple(warnings))
 
 
 def parse_descriptor(data: bytes, *, reject_long_items: bool = False, vendor_id: int | None = None,
@@ -420,7 +295,5 @@ def parse_descriptor(data: bytes, *, reject_long_items: bool = False, vendor_id:
         data, notes = fixup(data, vendor_id, product_id)
     if not data:
         raise ParseError("empty report descriptor", source=source, offset=0)
-    parser = _Parser(data, source)
-    parser.warnings.extend(notes)
-    parser.run(scan(data, source=source), reject_long_items)
-    return parser.descriptor(data)
+    reports, collections = _parse(scan(data, source=source), data, source, reject_long_items, notes)
+    return _descriptor(data, reports, collections, notes)
