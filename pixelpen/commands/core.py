@@ -4,7 +4,10 @@
 each simulated panel whose simulator is registered (:data:`DEMO_PANELS`), then plays a short animation there
 (a cursor moving, a clock's digits changing: :class:`pixelpen.animation.PanelAnimation`), in simulated time;
 it writes each panel's glass (``panel-MODEL.png``), the animation's glass frames (``panel-MODEL.gif``) and
-the frame statistics of all panels (``panels.json``).
+the frame statistics of all panels (``panels.json``).  Its input part (:func:`input_demo`) records a simulated
+tablet's signature and a trackball in hid-recorder files, replays the signature into strokes smoothed to
+B-splines, drawn with a cursor echo on a simulated panel and plotted on a simulated plotter, and lets the
+trackball move a locator over the reference scene, picking what lies under it (``input.json``).
 """
 
 from __future__ import annotations
@@ -42,6 +45,14 @@ DEMO_PANELS: tuple[tuple[str, dict[str, str]], ...] = (
 """The simulated panels the demo shows the scene and the animation on (those whose simulator is registered)."""
 ANIMATION_FRAMES = 30
 """Frames of the panel demo's animation."""
+INPUT_PANEL = ("st7789", {"size": "240x240"})
+"""The simulated panel the input demo draws the signature and the locator on."""
+INPUT_PLOTTER = "hp7475a"
+"""The simulated plotter the input demo plots the smoothed signature on."""
+SIGNATURE_TOLERANCE_MM = 0.5
+"""How far the smoothed signature may stray from the pen's points."""
+TABLET_MM = (224.0, 140.0)
+"""The simulated tablet's active area (sim/hid/descriptors.py PEN_TABLET): the signature's world window."""
 
 _ROLE = re.compile(r":[a-z]+(?::[a-z]+)?:`(?:([^`<]*?)\s*<[^`>]*>|~(?:[\w.]*\.)?([^`]*)|([^`]*))`")
 _LITERAL = re.compile(r"``(.+?)``|`([^`]+)`|\*\*(.+?)\*\*")
@@ -173,6 +184,19 @@ def cmd_demo(args: argparse.Namespace) -> int:
               f"{r.bytes_per_frame:,.0f} bytes and {r.windows_per_frame:.1f} windows a frame, "
               f"{r.fps_at_bus_limit:,.0f} fps at the bus limit; full frames {r.full_frame_fps_at_bus_limit:.1f} fps)",
               file=sys.stderr)
+    try:
+        result = input_demo(out)
+    except Exception as exc:  # noqa: BLE001 - a missing input piece must not stop the rest of the demo
+        log.warning("demo: the input part failed: %s", exc)
+    else:
+        print(f"  input: a tablet signature ({result.signature_reports} reports, {result.strokes} strokes, "
+              f"{result.stroke_points} points) smoothed to {result.control_points} B-spline control points "
+              f"(within {result.max_error_mm:.2f} mm), drawn on {result.panel} under a cursor echo "
+              f"({result.echo_frames} frames, {result.echo_bytes_per_frame:,.0f} bytes a frame): "
+              f"{result.signature_glass}; plotted: {result.signature_paper}", file=sys.stderr)
+        print(f"  input: a trackball moved a locator over the reference scene ({result.trackball_reports} reports) "
+              f"and picked {', '.join(result.picked) or 'nothing'}; passed over {len(result.hovered)} items: "
+              f"{result.pick_glass}", file=sys.stderr)
     print(f"pixelpen demo: the reference scene was drawn into {out.resolve()}/")
     for path in sorted(out.iterdir()):
         print(f"  {path}")
@@ -238,3 +262,139 @@ def panel_demo(out: Path, panels: Sequence[tuple[str, dict[str, str]]] = DEMO_PA
             1000 * (stats.host_seconds - before.host_seconds) / max(n, 1), 1 / bus_s if bus_s else 0.0, limit))
     (out / "panels.json").write_text(json.dumps([asdict(r) for r in results], indent=2) + "\n")
     return results
+
+
+@dataclass
+class InputDemoResult:
+    """What the input demo did: recordings replayed, the smoothed signature, the echo's frames, what was picked."""
+
+    panel: str
+    signature_recording: str
+    signature_reports: int
+    strokes: int
+    stroke_points: int
+    control_points: int
+    max_error_mm: float
+    echo_frames: int
+    echo_bytes_per_frame: float
+    signature_glass: str
+    signature_paper: str
+    trackball_recording: str
+    trackball_reports: int
+    picked: list[str]
+    """What lay under the locator at each trackball button press (segment names, or primitive kinds)."""
+    hovered: list[str]
+    """Everything the locator passed over, in order, each once."""
+    pick_glass: str
+
+
+def record_simulated(url: str, path: Path, seconds: float) -> int:
+    """Record the first ``seconds`` of the simulated HID device ``url`` (``sim:MODEL?...``) in a hid-recorder file;
+    the number of reports."""
+    from pixelpen.clock import SimulatedClock
+    from pixelpen.drivers.recordings.hidrecorder import HidRecording, write_hid_recording
+    from pixelpen.sim.base import create_simulator
+    from pixelpen.urls import parse_url
+
+    parsed = parse_url(url)
+    sim: Any = create_simulator(parsed.target, clock=SimulatedClock(), **dict(parsed.options))
+    sim.advance_to(seconds)
+    timed = sim.take_timed_reports()
+    start = timed[0][0] if timed else 0.0
+    write_hid_recording(HidRecording(sim.info.get("product_string", parsed.target), "", 0x03,
+                                     sim.info.get("vendor_id", 0), sim.info.get("product_id", 0),
+                                     sim.report_descriptor, [(t - start, report) for t, report in timed]), path)
+    return len(timed)
+
+
+def _picked_name(hit: Any) -> str:
+    """A pick result as the demo names it: the segment, or the primitive's kind and index."""
+    return hit.segment or f"{type(hit.primitive).__name__.lower()} {hit.index}"
+
+
+def input_demo(out: Path) -> InputDemoResult:
+    """The input part of the demo (see the module docstring); writes ``OUT/tablet-signature.hid``,
+    ``OUT/trackball.hid``, ``OUT/signature-panel.png``, ``OUT/signature-PLOTTER.png``, ``OUT/pick-panel.png``
+    and ``OUT/input.json``."""
+    import uuid
+
+    from pixelpen.display.picture import Polyline, Style
+    from pixelpen.input import open_input
+    from pixelpen.input.echo import Echo
+    from pixelpen.input.pick import Pick, PickRecord
+    from pixelpen.input.queue import InputQueue
+    from pixelpen.input.stroke import Stroke, StrokeValue
+    from pixelpen.scene import PAGE, WORLD, reference_scene
+    from pixelpen.sim.base import forget_simulator, named_simulator
+
+    model, options = INPUT_PANEL
+    panel_url = format_url("sim", model, options)
+    signature, trackball = out / "tablet-signature.hid", out / "trackball.hid"
+    signature_reports = record_simulated("sim:tablet?script=signature", signature, 8.0)
+    trackball_reports = record_simulated("sim:trackball?script=signature", trackball, 8.0)
+
+    strokes: list[StrokeValue] = []
+    with open_display(panel_url) as panel:
+        panel.window(0.0, 0.0, *TABLET_MM)
+        sim: Any = panel.simulator  # type: ignore[attr-defined]
+        echo = Echo(panel, interval=1 / 60)  # type: ignore[arg-type]
+        before_frames, before_bytes = panel.stats.frames, panel.stats.bytes  # type: ignore[attr-defined]
+        with open_input(f"replay:{signature}", display=panel) as tablet:
+            queue = InputQueue([tablet])
+            queue.attach(Stroke(panel, spacing=1.0, tolerance=SIGNATURE_TOLERANCE_MM, echo=echo), "event")
+            while (event := queue.await_event(5.0)) is not None:  # a word takes up to 1.3 s
+                if event.kind != "stroke":
+                    continue
+                strokes.append(event.value)
+                with echo.hidden():
+                    panel.draw(Polyline(event.value.points, Style(colour="grey")))
+                    panel.draw(event.value.spline.primitive(Style(colour="cyan", width=0.4)))
+        echo.close()
+        frames = panel.stats.frames - before_frames  # type: ignore[attr-defined]
+        echo_bytes = (panel.stats.bytes - before_bytes) / max(frames, 1)  # type: ignore[attr-defined]
+        signature_glass = out / "signature-panel.png"
+        sim.glass().save(signature_glass)
+
+    ident = f"demo-input-{uuid.uuid4().hex[:8]}"
+    signature_paper = out / f"signature-{INPUT_PLOTTER}.png"
+    try:
+        with open_display(format_url("sim", INPUT_PLOTTER, {"speed": "fast", "id": ident})) as plotter:
+            plotter.window(0.0, 0.0, *TABLET_MM)
+            for value in strokes:
+                if value.spline is not None:
+                    plotter.draw(value.spline.primitive())
+        named_simulator(ident).save_paper(signature_paper)
+    finally:
+        forget_simulator(ident)
+
+    picked: list[str] = []
+    hovered: list[str] = []
+    with open_display(panel_url) as panel:
+        show_reference(panel)  # type: ignore[arg-type]
+        panel.window(*WORLD)
+        panel.viewport(0.0, 0.0, WORLD[2] / PAGE[2], 1.0)
+        record = PickRecord(panel)
+        record.add(reference_scene())
+        echo = Echo(panel, shape="box", size=7, colour="magenta", interval=1 / 30)  # type: ignore[arg-type]
+        with open_input(f"replay:{trackball}", display=panel) as ball:
+            queue = InputQueue([ball])
+            pick = queue.attach(Pick(record, aperture_mm=1.5, gain=0.45, echo=echo), "event")
+            pick.locator.move_to(20.0, 40.0)
+            while queue.pump(1.0):
+                hit = pick.value()
+                if hit is not None and _picked_name(hit) not in hovered:
+                    hovered.append(_picked_name(hit))
+                while (event := queue.await_event(0.0)) is not None:
+                    if event.kind == "pick" and event.value is not None:
+                        picked.append(_picked_name(event.value))
+        pick_glass = out / "pick-panel.png"
+        panel.simulator.glass().save(pick_glass)  # type: ignore[attr-defined]
+
+    result = InputDemoResult(
+        panel_url, signature.name, signature_reports, len(strokes), sum(len(v) for v in strokes),
+        sum(len(v.spline.control_points) for v in strokes if v.spline is not None),
+        max((v.spline.max_error for v in strokes if v.spline is not None), default=0.0), frames, echo_bytes,
+        signature_glass.name, signature_paper.name, trackball.name, trackball_reports, picked, hovered,
+        pick_glass.name)
+    (out / "input.json").write_text(json.dumps(asdict(result), indent=2) + "\n")
+    return result

@@ -25,7 +25,7 @@ from abc import ABC, abstractmethod
 from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar, Literal, TypeVar
 
 from pixelpen.clock import Clock
 from pixelpen.devices.hid.events import DeviceRemoved, InputEvent
@@ -83,6 +83,9 @@ class LogicalDevice(ABC):
         return self.queue
 
 
+L = TypeVar("L", bound=LogicalDevice)
+
+
 @dataclass(frozen=True)
 class LogicalEvent:
     """A trigger in event mode: when, which logical device (None for a removed input device), the measure."""
@@ -121,7 +124,7 @@ class InputQueue:
         if self.clock is None:
             self.clock = device.clock
 
-    def attach(self, logical: LogicalDevice, mode: Mode | None = None) -> LogicalDevice:
+    def attach(self, logical: L, mode: Mode | None = None) -> L:
         """Give ``logical`` the raw events from now on (in ``mode`` if given) and return it."""
         if logical.queue is not None and logical.queue is not self:
             raise ConfigError(f"{type(logical).__name__} is attached to another InputQueue")

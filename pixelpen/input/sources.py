@@ -6,7 +6,7 @@
 * ``hid:PATH|VID:PID[:SERIAL][@IFACE]?backend=hidraw|hid`` — a real device through ``drivers.hidapi.open_hid``.
 * ``replay:FILE?device=N&realtime=BOOL`` — a hid-recorder file (``drivers.recordings.hidrecorder``) played by
   ``pixelpen.sim.hid.replay.replay_device`` behind the same fake hidapi module as ``sim:``.
-* ``evdev:/dev/input/eventN`` — python-evdev (``drivers.evdev.EvdevLink``) through ``devices.hid.evdev``.
+* ``evdev:/dev/input/eventN?grab=BOOL`` — python-evdev (``drivers.evdev.EvdevLink``) through ``devices.hid.evdev``.
 * ``evemu:FILE?realtime=BOOL`` — an evemu recording played on the clock through the same evdev semantics.
 
 A replay without a clock runs on a new simulated clock, as fast as it is read (``realtime=true``: the real one).
@@ -37,6 +37,10 @@ REPLAY_OPTIONS: tuple[OptionSpec[Any], ...] = (
     OptionSpec("realtime", boolean, False, "play at the recorded pace on a real clock (else as fast as possible)"),
 )
 """Options of ``replay:`` URLs read here."""
+EVDEV_OPTIONS: tuple[OptionSpec[Any], ...] = (
+    OptionSpec("grab", boolean, False, "take the device for this reader only (EVIOCGRAB: the desktop stops seeing it)"),
+)
+"""Options of ``evdev:`` URLs read here."""
 EVEMU_OPTIONS: tuple[OptionSpec[Any], ...] = REPLAY_OPTIONS[1:]
 """Options of ``evemu:`` URLs read here."""
 
@@ -126,22 +130,22 @@ class EvdevSource:
 
     def __init__(self, reader: Any, semantics: Any, device_id: DeviceId, *, clock: Clock) -> None:
         self.reader = reader
-        """Has ``read_event(timeout) -> (time, type, code, value) | None`` and ``close()``."""
+        """Has ``read_events(timeout) -> [(time, type, code, value), ...]`` ([] on timeout) and ``close()``."""
         self.semantics = semantics
         self.device_id = device_id
         self.clock = clock
 
     def read(self, timeout: float | None) -> list[InputEvent] | None:
-        """The events of the next evdev event (most give none until their frame's SYN_REPORT)."""
-        event = self.reader.read_event(timeout)
-        if event is None:
+        """The events of the evdev events that came (frames end at SYN_REPORT), or None on timeout."""
+        raw = self.reader.read_events(timeout)
+        if not raw:
             return None
-        events: list[InputEvent] = self.semantics.feed_event(*event)
+        events: list[InputEvent] = self.semantics.feed_events(raw)
         return events
 
     def describe(self) -> str:
-        """The device and what its semantics understood."""
-        return self.semantics.describe()
+        """What the semantics understood of the device."""
+        return str(self.semantics.describe())
 
     def close(self) -> None:
         """Close the reader."""
@@ -158,22 +162,25 @@ class RecordingReader:
         self._origin = clock.now() - (events[0][0] if events else 0.0)
         self.closed = False
 
-    def read_event(self, timeout: float | None) -> tuple[float, int, int, int] | None:
-        """The next event once due, waiting on the clock at most ``timeout``; None on timeout or, at once when
-        ``timeout`` is None, at the end of the recording (nothing more will come)."""
+    def read_events(self, timeout: float | None) -> list[tuple[float, int, int, int]]:
+        """The events due once the next is (waiting on the clock at most ``timeout``); [] on timeout or, at once
+        when ``timeout`` is None, at the end of the recording (nothing more will come)."""
         if self._next >= len(self._events):
             if timeout is not None:
                 self._clock.sleep(timeout)
-            return None
-        t, type_, code, value = self._events[self._next]
-        wait = self._origin + t - self._clock.now()
+            return []
+        wait = self._origin + self._events[self._next][0] - self._clock.now()
         if wait > 0:
             if timeout is not None and wait > timeout:
                 self._clock.sleep(timeout)
-                return None
+                return []
             self._clock.sleep(wait)
-        self._next += 1
-        return (self._origin + t, type_, code, value)
+        now, due = self._clock.now(), []
+        while self._next < len(self._events) and self._origin + self._events[self._next][0] <= now:
+            t, type_, code, value = self._events[self._next]
+            due.append((self._origin + t, type_, code, value))
+            self._next += 1
+        return due
 
     def close(self) -> None:
         """Nothing to release."""
@@ -185,13 +192,15 @@ def open_evdev(url: DeviceURL, *, clock: Clock | None, options: dict[str, Any]) 
     from pixelpen.devices.hid.evdev import EvdevSemantics
     from pixelpen.drivers.evdev import EvdevLink
 
-    link = EvdevLink(url.target)
+    own, rest = _split(url, EVDEV_OPTIONS)
+    clock = clock or REAL_CLOCK
+    link = EvdevLink(url.target, grab=own["grab"], clock=clock)
     try:
-        semantics = EvdevSemantics(link.device_id, link.absinfo, **(dict(url.options) | options))
+        semantics = EvdevSemantics(link.device_id, link.absinfo, keys=link.codes.get(EV_KEY, ()), **(rest | options))
     except BaseException:
         link.close()
         raise
-    return EvdevSource(link, semantics, link.device_id, clock=clock or REAL_CLOCK)
+    return EvdevSource(link, semantics, link.device_id, clock=clock)
 
 
 def open_evemu(url: DeviceURL, *, clock: Clock | None, options: dict[str, Any]) -> EventSource:

@@ -8,8 +8,8 @@ primary) is pressed on a pointer, and ends — its trigger — when it lifts or 
 
 :func:`smooth` fits a B-spline to the points (least squares, the Cox–de Boor basis of
 :func:`pixelpen.geometry.bspline_basis` over open uniform knots, chord-length parameters, the two ends
-interpolated), adding control points until every point lies within ``tolerance`` world units of the curve at
-its parameter or there are :data:`MAX_CONTROL_POINTS`; the result is a drawable
+interpolated) with the fewest control points that bring every point within ``tolerance`` world units of the
+curve at its parameter (at most :data:`MAX_CONTROL_POINTS`); the result is a drawable
 :class:`~pixelpen.display.picture.BSpline`.
 """
 
@@ -95,20 +95,26 @@ def fit_bspline(points: np.ndarray, n: int, degree: int = 3) -> SmoothStroke:
 
 
 def smooth(points: np.ndarray, *, tolerance: float, degree: int = 3) -> SmoothStroke:
-    """A B-spline within ``tolerance`` of every point: control points doubled from degree + 1 until it fits."""
+    """A B-spline within ``tolerance`` of every point with the fewest control points (doubled from degree + 1 until
+    it fits, then bisected), or the best of :data:`MAX_CONTROL_POINTS` (at most one per point)."""
     pts = np.asarray(points, dtype=float)
     if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 2:
         raise InvalidArgument(f"smoothing needs an (N, 2) array of N >= 2 points, got shape {pts.shape}")
     if not (isinstance(tolerance, (int, float)) and tolerance > 0 and math.isfinite(tolerance)):
         raise InvalidArgument(f"smoothing tolerance must be a positive number, got {tolerance!r}")
     degree = min(degree, len(pts) - 1)
-    n = degree + 1
     limit = min(len(pts), MAX_CONTROL_POINTS)
-    while True:
-        fit = fit_bspline(pts, n, degree)
-        if fit.max_error <= tolerance or n >= limit:
-            return fit
-        n = min(2 * n, limit)
+    low, fit = degree, fit_bspline(pts, degree + 1, degree)
+    while fit.max_error > tolerance and len(fit.control_points) < limit:  # double until it fits ...
+        low, fit = len(fit.control_points), fit_bspline(pts, min(2 * len(fit.control_points), limit), degree)
+    high = len(fit.control_points)
+    while high - low > 1 and fit.max_error <= tolerance:  # ... then the fewest that fit, by bisection
+        middle = fit_bspline(pts, (low + high) // 2, degree)
+        if middle.max_error <= tolerance:
+            high, fit = len(middle.control_points), middle
+        else:
+            low = len(middle.control_points)
+    return fit
 
 
 class Stroke(LogicalDevice):
