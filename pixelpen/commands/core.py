@@ -337,7 +337,7 @@ def input_demo(out: Path) -> InputDemoResult:
     with open_display(panel_url) as panel:
         panel.window(0.0, 0.0, *TABLET_MM)
         sim: Any = panel.simulator  # type: ignore[attr-defined]
-        echo = Echo(panel, interval=1 / 60)  # type: ignore[arg-type]
+        echo = Echo(panel, interval=1 / 30)  # type: ignore[arg-type]
         before_frames, before_bytes = panel.stats.frames, panel.stats.bytes  # type: ignore[attr-defined]
         with open_input(f"replay:{signature}", display=panel) as tablet:
             queue = InputQueue([tablet])

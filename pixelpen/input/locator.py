@@ -68,6 +68,7 @@ class Locator(LogicalDevice):
         self.buttons = frozenset(buttons)
         self.echo = echo
         self._axes: dict[str, float] = {}
+        self._unit: tuple[geo.ViewingPipeline, np.ndarray] | None = None
         x0, y0, x1, y1 = self.pipeline.clip_rect
         start = ((x0 + x1) / 2, (y0 + y1) / 2) if initial is None else tuple(self.pipeline.to_device(initial))
         self.position = self._clamp(float(start[0]), float(start[1]))
@@ -129,11 +130,18 @@ class Locator(LogicalDevice):
 
     def move_to_unit(self, u: float, v: float, *, time: float | None = None) -> None:
         """Move to the point (u, v) of the unit square (v down) mapped onto the viewport the window fills."""
+        m = self._unit_matrix()
+        self._set((float(m[0, 0] * u + m[0, 1] * v + m[0, 2]), float(m[1, 0] * u + m[1, 1] * v + m[1, 2])), time)
+
+    def _unit_matrix(self) -> np.ndarray:
+        """The unit square (v down) -> device matrix of the current pipeline (computed once per pipeline)."""
         p = self.pipeline
-        corners = geo.apply(p.world_to_normalized, p.window_corners)
-        (nx0, ny0), (nx1, ny1) = corners.min(axis=0), corners.max(axis=0)
-        x, y = geo.apply(p.normalized_to_device, (nx0 + u * (nx1 - nx0), ny1 - v * (ny1 - ny0)))
-        self._set((float(x), float(y)), time)
+        if self._unit is None or self._unit[0] is not p:
+            corners = geo.apply(p.world_to_normalized, p.window_corners)
+            (nx0, ny0), (nx1, ny1) = corners.min(axis=0), corners.max(axis=0)
+            square = np.array([[nx1 - nx0, 0.0, nx0], [0.0, ny0 - ny1, ny1], [0.0, 0.0, 1.0]])
+            self._unit = (p, p.normalized_to_device @ square)
+        return self._unit[1]
 
     def move_to(self, x: float, y: float, *, time: float | None = None) -> None:
         """Move to a world point (an application warping the cursor), kept inside the viewport."""
