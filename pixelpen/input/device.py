@@ -127,7 +127,7 @@ class InputDevice:
                 return [DeviceRemoved(self.clock.now(), self.device_id)]
             if events:
                 return events
-            if events is None or remaining == 0.0:
+            if events is None:  # the timeout passed (a report that gave no events reads on)
                 return []
 
     def events(self, timeout: float | None = None) -> Iterator[InputEvent]:

@@ -81,3 +81,13 @@ def test_close_is_idempotent_and_closes_the_source_once() -> None:
 def test_bad_timeout_is_refused() -> None:
     with pytest.raises(InvalidArgument, match="timeout"):
         scripted([]).read(-1)
+
+
+def test_a_poll_reads_past_reports_that_give_no_events() -> None:
+    clock = SimulatedClock()
+    # an unchanged report (no buttons, no motion) gives no event; the one after it does
+    sim = boot_mouse([(0.010, bytes([0x00, 0x00, 0x00])), (0.010, bytes([0x00, 0x02, 0x00]))], clock)
+    with open_report_device(sim, clock=clock) as dev:
+        clock.advance(0.05)
+        events = dev.read(0)
+    assert [(e.dx, e.dy) for e in events if isinstance(e, Motion)] == [(2, 0)]

@@ -95,3 +95,19 @@ def test_a_removed_device_is_queued_and_ends_requests() -> None:
 def test_a_logical_device_needs_its_queue() -> None:
     with pytest.raises(ConfigError, match="not attached"):
         Locator(PIPELINE).request(0)
+
+
+def test_several_devices_feed_one_queue() -> None:
+    from pixelpen.clock import SimulatedClock
+    from pixelpen.input.device import InputDevice
+    from tests.input.scripted import ScriptedSource
+
+    clock = SimulatedClock()
+    mouse = InputDevice(ScriptedSource([press(0.10), press(0.30)], clock))
+    keyboard = InputDevice(ScriptedSource([Key(0.20, DEVICE, usage=0x20, key="3", pressed=True, char="3")], clock))
+    queue = InputQueue([mouse, keyboard])
+    queue.attach(Choice(), mode="event")
+    got = []
+    while (event := queue.await_event(1.0)) is not None:
+        got.append((round(event.time, 6), event.value))
+    assert got == [(0.1, 1), (0.2, 3), (0.3, 1)]
