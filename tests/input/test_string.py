@@ -70,3 +70,15 @@ def test_bad_limits_are_refused() -> None:
         StringInput(max_length=0)
     with pytest.raises(InvalidArgument, match="initial"):
         StringInput(initial="toolong", max_length=3)
+
+
+def test_a_simulated_keyboard_types_edits_and_enters_a_line() -> None:
+    from pixelpen.clock import SimulatedClock
+    from pixelpen.input.registry import open_report_device
+    from pixelpen.sim.base import create_simulator
+
+    clock = SimulatedClock()
+    keyboard = create_simulator("keyboard", clock=clock, script="typing:Ab\bc\x1bXy\n")  # \b Backspace, \x1b Esc
+    with open_report_device(keyboard, clock=clock) as device:
+        line = InputQueue([device]).attach(StringInput())
+        assert line.request(5.0) == "Xy"
