@@ -12,6 +12,8 @@ display's current viewing pipeline (``ViewingPipeline.inverse``: device -> norma
   range (y down, as HID reports it) onto the viewport: (0, 0) is its top-left corner, (1, 1) its bottom-right.
   With ``preserve_aspect`` (the display's default) that is the part of the viewport the window fills, so the
   whole tablet is the whole window: a window the size of the tablet in mm gives the pen's position in mm.
+  Axes report over ``axis_range`` (default 0..1, an absolute pointer; (-1, 1) makes a joystick's stick an
+  absolute locator, its centre the viewport's); positions outside the range stay at its edge.
 
 The trigger is a press of one of ``buttons`` (default the primary button), the pen tip or a finger touching
 down.  An ``echo`` (:mod:`pixelpen.input.echo`) follows the position on the display.
@@ -50,7 +52,7 @@ class Locator(LogicalDevice):
 
     def __init__(self, display: Display | geo.ViewingPipeline, *, mode: Mode = "request", gain: float = 1.0,
                  buttons: Iterable[int] = (1,), initial: tuple[float, float] | None = None,
-                 echo: Echo | None = None) -> None:
+                 axis_range: tuple[float, float] = (0.0, 1.0), echo: Echo | None = None) -> None:
         super().__init__(mode=mode)
         if isinstance(display, geo.ViewingPipeline):
             self.display: Display | None = None
@@ -65,6 +67,10 @@ class Locator(LogicalDevice):
         if not (isinstance(gain, (int, float)) and 0 < gain < 1e6):
             raise InvalidArgument(f"locator gain must be a number in (0, 1e6), got {gain!r}")
         self.gain = float(gain)
+        low, high = axis_range
+        if not (isinstance(low, (int, float)) and isinstance(high, (int, float)) and low < high):
+            raise InvalidArgument(f"locator axis_range must be (low, high) with low < high, got {axis_range!r}")
+        self.axis_range = (float(low), float(high))
         self.buttons = frozenset(buttons)
         self.echo = echo
         self._axes: dict[str, float] = {}
@@ -106,7 +112,9 @@ class Locator(LogicalDevice):
         if isinstance(event, Axis) and event.axis in ("x", "y"):
             self._axes[event.axis] = event.value
             if len(self._axes) == 2:
-                self.move_to_unit(self._axes["x"], self._axes["y"], time=event.time)
+                low, high = self.axis_range
+                self.move_to_unit((self._axes["x"] - low) / (high - low), (self._axes["y"] - low) / (high - low),
+                                  time=event.time)
             return False
         if isinstance(event, Button) and event.button in self.buttons:
             return self._press(event.pressed)
@@ -131,6 +139,7 @@ class Locator(LogicalDevice):
     def move_to_unit(self, u: float, v: float, *, time: float | None = None) -> None:
         """Move to the point (u, v) of the unit square (v down) mapped onto the viewport the window fills."""
         m = self._unit_matrix()
+        u, v = min(max(u, 0.0), 1.0), min(max(v, 0.0), 1.0)
         self._set((float(m[0, 0] * u + m[0, 1] * v + m[0, 2]), float(m[1, 0] * u + m[1, 1] * v + m[1, 2])), time)
 
     def _unit_matrix(self) -> np.ndarray:

@@ -92,6 +92,15 @@ def test_touch_and_absolute_axes_move_it_too() -> None:
     assert (loc.value().x, loc.value().y) == pytest.approx((60.0, 45.0))
 
 
+def test_a_stick_is_an_absolute_locator_over_its_axis_range() -> None:
+    loc = Locator(PIPELINE, axis_range=(-1.0, 1.0))
+    for axis, value in (("x", -1.0), ("y", 0.0)):
+        loc.handle(Axis(0.0, DEVICE, axis=axis, value=value, raw=0))
+    assert (loc.value().x, loc.value().y) == pytest.approx((10.0, 45.0))  # left edge, half way up
+    loc.handle(Axis(0.0, DEVICE, axis="x", value=3.0, raw=0))  # beyond the range: held at the edge
+    assert loc.value().x == pytest.approx(110.0)
+
+
 def test_triggers_are_press_edges_of_the_button_the_tip_or_a_finger() -> None:
     loc = Locator(PIPELINE, buttons=(1, 3))
     assert not loc.handle(Button(0.0, DEVICE, button=2, pressed=True))
