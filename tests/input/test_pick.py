@@ -3,9 +3,13 @@
 
 from __future__ import annotations
 
+import itertools
+import math
 from pathlib import Path
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from pixelpen import geometry as geo
 from pixelpen.devices.hid.events import Button, Motion
@@ -104,3 +108,28 @@ def test_record_refuses_what_it_cannot_record(tmp_path: Path) -> None:
     with pytest.raises(InvalidArgument):
         Pick(record, aperture_mm=-1)
     assert record.pick((0, 0), 10.0) is None  # nothing recorded yet
+
+
+def scalar_distance(p: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+    """Point to segment, the textbook way: project, clamp to the segment, measure."""
+    (px, py), (ax, ay), (bx, by) = p, a, b
+    length2 = (bx - ax) ** 2 + (by - ay) ** 2
+    t = 0.0 if length2 == 0 else max(0.0, min(1.0, ((px - ax) * (bx - ax) + (py - ay) * (by - ay)) / length2))
+    return math.hypot(ax + t * (bx - ax) - px, ay + t * (by - ay) - py)
+
+
+coordinate = st.floats(1, 99, allow_nan=False)
+
+
+@given(st.lists(st.tuples(coordinate, coordinate), min_size=2, max_size=8), st.tuples(coordinate, coordinate))
+def test_vectorised_distance_matches_the_scalar_one(points: list[tuple[float, float]],
+                                                    probe: tuple[float, float]) -> None:
+    shown = display_class("png").from_url(parse_url("png:unused.png?size=200x100&dpi=25.4"))
+    shown.window(0, 0, 200, 100)
+    record = PickRecord(shown)  # type: ignore[arg-type]
+    pic = Picture()
+    pic.add(Polyline(points))
+    record.add(pic)
+    device = [(x, 100.0 - y) for x, y in points]  # world -> device on this display
+    expected = min(scalar_distance(device_point(*probe), a, b) for a, b in itertools.pairwise(device))
+    assert record.distances(device_point(*probe))[0] == pytest.approx(expected, abs=1e-9)

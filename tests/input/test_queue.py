@@ -5,6 +5,8 @@ from __future__ import annotations
 import logging
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from pixelpen import geometry as geo
 from pixelpen.devices.hid.events import Button, Key, Motion
@@ -111,3 +113,17 @@ def test_several_devices_feed_one_queue() -> None:
     while (event := queue.await_event(1.0)) is not None:
         got.append((round(event.time, 6), event.value))
     assert got == [(0.1, 1), (0.2, 3), (0.3, 1)]
+
+
+@given(st.lists(st.tuples(st.integers(1, 5), st.booleans()), max_size=60), st.integers(1, 8))
+def test_queue_invariants(presses: list[tuple[int, bool]], capacity: int) -> None:
+    """Every trigger is queued or counted lost; the queue never holds more than its capacity; order is kept."""
+    events = [Button(0.01 * (k + 1), DEVICE, button=b, pressed=p) for k, (b, p) in enumerate(presses)]
+    queue = InputQueue([scripted(events)], capacity=capacity)
+    queue.attach(Choice(), mode="event")
+    while queue.pump(1.0):
+        assert len(queue) <= capacity
+    triggers = sum(p for _, p in presses)
+    assert len(queue) + queue.overflows == triggers
+    kept = [queue.await_event(0) for _ in range(len(queue))]
+    assert [e.value for e in kept if e] == [b for b, p in presses if p][:capacity]

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from pixelpen.devices.hid.events import Key
 from pixelpen.errors import InvalidArgument
@@ -82,3 +84,14 @@ def test_a_simulated_keyboard_types_edits_and_enters_a_line() -> None:
     with open_report_device(keyboard, clock=clock) as device:
         line = InputQueue([device]).attach(StringInput())
         assert line.request(5.0) == "Xy"
+
+
+@given(st.lists(st.sampled_from(["a", "Z", " ", "<bs>", "<del>", "<left>", "<right>", "<home>", "<end>", "<esc>"]),
+                max_size=80), st.integers(1, 12))
+def test_editing_invariants(strokes: list[str], limit: int) -> None:
+    """The cursor stays inside the text, the text inside the limit, and only typed characters appear."""
+    device = StringInput(max_length=limit)
+    for key in keys(*strokes):
+        device.handle(key)
+        assert 0 <= device.cursor <= len(device.text) <= limit
+    assert set(device.text) <= {"a", "Z", " "}
