@@ -5,6 +5,7 @@ from __future__ import annotations
 import subprocess
 import sys
 from pathlib import Path
+from typing import ClassVar
 
 import pytest
 
@@ -123,3 +124,41 @@ def test_evemu_url_plays_the_recording_on_a_simulated_clock(tmp_path: Path) -> N
     # ABS_X 500 of 0..1000 at 10 units/mm, ABS_Y 250 of 0..500; pressure 341 of 0..1023 = 1/3
     assert [(p.x, p.y, p.x_mm, p.y_mm) for p in pens[:1]] == [(0.5, 0.5, 50.0, 25.0)]
     assert [p.time for p in pens] == [0.0, 0.5] and pens[-1].pressure == pytest.approx(1 / 3)
+
+
+class FakeEvdevLink:
+    """Stands in for drivers.evdev.EvdevLink: a pen node with one frame waiting."""
+
+    opened: ClassVar[list[FakeEvdevLink]] = []
+
+    def __init__(self, path: str, *, grab: bool = False, clock: object = None) -> None:
+        from pixelpen.devices.hid.events import DeviceId
+        from pixelpen.drivers.recordings.evemu import AbsInfo
+
+        self.path, self.grabbed, self.closed = path, grab, False
+        self.device_id = DeviceId("usb", 0x056A, 0x0001, name="fake pen", path=path)
+        self.absinfo = {0x00: AbsInfo(0, 0, 1000, 0, 0, 10), 0x01: AbsInfo(0, 0, 500, 0, 0, 10),
+                        0x18: AbsInfo(0, 0, 1023, 0, 0, 0)}
+        self.codes = {0x01: frozenset({0x140, 0x14A})}  # BTN_TOOL_PEN, BTN_TOUCH
+        self.frames = [[(0.0, 1, 0x140, 1), (0.0, 3, 0x00, 250), (0.0, 3, 0x01, 125), (0.0, 0, 0, 0)]]
+        FakeEvdevLink.opened.append(self)
+
+    def read_events(self, timeout: float | None = None) -> list[tuple[float, int, int, int]]:
+        return self.frames.pop(0) if self.frames else []
+
+    def close(self) -> None:
+        self.closed = True
+
+
+def test_evdev_url_reads_a_node_through_the_evdev_semantics(monkeypatch: pytest.MonkeyPatch) -> None:
+    import pixelpen.drivers.evdev
+
+    monkeypatch.setattr(pixelpen.drivers.evdev, "EvdevLink", FakeEvdevLink)
+    with open_input("evdev:/dev/input/event7?grab=true", clock=SimulatedClock()) as dev:
+        (pen,) = dev.read(0)
+        assert dev.read(0) == []
+    link = FakeEvdevLink.opened[-1]
+    assert (link.path, link.grabbed, link.closed) == ("/dev/input/event7", True, True)
+    assert isinstance(pen, Pen) and (pen.x, pen.y, pen.x_mm, pen.y_mm) == (0.25, 0.25, 25.0, 12.5)
+    with pytest.raises(URLError, match="colour"):
+        open_input("evdev:/dev/input/event7?colour=red")
