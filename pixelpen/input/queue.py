@@ -13,7 +13,7 @@ logical device's mode (GKS 7.2):
   order by :meth:`InputQueue.await_event`.
 
 The queue is bounded (``capacity``, default :data:`QUEUE_CAPACITY`): as in GKS, an event arriving when it is
-full is lost; losses are counted (``overflows``), logged once per episode and reported by
+full is lost; losses are counted (``overflows``), logged once until reported, and reported by
 :meth:`InputQueue.take_overflows`.  A device that went away puts a LogicalEvent with ``device`` None and the
 DeviceRemoved as its value on the queue (it is never dropped) and is read no more.
 """
