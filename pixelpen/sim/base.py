@@ -156,6 +156,9 @@ class ReportDevice(Protocol):
     def take_reports(self) -> list[bytes]:
         """Return and forget the input reports the device has sent so far, oldest first."""
 
+    def take_timed_reports(self) -> list[tuple[float, bytes]]:
+        """The same as ``take_reports``, each with the clock time the device sent it."""
+
     def write_report(self, report: bytes) -> None:
         """An output report from the host (keyboard LEDs, force feedback)."""
 

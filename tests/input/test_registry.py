@@ -68,8 +68,6 @@ E: 000000.010000 3 00 fd 02
 """
 
 
-@pytest.mark.xfail(strict=True, reason="SimHidapi.open_path pumps the reports due at the open instant to earlier "
-                   "readers only, so a replay's first report (t = 0) is lost (request to B/E)")
 def test_replay_url_plays_a_hid_recorder_file(tmp_path: Path) -> None:
     path = tmp_path / "mouse.hid"
     path.write_text(RECORDING)

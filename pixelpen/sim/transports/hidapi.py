@@ -128,12 +128,20 @@ class _Slot:
     clock: Clock
     queues: list[ReportQueue] = field(default_factory=list)
 
-    def pump(self) -> None:
-        """What the device sent up to now goes to every open handle, as the kernel gives each reader every report."""
-        self.device.advance_to(self.clock.now())
-        reports = self.device.take_reports()
+    def pump(self, joining: ReportQueue | None = None) -> None:
+        """What the device sent up to now goes to every open handle, as the kernel gives each reader every report.
+
+        A handle ``joining`` now also gets the reports sent at this very instant (a replay's first report at the
+        time the reader opens), none sent before.
+        """
+        now = self.clock.now()
+        self.device.advance_to(now)
+        timed = self.device.take_timed_reports()
+        reports = [r for _, r in timed]
         for queue in self.queues:
             queue.extend(reports)
+        if joining is not None:
+            joining.extend(r for t, r in timed if t >= now)
 
 
 class SimHidapi:
@@ -250,10 +258,10 @@ class SimHidDevice:
             raise RuntimeError("already open")
         for slot in self._bus._slots:
             if slot.path == path and connected(slot.device):
-                slot.pump()  # what was sent before the open goes to the readers open already, not to this one
                 capacity, drop = BUFFERS[self._bus.backend]
                 self._slot = slot
                 self._queue = ReportQueue(slot.device, slot.clock, capacity=capacity, drop=drop, pump=slot.pump)
+                slot.pump(joining=self._queue)  # what was sent before the open goes to the readers open already
                 slot.queues.append(self._queue)
                 return
         raise OSError("open failed")

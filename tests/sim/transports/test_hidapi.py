@@ -139,6 +139,12 @@ def test_reports_sent_before_the_open_are_not_read():
     assert opened(bus, "sim:mouse:0").read(64, 1000) == [0x00, 0x00, 0x00]
 
 
+def test_a_report_sent_at_the_instant_of_the_open_is_read():
+    clock = SimulatedClock()
+    bus = SimHidapi([mouse(clock, reports=[(0.0, bytes([0x01, 0x02, 0x03])), *MOVES])])
+    assert opened(bus, "sim:mouse:0").read(64, 0) == [0x01, 0x02, 0x03]  # a replay's first report, at t = 0
+
+
 def test_every_open_handle_gets_every_report():
     clock = SimulatedClock()
     bus = SimHidapi([mouse(clock)])
