@@ -316,6 +316,8 @@ def read_in_slices(read_once: Callable[[int], bytes | None], clock: Clock, timeo
         if deadline is not None:
             remaining = deadline - clock.now()
             if not first and remaining <= TOLERANCE:
+                if remaining > 0:
+                    clock.sleep(remaining)  # the clock reaches the deadline, so a caller looping until it ends
                 return None
             wait = min(READ_SLICE, max(0.0, remaining))
         first = False

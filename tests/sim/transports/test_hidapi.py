@@ -223,6 +223,16 @@ def test_link_reads_reports_and_times_out_on_the_fake_clock():
     assert ball.numbered and ball.read_report(0) == bytes([0x01, 0x02, 0x10, 0x00, 0xF0, 0xFF])
 
 
+def test_a_tiny_timeout_still_brings_the_clock_to_its_deadline():
+    clock = SimulatedClock()
+    link = open_hid("1234:0001:M1", module=SimHidapi([mouse(clock)]), clock=clock)
+    clock.advance(0.1)
+    for tiny in (1e-14, 1e-9, 5e-7):  # under the driver's rounding to whole milliseconds
+        start = clock.now()
+        assert link.read_report(tiny) is None
+        assert clock.now() == pytest.approx(start + tiny, abs=1e-15)  # a caller looping to a deadline gets there
+
+
 def test_link_feature_round_trip_numbered_and_not():
     clock = SimulatedClock()
     bus = SimHidapi([mouse(clock), trackball(clock)])
