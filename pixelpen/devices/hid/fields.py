@@ -164,7 +164,9 @@ class ReportDescriptor:
         self.warnings = warnings
         self.layouts: dict[tuple[ReportKind, int | None], ReportLayout] = {(r.kind, r.report_id): r for r in layouts}
         self.numbered = any(r.report_id is not None for r in layouts)
-        """Whether reports start with a report-ID byte (the descriptor has a Report ID item)."""
+        """Whether any report starts with a report-ID byte (the descriptor has a Report ID item)."""
+        self.numbered_kinds = frozenset(r.kind for r in layouts if r.report_id is not None)
+        """The report spaces whose reports start with an ID byte (the kernel numbers each space on its own)."""
         self.input_reports = self._space(ReportKind.INPUT)
         self.output_reports = self._space(ReportKind.OUTPUT)
         self.feature_reports = self._space(ReportKind.FEATURE)
@@ -191,7 +193,7 @@ class ReportDescriptor:
 
     def report_id_of(self, report: bytes, kind: ReportKind = ReportKind.INPUT) -> int | None:
         """The report ID a report read from the device carries (None when reports are unnumbered)."""
-        if not self.numbered:
+        if kind not in self.numbered_kinds:
             return None
         if not report:
             raise ParseError(f"an empty {kind.value} report has no report-ID byte", offset=0)
