@@ -120,6 +120,8 @@ def read_libinput_record(path_or_text: str | bytes | os.PathLike[str] | TextIO, 
         mark = getattr(exc, "problem_mark", None)
         raise ParseError(f"not YAML: {getattr(exc, 'problem', None) or exc}", source=where.source,
                          line=mark.line + 1 if mark is not None else None) from None
+    except ValueError as exc:  # a value PyYAML cannot construct (an integer of over 4300 digits)
+        raise where.error(f"a value that cannot be read: {exc}") from None
     top = where.mapping(document, "the file")
     version = top.get("version")
     if version != FILE_VERSION:

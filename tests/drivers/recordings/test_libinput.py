@@ -154,6 +154,11 @@ def test_limits_bound_events_and_size():
         read_libinput_record(RECORD, limits=Limits(file_bytes=100))
 
 
+def test_huge_number_is_a_clean_error():
+    with pytest.raises(ParseError, match="cannot be read"):
+        read_libinput_record("version: " + "9" * 5000 + "\n")
+
+
 def test_deep_nesting_is_a_clean_error():
     with pytest.raises(ParseError, match="line 2: more than 64 brackets"):
         read_libinput_record("version: 1\ndevices: " + "[" * 5000 + "\n")
@@ -171,4 +176,5 @@ def test_fuzzed_files_give_clean_errors():
 
 @pytest.mark.slow
 def test_fuzzed_files_give_clean_errors_long_campaign():
-    campaign("libinput-record", _target, [RECORD.encode()], SLOW_CASES, seed=random.Random(517).randrange(10**6)).check()
+    campaign("libinput-record", _target, [RECORD.encode()], SLOW_CASES,
+             seed=random.Random(517).randrange(10**6)).check()
