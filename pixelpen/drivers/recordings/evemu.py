@@ -151,6 +151,9 @@ class _Reader:
         self.last = 0.0
         self.backwards = 0
         self.first_backwards = 0
+        self.backwards_source = source
+        self.events_only = False
+        """Whether this is a separate events file (device lines refused)."""
 
     def error(self, message: str, token: object = None) -> ParseError:
         return ParseError(message, source=self.source, line=self.line, token=token)
@@ -167,6 +170,8 @@ class _Reader:
         if handler is None:
             raise self.error("not an evemu line: expected N:, I:, P:, B:, A:, L:, S:, E: or a # comment",
                              stripped[:40])
+        if kind != "E:" and self.events_only:
+            raise self.error(f"{kind} a device line in an events file (only E: lines and comments)")
         if kind != "E:" and self.events:
             raise self.error(f"{kind} a device line after the events began (line types N: I: P: B: A: L: S: "
                              "come first)")
@@ -278,6 +283,7 @@ class _Reader:
                                  "(times must not go backwards)", stamp)
             if not self.backwards:
                 self.first_backwards = self.line
+                self.backwards_source = self.source
             self.backwards += 1
             t = self.last
         self.last = t
@@ -295,8 +301,8 @@ class _Reader:
             raise ParseError(f"no {' or '.join(missing)} line: not an evemu device description", source=self.source,
                              line=self.line or None)
         if self.backwards:
-            warnings.warn(f"{self.source}: line {self.first_backwards}: {self.backwards} event times go backwards; "
-                          "each is held at the time before it", RecordingWarning, stacklevel=3)
+            warnings.warn(f"{self.backwards_source}: line {self.first_backwards}: {self.backwards} event times go "
+                          "backwards; each is held at the time before it", RecordingWarning, stacklevel=3)
         if self.absinfo and EV_ABS not in self.codes:
             self.codes[EV_ABS] = set(self.absinfo)
         assert self.name is not None and self.ids is not None
@@ -333,16 +339,30 @@ def read_text_source(path_or_text: str | bytes | os.PathLike[str] | TextIO, stac
     return stream, name
 
 
-def read_evemu(path_or_text: str | bytes | os.PathLike[str] | TextIO, *, source: str | None = None,
-               strict: bool = False, limits: Limits = LIMITS) -> EvdevRecording:
+def read_evemu(path_or_text: str | bytes | os.PathLike[str] | TextIO, *, events: str | bytes | os.PathLike[str]
+               | TextIO | None = None, source: str | None = None, strict: bool = False,
+               limits: Limits = LIMITS) -> EvdevRecording:
     """The device and events of an evemu file: a path, an open text file, or the text itself.
 
-    A ``str`` holding a line break, or ``bytes``, is the text; any other ``str`` is a path.  ``strict`` makes
-    a time going backwards an error instead of a warning.
+    A ``str`` holding a line break, or ``bytes``, is the text; any other ``str`` is a path.  ``events`` is a
+    separate events file (``E:`` lines and comments only, as older evemu-record and umockdev write them), its
+    events after the description's.  ``strict`` makes a time going backwards an error instead of a warning.
     """
+    reader = _read(path_or_text, source, strict, limits, None)
+    if events is not None and reader.name is not None and reader.ids is not None:  # else finish() says so
+        reader = _read(events, None, strict, limits, reader)
+    return reader.finish()
+
+
+def _read(path_or_text: str | bytes | os.PathLike[str] | TextIO, source: str | None, strict: bool, limits: Limits,
+          description: _Reader | None) -> _Reader:
+    """Feed a file's lines to a new reader, or (an events file) to the one that read the description."""
     with ExitStack() as stack:
         lines, name = read_text_source(path_or_text, stack, "evemu", limits.file_bytes)
         reader = _Reader(source or name, strict, limits)
+        if description is not None:  # the events file continues the description's reader, under its own name
+            reader, description.source, description.line = description, reader.source, 0
+            reader.events_only = True
         chars = 0
         while True:
             text = lines.readline(limits.line_chars + 1)
@@ -355,7 +375,7 @@ def read_evemu(path_or_text: str | bytes | os.PathLike[str] | TextIO, *, source:
             if chars > limits.file_bytes:
                 raise reader.error(f"more than the {limits.file_bytes}-byte limit of a file")
             reader.feed(text)
-        return reader.finish()
+        return reader
 
 
 # ---- writing -----------------------------------------------------------------------------------------------

@@ -280,3 +280,18 @@ def test_types_without_codes_in_b_lines_are_refused():
         read_evemu(f"N: x\nI: 0003 0001 0002 0003\nB: {EV_SW:02x} 00 00 00 01 00 00 00 00\n")
     assert read_evemu(f"N: x\nI: 0003 0001 0002 0003\nB: {EV_LED:02x} ff ff 00 00 00 00 00 00\n").codes[
         EV_LED] == frozenset(range(16))
+
+
+def test_separate_events_file_as_older_evemu_and_umockdev_write_it(tmp_path):
+    events = tmp_path / "tap.events"
+    events.write_text("# device /dev/input/event9\nE: 1330495931.101111 0003 0039 0\n"
+                      "E: 1330495931.101135 0000 0000 0\n")
+    rec = read_evemu(TABLET, events=events)
+    assert rec.events[-2:] == [(1330495931.101111, ecodes.EV_ABS, ecodes.ABS_MT_TRACKING_ID, 0),
+                               (1330495931.101135, ecodes.EV_SYN, ecodes.SYN_REPORT, 0)]
+    assert rec.node == "/dev/input/event9" and rec.name == "Wacom Intuos S Pen"
+    events.write_text("E: 1.000000 0000 0000 0\nN: other\n")
+    with pytest.raises(ParseError, match=r"tap.events, line 2: N: a device line in an events file"):
+        read_evemu(TABLET, events=events)
+    with pytest.raises(ParseError, match=r"<evemu text>.*no I: line"):
+        read_evemu("N: x\n", events=events)
