@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from pixelpen.devices.hid import keymaps
 from pixelpen.devices.hid.evdev import ABS_NAMES, KEY_USAGES, REL_NAMES, EvdevSemantics
@@ -202,3 +204,14 @@ def test_options_are_checked():
 def test_python_evdev_absinfo_is_accepted():
     sem = EvdevSemantics(DEV, {e.ABS_X: evdev.AbsInfo(5, 0, 10, 0, 0, 0)})
     assert sem.absinfo[e.ABS_X] == AbsInfo(5, 0, 10, 0, 0, 0)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.sampled_from([{}, PEN_AXES, MT]),
+       st.lists(st.tuples(st.sampled_from([0, 1, 2, 3, 4]), st.integers(0, 0x2FF), st.integers(-(2**31), 2**31 - 1)),
+                max_size=60))
+def test_any_event_stream_gives_events_only_at_syn_report_and_never_fails(axes, stream):
+    sem = EvdevSemantics(DEV, axes)
+    for ev_type, code, value in stream:
+        out = sem.feed_event(0.0, ev_type, code, value)
+        assert not out or (ev_type, code) == (e.EV_SYN, e.SYN_REPORT)
