@@ -42,10 +42,11 @@ def test_a_simulated_device_is_recorded_report_for_report(tmp_path, capsys):
 
 
 def test_a_device_named_by_vid_pid_through_the_hidapi_module(tmp_path, monkeypatch, capsys):
-    module = SimHidapi([replay_device(RECORDED, realtime=True)])
+    # hidraw gives a reader only the reports sent after it opened the device: the replay waits 0.3 s for that
+    module = SimHidapi([replay_device(RECORDED, realtime=True, delay=0.3)])
     monkeypatch.setattr(hidapi, "hid_module", lambda backend="hidraw": module)
     out = tmp_path / "mouse.hid"
-    assert main(["record-input", "046d:c077", "--count", "3", "-o", str(out)]) == 0
+    assert main(["record-input", "046d:c077", "--count", "3", "--duration", "20", "-o", str(out)]) == 0
     (rec,) = read_hid_recording(out)
     assert (rec.vendor_id, rec.product_id, rec.name) == (0x046D, 0xC077, "Old Mouse")
     assert [r for _, r in rec.reports] == [r for _, r in RECORDED.reports]

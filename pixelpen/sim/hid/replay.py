@@ -9,6 +9,7 @@ events.  With ``realtime=True`` it runs on the real clock and the reports come a
 
 from __future__ import annotations
 
+import math
 import os
 from typing import Any
 
@@ -23,13 +24,17 @@ _HIDAPI_BUS = {name: number for number, name in HIDAPI_BUS_NAMES.items()}
 
 
 def replay_device(recording: HidRecording | str | os.PathLike[str], *, clock: Clock | None = None,
-                  realtime: bool = False, device: int = 0) -> HidSim:
+                  realtime: bool = False, device: int = 0, delay: float = 0.0) -> HidSim:
     """A HidSim sending ``recording``'s reports (a HidRecording, or device ``device`` of a hid-recorder file).
 
     ``clock``: by default a new simulated clock (the replay runs as fast as the host reads), or with
     ``realtime`` the real clock (the reports are paced as recorded); a clock given is used as it is, except
-    that a simulated one with ``realtime`` is an InvalidArgument.
+    that a simulated one with ``realtime`` is an InvalidArgument.  ``delay`` seconds pass before the first
+    report: a hidraw reader gets only the reports sent after it opened the device, so a real-time replay
+    opened a few milliseconds after it was made needs one (hid-replay waits for Enter before it injects).
     """
+    if not (isinstance(delay, (int, float)) and 0 <= delay < math.inf):
+        raise InvalidArgument(f"replay delay {delay!r}: a finite number of seconds >= 0")
     if isinstance(recording, (str, os.PathLike)):
         recordings = read_hid_recording(recording)
         if not 0 <= device < len(recordings):
@@ -41,7 +46,8 @@ def replay_device(recording: HidRecording | str | os.PathLike[str], *, clock: Cl
         clock = REAL_CLOCK if realtime else SimulatedClock()
     elif realtime and isinstance(clock, SimulatedClock):
         raise InvalidArgument("a real-time replay needs a real clock, not a SimulatedClock")
-    return HidSim.from_descriptor(recording.descriptor, recording.reports, clock=clock, model="replay",
+    reports = recording.reports if not delay else [(t + delay, r) for t, r in recording.reports]
+    return HidSim.from_descriptor(recording.descriptor, reports, clock=clock, model="replay",
                                   info=hidapi_info(recording))
 
 

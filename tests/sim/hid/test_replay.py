@@ -97,3 +97,14 @@ def test_the_real_hidapi_link_reads_the_replay_as_fast_as_it_asks():
     assert got == [r for _, r in REPORTS]
     assert clock.now() == pytest.approx(2.5, abs=0.01)  # the reads waited on the simulated clock only
     assert link.read_report(1.0) is None
+
+
+def test_a_delay_shifts_every_report():
+    clock = SimulatedClock()
+    sim = replay_device(MOUSE, clock=clock, delay=1.0)
+    clock.advance(0.999)
+    assert sim.take_reports() == []
+    clock.advance(0.002)
+    assert sim.take_timed_reports() == [(1.0, b"\x01\x02\x03"), (1.001, b"\x00\xff\x81"), (1.001, b"\x00\x01\x01")]
+    with pytest.raises(InvalidArgument):
+        replay_device(MOUSE, delay=-1.0)
