@@ -45,6 +45,8 @@ WHOLE_INT_BYTES = 64
 """Reports up to this length are read with one int.from_bytes; longer ones field by field (bounded work)."""
 ARRAY_TABLE_BITS = 12
 """Array elements up to this many bits decode through a lookup table of every raw value."""
+MAX_COMPILED_ELEMENTS = 1024
+"""Reports with more elements are decoded by a loop over a plan, not compiled source (bounded build time and memory)."""
 BATCH_MATRIX_BYTES = 64 * 2**20
 """decode_batch marks array usages in an (N, usages) boolean matrix up to this size, else usage by usage."""
 
@@ -158,6 +160,13 @@ class ReportDecoder:
         self.elements = elements(layout)
         self.variable_keys = frozenset(e.key for e in self.elements if e.key is not None)
         self._repeats = {k: sum(1 for e in self.elements if e.key == k) for k in self.variable_keys}
+        self._tables: dict[Field, str] = {}
+        if len(self.elements) > MAX_COMPILED_ELEMENTS:
+            self.source = None
+            self._plan = [self._step(e) for e in self.elements]
+            self.decode = self._decode_by_plan
+            self.values = self._values_by_plan
+            return
         self.source = self._decode_source()
         self.decode = self.source.compile("decode", f"<hid decoder report {layout.report_id}>")  # type: ignore[assignment]
         self.values = self._values_source().compile("values", f"<hid values report {layout.report_id}>")  # type: ignore[assignment]
@@ -223,8 +232,9 @@ class ReportDecoder:
         """``d[usage] = 1`` for one array element (None as the key of "nothing", popped at the end)."""
         f = e.field
         if f.bit_size <= ARRAY_TABLE_BITS:
-            table = src.const(array_table(f, skip))
-            return f"    d[{table}[{self._expr(e, whole, signed=False)}]] = 1"
+            if f not in self._tables:  # one table per field, shared by its elements
+                self._tables[f] = src.const(array_table(f, skip))
+            return f"    d[{self._tables[f]}[{self._expr(e, whole, signed=False)}]] = 1"
         usage = src.const(lambda value, f=f: array_usage(f, value, skip))
         return f"    d[{usage}({self._expr(e, whole)})] = 1"
 
@@ -234,6 +244,39 @@ class ReportDecoder:
         whole = self._prologue(src)
         src.lines.append("    return [" + ", ".join(self._expr(e, whole) for e in self.elements) + "]")
         return src
+
+    # -- reports too large to compile: one loop over a plan -------------------------------------------------
+
+    def _step(self, e: Element) -> tuple[int, int, int, int, int, Key | None, Callable[[int], Key | None] | None]:
+        """One element as (first byte, end byte, shift, mask, sign bit or 0, variable key, array usage of a value)."""
+        first, last = e.bit_offset // 8, (e.bit_offset + e.bit_size - 1) // 8
+        f = e.field
+        usage_of = None if e.key is not None or not f.is_array else (
+            lambda value, f=f: array_usage(f, value, self.variable_keys))
+        half = 1 << (e.bit_size - 1) if e.signed else 0
+        return first, last + 1, e.bit_offset - 8 * first, (1 << e.bit_size) - 1, half, e.key, usage_of
+
+    def _values_by_plan(self, report: bytes) -> list[int]:
+        if len(report) != self.length or (self.report_id is not None and report[0] != self.report_id):
+            report = self._fit(report)
+        out = []
+        for first, end, shift, mask, half, _, _ in self._plan:
+            value = int.from_bytes(report[first:end], "little") >> shift & mask
+            out.append((value ^ half) - half if half else value)
+        return out
+
+    def _decode_by_plan(self, report: bytes) -> Values:
+        values = self._values_by_plan(report)
+        d: Values = {}
+        for value, (_, _, _, _, _, key, usage_of) in zip(values, self._plan, strict=True):
+            if key is not None:
+                if self._repeats[key] == 1:
+                    d[key] = value
+                else:
+                    d.setdefault(key, []).append(value)  # type: ignore[union-attr]
+            elif usage_of is not None and (usage := usage_of(value)) is not None:
+                d[usage] = 1
+        return d
 
     def _fit(self, report: bytes) -> bytes:
         """A report checked for its ID and brought to the layout's length (the kernel's rules)."""
@@ -349,15 +392,17 @@ class ReportDecoder:
     def _array_indices(self, arr: np.ndarray) -> tuple[list[Key], list[np.ndarray]]:
         """Every usage the arrays can report, and per array element an (N,) array of indices into it (-1: none)."""
         index: dict[Key, int] = {}
+        luts: dict[Field, np.ndarray] = {}
         cols = []
         for e in self.elements:
             if e.key is not None or not e.field.is_array:
                 continue
             f = e.field
-            if f.bit_size <= ARRAY_TABLE_BITS:  # a table over every raw value of the element's bits
-                table = array_table(f, self.variable_keys)
-                lut = np.array([-1 if k is None else index.setdefault(k, len(index)) for k in table], np.int32)
-                cols.append(lut[self._element_batch(arr, e, raw=True)])
+            if f.bit_size <= ARRAY_TABLE_BITS:  # a table over every raw value of the element's bits, one per field
+                if f not in luts:
+                    luts[f] = np.array([-1 if k is None else index.setdefault(k, len(index))
+                                        for k in array_table(f, self.variable_keys)], np.int32)
+                cols.append(luts[f][self._element_batch(arr, e, raw=True)])
                 continue
             possible = [array_usage(f, f.logical_min + i, self.variable_keys) for i in range(len(f.usages))]
             lut = np.array([-1 if k is None else index.setdefault(k, len(index)) for k in possible] + [-1], np.int32)

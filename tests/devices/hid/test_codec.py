@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from pixelpen.devices.hid import codec
 from pixelpen.devices.hid.codec import WHOLE_INT_BYTES, ReportDecoder, ReportEncoder, ShortReportWarning
 from pixelpen.devices.hid.fields import (
     MAIN_CONSTANT,
@@ -334,6 +335,21 @@ def test_decode_batch_agrees_with_decode_row_by_row(lay, noise):
         got = column.tolist()
         want = [s.get(key, 0) for s in single]
         assert [int(g) if not isinstance(g, list) else g for g in got] == want, key
+
+
+@settings(max_examples=100, deadline=None)
+@given(layouts(), st.binary(min_size=0, max_size=80))
+def test_the_loop_decoder_of_huge_reports_agrees_with_the_compiled_one(lay, noise):
+    report = (noise * (lay.length // max(len(noise), 1) + 1))[:lay.length] or bytes(lay.length)
+    if lay.report_id is not None:
+        report = bytes([lay.report_id]) + report[1:]
+    compiled = ReportDecoder(lay)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(codec, "MAX_COMPILED_ELEMENTS", -1)
+        looped = ReportDecoder(lay)
+    assert looped.source is None and compiled.source is not None
+    assert looped.decode(report) == compiled.decode(report)
+    assert looped.values(report) == compiled.values(report)
 
 
 @pytest.mark.slow
