@@ -11,7 +11,7 @@ compiles them into decoders and encoders.
 from __future__ import annotations
 
 import enum
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -173,6 +173,8 @@ class ReportDescriptor:
         self.output_reports = self._space(ReportKind.OUTPUT)
         self.feature_reports = self._space(ReportKind.FEATURE)
         self._decoders: dict[tuple[ReportKind, int | None], ReportDecoder] = {}
+        self._decode_functions: dict[ReportKind, dict[int | None, Callable[[bytes], Values]]] = {
+            k: {} for k in ReportKind}
         self._encoders: dict[tuple[ReportKind, int | None], ReportEncoder] = {}
 
     def _space(self, kind: ReportKind) -> dict[int | None, list[Field]]:
@@ -221,7 +223,12 @@ class ReportDescriptor:
 
     def decode(self, report: bytes, kind: ReportKind = ReportKind.INPUT) -> Values:
         """The values of one report as read from the device, keyed by ``(usage_page, usage_id)``."""
-        return self.decoder(kind, self.report_id_of(report, kind)).decode(report)
+        functions = self._decode_functions[kind]  # the hot path: one dict lookup per report once compiled
+        function = functions.get(report[0] if report and kind in self.numbered_kinds else None)
+        if function is None:
+            rid = self.report_id_of(report, kind)
+            function = functions[rid] = self.decoder(kind, rid).decode
+        return function(report)
 
     def encode(self, values: Mapping[tuple[int, int], int | Sequence[int]], *, report_id: int | None = None,
                kind: ReportKind = ReportKind.INPUT) -> bytes:
