@@ -5,6 +5,8 @@ Desktop, Simulation Controls, Keyboard/Keypad, LED, Button, Ordinal, the common 
 Digitizers; other pages have their page name only, and vendor-defined pages (0xFF00..0xFFFF) are named as
 such.  Keyboard names drop the HUT's leading "Keyboard " (``0x00070004`` is ``"a and A"``); keypad names
 keep "Keypad ".  A usage not in the tables is named by its page and hex ID (``"Generic Desktop 0x00FF"``).
+
+Longer than 600 lines because it is data: the usage tables, one name per line, as the HUT lists them.
 """
 
 from __future__ import annotations
