@@ -362,16 +362,16 @@ class SimInput:
             return self._model(source, clock, options)
         if isinstance(source, (bytes, bytearray, memoryview)):
             sim = HidSim.from_descriptor(bytes(source), options.pop("reports", ()), clock=clock, model="hid")
-            where = "sim_input(descriptor)"
         elif isinstance(source, HidRecording):
             from pixelpen.sim.hid.replay import replay_device
 
             sim = replay_device(source, clock=clock)
-            where = f"sim_input(recording {source.name!r})"
         else:
             raise pytest.UsageError(f"pixelpen: sim_input takes a model name, descriptor bytes or a HidRecording, "
                                     f"not {type(source).__name__}")
-        device = _open_report_device(sim, clock, options, where)
+        from pixelpen.input.registry import open_report_device
+
+        device = open_report_device(sim, clock=clock, **options)
         self._opened.append((device, sim))
         return device
 
@@ -414,20 +414,6 @@ class SimInput:
         finally:
             for name in self._named:
                 forget_simulator(name)
-
-
-def _open_report_device(sim: HidSim, clock: Any, options: dict[str, Any], where: str) -> InputDevice:
-    """``sim`` behind the fake hidapi module and the real HidapiLink, through the semantics its descriptor picks."""
-    from pixelpen.drivers.hidapi import open_hid
-    from pixelpen.input.device import InputDevice
-    from pixelpen.input.sources import report_source
-    from pixelpen.sim.transports.hidapi import SimHidapi
-
-    bus = SimHidapi([sim], clock=clock)
-    link = open_hid(bus.paths()[0], module=bus, clock=clock)
-    source = report_source(link, link.device_id, clock=clock, options=options, where=where)
-    source.bus = bus
-    return InputDevice(source, url=where)
 
 
 def _image_paths(folder: Path, request: pytest.FixtureRequest, made: list[Any]) -> list[tuple[Any, Path]]:

@@ -13,13 +13,13 @@ LEAVES = ("errors", "urls", "options", "colour", "clock", "tomltext")
 """Top-level modules everyone may import; they import only each other."""
 
 FORBIDDEN: dict[str, tuple[str, ...]] = {
-    "sim": ("devices", "display", "commands", "cli"),
-    "raster": ("display", "devices", "drivers", "sim", "commands", "cli"),
-    "vector": ("display", "devices", "drivers", "sim", "commands", "cli"),
-    "geometry": ("display", "devices", "drivers", "sim", "commands", "cli", "raster", "vector", "profiles"),
-    "profiles": ("display", "devices", "drivers", "sim", "commands", "cli", "raster", "vector"),
-    "drivers": ("devices", "display", "sim", "commands", "cli"),
-    "display": ("devices", "drivers", "sim", "commands", "cli"),
+    "sim": ("devices", "display", "input", "commands", "cli"),
+    "raster": ("display", "devices", "drivers", "sim", "input", "commands", "cli"),
+    "vector": ("display", "devices", "drivers", "sim", "input", "commands", "cli"),
+    "geometry": ("display", "devices", "drivers", "sim", "input", "commands", "cli", "raster", "vector", "profiles"),
+    "profiles": ("display", "devices", "drivers", "sim", "input", "commands", "cli", "raster", "vector"),
+    "drivers": ("devices", "display", "sim", "input", "commands", "cli"),
+    "display": ("devices", "drivers", "sim", "input", "commands", "cli"),
     "devices": ("commands", "cli", "input"),
     "input": ("sim", "commands", "cli"),
 }

@@ -69,7 +69,7 @@ def option_sections() -> list[OptionSection]:
 
     return [
         ("options of every sim: and sim:// URL (the simulated line)", TRANSPORT_OPTIONS),
-        *((f"options of the {model} simulator (sim:{model}, sim://{model})", simulator_options(model))
+        *((f"options of the {model} simulator (sim:{model})", simulator_options(model))
           for model in simulator_models()),
     ]
 
@@ -107,11 +107,13 @@ def cmd_devices(args: argparse.Namespace) -> int:
         for name, cls in known_schemes().items()
     }
     sections = {title: {name: plain_text(text) for name, text in describe(specs)} for title, specs in option_sections()}
+    inputs = input_schemes()
     present: list[dict[str, object]] = []
     if not args.no_probe:
         present = [_record(device) for device in discover()]
     if args.json:
-        json.dump({"schemes": schemes, "options": sections, "present": present}, sys.stdout, indent=2, default=str)
+        json.dump({"schemes": schemes, "inputs": inputs, "options": sections, "present": present}, sys.stdout,
+                  indent=2, default=str)
         print()
         return 0
     print("Known schemes:")
@@ -119,6 +121,9 @@ def cmd_devices(args: argparse.Namespace) -> int:
         sim = f"  (sim:{name} too)" if info["simulated"] else ""
         print(f"  {name + ':':10} {info['description']}{sim}")
         _print_options(info["options"])
+    print("\nInput schemes (pixelpen.open_input):")
+    for name, description in inputs.items():
+        print(f"  {name + ':':10} {description}")
     for title, options in sections.items():
         print(f"\n{title[0].upper()}{title[1:]}:")
         _print_options(options)
@@ -126,6 +131,14 @@ def cmd_devices(args: argparse.Namespace) -> int:
     for rec in present:
         print("  " + "  ".join(f"{k}={v}" for k, v in rec.items() if v not in (None, "")))
     return 0
+
+
+def input_schemes() -> dict[str, str]:
+    """The input schemes of ``pixelpen.open_input``, each with the first line of its opener's docstring."""
+    from pixelpen.input.registry import input_opener, input_scheme_names
+
+    return {name: plain_text((input_opener(name).__doc__ or "").strip().partition("\n")[0])
+            for name in input_scheme_names()}
 
 
 def scheme_options(cls: type[Display]) -> dict[str, str]:

@@ -2,14 +2,18 @@
 
 import json
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
 from PIL import Image as PILImage
 
 from pixelpen.cli import main
+from pixelpen.commands.core import SIGNATURE_TOLERANCE_MM, input_demo
 from pixelpen.display.pictfile import save_picture
 from pixelpen.display.picture import Fill, Picture, Polyline, Rectangle, Style
+from pixelpen.drivers.recordings.hidrecorder import read_hid_recording
+from pixelpen.scene import reference_scene
 from pixelpen.sim.base import simulator_models
 
 
@@ -126,9 +130,12 @@ def test_devices_lists_schemes_with_options(capsys):
     line = data["options"]["options of every sim: and sim:// URL (the simulated line)"]
     assert {"speed", "baud", "flow"} <= set(line)
     sections = set(data["options"])
-    assert {f"options of the {m} simulator (sim:{m}, sim://{m})" for m in ("hp7475a", "grbl", "axidraw")} <= sections
-    grbl = data["options"]["options of the grbl simulator (sim:grbl, sim://grbl)"]
+    assert {f"options of the {m} simulator (sim:{m})" for m in ("hp7475a", "grbl", "axidraw")} <= sections
+    grbl = data["options"]["options of the grbl simulator (sim:grbl)"]
     assert grbl["rx_buffer"].startswith("serial RX buffer")
+    assert set(data["inputs"]) == {"sim", "hid", "replay", "evdev", "evemu"}  # pixelpen.open_input's schemes
+    assert data["inputs"]["hid"].startswith("hid:PATH or hid:VID:PID")
+    assert "options of the tablet simulator (sim:tablet)" in sections  # the HID simulators' options too
 
 
 def test_devices_lists_every_option_section_under_its_title(capsys, monkeypatch):
@@ -177,3 +184,24 @@ def test_plain_text_of_rest(rst, plain):
     from pixelpen.commands.core import plain_text
 
     assert plain_text(rst) == plain
+
+
+def test_input_demo_smooths_a_replayed_signature_and_picks_over_the_scene(tmp_path: Path) -> None:
+    result = input_demo(tmp_path)
+    # the signature script writes three words and a flourish, each a pen-down stroke (sim/hid/motion.py)
+    assert result.strokes == 4
+    assert 0 < result.max_error_mm <= SIGNATURE_TOLERANCE_MM
+    assert result.control_points < result.stroke_points  # smoothing, not interpolation
+    (tablet,) = read_hid_recording(tmp_path / result.signature_recording)
+    assert len(tablet.reports) == result.signature_reports and tablet.vendor_id == 0x1209
+    glass = np.asarray(PILImage.open(tmp_path / result.signature_glass).convert("RGB"))
+    assert ((glass[..., 1] > 150) & (glass[..., 2] > 150) & (glass[..., 0] < 100)).sum() > 300  # cyan ink
+    # the echo moved in small frames: far less than a full 240 x 240 RGB565 frame each
+    assert result.echo_frames > 50 and result.echo_bytes_per_frame < 0.01 * 240 * 240 * 2
+    paper = np.asarray(PILImage.open(tmp_path / result.signature_paper).convert("L"))
+    assert (paper < 128).mean() > 0.001
+    items = {i.name for i in reference_scene().items if hasattr(i, "name")} | {
+        f"{type(i).__name__.lower()} {k}" for k, i in enumerate(reference_scene().items)}
+    assert result.picked and set(result.picked) <= items and set(result.hovered) <= items
+    assert set(result.picked) <= set(result.hovered)
+    assert json.loads((tmp_path / "input.json").read_text())["strokes"] == 4
