@@ -52,6 +52,7 @@ from pixelpen.errors import (
     LinkError,
     LinkTimeout,
     ParseError,
+    PixelpenError,
     ProtocolError,
 )
 
@@ -415,6 +416,8 @@ class HidapiLink:
         except OSError as exc:
             raise Disconnected(f"{self.info.path}: the device was removed during a read "
                                f"(hidapi: {self._detail(str(exc))})") from None
+        except PixelpenError:
+            raise
         except ValueError as exc:  # cython-hidapi: "not open"
             raise LinkError(f"{self.info.path}: read on a closed device ({exc})") from None
         return bytes(data) if data else None

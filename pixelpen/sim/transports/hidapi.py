@@ -33,7 +33,7 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from pixelpen.clock import Clock
+from pixelpen.clock import Clock, SimulatedClock
 from pixelpen.drivers.hidapi import MAX_DESCRIPTOR, numbered_reports, top_level_usages
 from pixelpen.errors import Disconnected, ProtocolError
 from pixelpen.sim.base import ReportDevice
@@ -44,6 +44,9 @@ VERSION = "0.15.0"
 _GONE = "No such device"
 _READ_GONE = "hid_read_timeout: unexpected poll error (device disconnected)"
 _STALL = "Broken pipe"
+IDLE_LIMIT = 3600.0
+"""Simulated seconds a handle may wait in a row on a device with nothing more to send before reads raise
+RuntimeError: a host reading without timeout in slices (as HidapiLink does) would otherwise spin forever."""
 MAX_WAITS = 1_000_000
 """Waits one read may make on the clock before the fake calls it a bug (never a hang)."""
 
@@ -77,6 +80,8 @@ class ReportQueue:
         self.drop = drop
         self.dropped = 0
         """Reports lost because the buffer was full (a reader slower than the device)."""
+        self.idle = 0.0
+        """Simulated seconds waited in a row with nothing scheduled (see IDLE_LIMIT)."""
         self._pump = pump if pump is not None else self.pump
         self._queue: deque[bytes] = deque()
 
@@ -106,12 +111,16 @@ class ReportQueue:
                 raise Disconnected(f"{self.device.model}: the device was unplugged")
             self._pump()
             if self._queue:
+                self.idle = 0.0
                 return self._queue.popleft()
             now = self.clock.now()
             if deadline is not None and now >= deadline:
                 return None
             due = self.device.next_event_time()
-            if due is None and deadline is None:
+            if due is None and deadline is not None and isinstance(self.clock, SimulatedClock):
+                self.idle += deadline - now
+            if due is None and (deadline is None or self.idle > IDLE_LIMIT):
+                self.idle = 0.0
                 raise RuntimeError(f"{self.device.model}: a read without timeout would wait forever (the simulated "
                                    "device has nothing more to send); real hidapi would hang here")
             target = min(t for t in (due, deadline) if t is not None)

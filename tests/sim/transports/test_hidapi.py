@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from pixelpen.clock import SimulatedClock
 from pixelpen.drivers.hidapi import enumerate_hid, open_hid
-from pixelpen.errors import Disconnected, LinkError, ProtocolError
+from pixelpen.errors import ConfigError, Disconnected, LinkError, ProtocolError
 from pixelpen.sim.base import Fault
 from pixelpen.sim.hid.descriptors import BOOT_KEYBOARD, BOOT_MOUSE, TRACKBALL
 from pixelpen.sim.hid.device import HidSim
@@ -231,6 +231,24 @@ def test_a_tiny_timeout_still_brings_the_clock_to_its_deadline():
         start = clock.now()
         assert link.read_report(tiny) is None
         assert clock.now() == pytest.approx(start + tiny, abs=1e-15)  # a caller looping to a deadline gets there
+
+
+@pytest.mark.timeout(60)
+def test_a_link_read_without_timeout_on_a_finished_device_raises_instead_of_spinning():
+    clock = SimulatedClock()
+    link = open_hid("1234:0001:M1", module=SimHidapi([mouse(clock)]), clock=clock)
+    assert link.read_report(None) == b"\x01\x05\xfb" and link.read_report(None) == b"\x00\x00\x00"
+    with pytest.raises(RuntimeError, match="would wait forever"):
+        link.read_report(None)  # HidapiLink waits in 0.1 s slices; the fake sees an hour of them with nothing due
+    assert link.read_report(5.0) is None  # a read with a timeout still just times out
+
+
+def test_a_recording_out_of_order_is_a_config_error_through_the_link():
+    clock = SimulatedClock()
+    sim = mouse(clock, reports=[(1.0, bytes([1, 5, 0xFD])), (0.5, bytes(3))])
+    link = open_hid("1234:0001:M1", module=SimHidapi([sim]), clock=clock)
+    with pytest.raises(ConfigError, match=r"report 1 at 0\.5 s comes before report 0"):
+        link.read_report(2.0)
 
 
 def test_link_feature_round_trip_numbered_and_not():
