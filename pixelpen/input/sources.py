@@ -24,7 +24,7 @@ from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
 from pixelpen.devices.hid.events import DeviceId, InputEvent
 from pixelpen.errors import ConfigError, URLError
 from pixelpen.input.device import EventSource, ReportSource
-from pixelpen.options import OptionSpec, boolean, choice, integer, read_options
+from pixelpen.options import OptionSpec, boolean, choice, integer, number, read_options
 from pixelpen.urls import DeviceURL
 
 HID_OPTIONS: tuple[OptionSpec[Any], ...] = (
@@ -35,13 +35,15 @@ HID_OPTIONS: tuple[OptionSpec[Any], ...] = (
 REPLAY_OPTIONS: tuple[OptionSpec[Any], ...] = (
     OptionSpec("device", integer(0), 0, "which device of a multi-device recording (its D: index)"),
     OptionSpec("realtime", boolean, False, "play at the recorded pace on a real clock (else as fast as possible)"),
+    OptionSpec("delay", number(0.0, 3600.0), 0.1, "with realtime: seconds from opening to the first report (a "
+               "reader opened later than the first report's time would miss it)"),
 )
 """Options of ``replay:`` URLs read here."""
 EVDEV_OPTIONS: tuple[OptionSpec[Any], ...] = (
     OptionSpec("grab", boolean, False, "take the device for this reader only (EVIOCGRAB: the desktop stops seeing it)"),
 )
 """Options of ``evdev:`` URLs read here."""
-EVEMU_OPTIONS: tuple[OptionSpec[Any], ...] = REPLAY_OPTIONS[1:]
+EVEMU_OPTIONS: tuple[OptionSpec[Any], ...] = REPLAY_OPTIONS[1:2]
 """Options of ``evemu:`` URLs read here."""
 
 
@@ -92,6 +94,10 @@ def open_sim(url: DeviceURL, *, clock: Clock | None, options: dict[str, Any]) ->
     sim_names = {spec.name for spec in sim_base.simulator_options(model)} | {"id"}
     device = sim_base.create_simulator(model, clock=clock,
                                        **{k: v for k, v in url.options.items() if k in sim_names})
+    if not isinstance(device, sim_base.ReportDevice):
+        device.close()
+        raise URLError(f"{url}: the {model} simulator is reached through {sim_base.reached_through(device)}, "
+                       "not HID reports")
     semantics_options = {k: v for k, v in url.options.items() if k not in sim_names} | options
     return simulated_source(device, clock=clock, options=semantics_options, where=str(url))
 
@@ -117,7 +123,8 @@ def open_replay(url: DeviceURL, *, clock: Clock | None, options: dict[str, Any])
     if index >= len(recordings):
         raise URLError(f"{url}: device={index}, but the recording holds {len(recordings)} device(s)")
     replay = importlib.import_module("pixelpen.sim.hid.replay")
-    device = replay.replay_device(recordings[index], clock=clock, realtime=own["realtime"])
+    device = replay.replay_device(recordings[index], clock=clock, realtime=own["realtime"],
+                                  delay=own["delay"] if own["realtime"] else 0.0)
     return simulated_source(device, clock=clock, options=rest | options, where=str(url))
 
 

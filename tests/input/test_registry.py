@@ -88,6 +88,20 @@ def test_replay_url_plays_the_reports_after_the_first(tmp_path: Path) -> None:
     assert [(e.dx, e.dy) for e in events if isinstance(e, Motion)][-1] == (-3, 2)  # 0xfd = -3 (int8)
 
 
+def test_a_realtime_replay_keeps_its_first_report(tmp_path: Path) -> None:
+    path = tmp_path / "mouse.hid"
+    path.write_text(RECORDING)
+    with open_input(f"replay:{path}?realtime=true&delay=0.05") as dev:  # the real clock: opening takes time
+        events = list(dev.events(timeout=0.3))
+    assert [(e.dx, e.dy) for e in events if isinstance(e, Motion)] == [(5, -5), (-3, 2)]
+
+
+@pytest.mark.parametrize(("model", "reach"), [("hp7475a", "a byte stream"), ("st7789", "a panel bus")])
+def test_a_simulator_without_hid_reports_is_no_input_device(model: str, reach: str) -> None:
+    with pytest.raises(URLError, match=f"reached through {reach}"):
+        open_input(f"sim:{model}")
+
+
 def test_replay_url_names_a_missing_device_index(tmp_path: Path) -> None:
     path = tmp_path / "mouse.hid"
     path.write_text(RECORDING)

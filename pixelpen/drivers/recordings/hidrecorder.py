@@ -327,7 +327,10 @@ def _open(path_or_text: str | bytes | os.PathLike[str] | TextIO, stack: ExitStac
     if isinstance(path_or_text, str) and ("\n" in path_or_text or "\r" in path_or_text):
         return io.StringIO(path_or_text), "<hid-recorder text>", None
     if isinstance(path_or_text, (str, os.PathLike)):
-        f = stack.enter_context(open(path_or_text, encoding="utf-8", errors="replace"))  # noqa: SIM115
+        try:
+            f = stack.enter_context(open(path_or_text, encoding="utf-8", errors="replace"))  # noqa: SIM115
+        except OSError as exc:
+            raise ParseError(f"cannot read the recording: {exc.strerror or exc}", source=str(path_or_text)) from None
         return f, str(path_or_text), os.fstat(f.fileno()).st_size
     if hasattr(path_or_text, "readline"):
         return path_or_text, str(getattr(path_or_text, "name", "<hid-recorder stream>")), None

@@ -376,3 +376,10 @@ def test_record_link_writes_each_report_and_what_came_before_an_unplug():
     assert read_hid_recording(out.getvalue())[0].reports == []
     with pytest.raises(InvalidArgument):
         record_link(link, io.StringIO(), link.device_id, duration=math.nan)
+
+
+def test_a_missing_file_is_a_parse_error_naming_it(tmp_path):
+    missing = tmp_path / "nope.hid"
+    with pytest.raises(ParseError, match="cannot read the recording") as caught:
+        read_hid_recording(missing)
+    assert str(missing) in str(caught.value)
