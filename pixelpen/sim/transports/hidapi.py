@@ -35,8 +35,8 @@ from typing import Any
 
 from pixelpen.clock import Clock, SimulatedClock
 from pixelpen.drivers.hidapi import MAX_DESCRIPTOR, numbered_reports, top_level_usages
-from pixelpen.errors import Disconnected, ProtocolError
-from pixelpen.sim.base import ReportDevice
+from pixelpen.errors import ConfigError, Disconnected, ProtocolError
+from pixelpen.sim.base import ReportDevice, reached_through
 
 BUS_VIRTUAL = 5
 """hidapi's HID_API_BUS_VIRTUAL (uhid and other virtual devices)."""
@@ -178,7 +178,10 @@ class SimHidapi:
 
     # ---- the simulated bus -------------------------------------------------------------------
     def plug(self, device: ReportDevice) -> str:
-        """Plug a simulated device in; its new path (``sim:<model>:<n>``)."""
+        """Plug a simulated device in; its new path (``sim:<model>:<n>``); ConfigError for a non-HID simulator."""
+        if not isinstance(device, ReportDevice):
+            raise ConfigError(f"the {getattr(device, 'model', type(device).__name__)} simulator is reached through "
+                              f"{reached_through(device)}, not HID reports")
         path = f"sim:{device.model}:{self._plugs}"
         self._plugs += 1
         self._slots.append(_Slot(path.encode(), device, self.clock if self.clock is not None else device.clock))

@@ -344,3 +344,11 @@ def test_any_report_reaches_the_device_unchanged_through_link_and_fake(report, n
     link.send_feature(report)
     rid = report[0] if numbered else 0
     assert sim.firmware.outputs[rid] == report and link.get_feature(rid) == report
+
+
+def test_a_plotter_simulator_cannot_be_plugged_in_as_a_hid_device():
+    from pixelpen.sim.base import create_simulator
+
+    plotter = create_simulator("hp7475a", clock=SimulatedClock())
+    with pytest.raises(ConfigError, match="hp7475a simulator is reached through a byte stream"):
+        SimHidapi([plotter])
