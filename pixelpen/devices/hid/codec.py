@@ -31,6 +31,7 @@ limit; the codec checks it again).
 from __future__ import annotations
 
 import warnings
+from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -159,7 +160,7 @@ class ReportDecoder:
         self.length = layout.length
         self.elements = elements(layout)
         self.variable_keys = frozenset(e.key for e in self.elements if e.key is not None)
-        self._repeats = {k: sum(1 for e in self.elements if e.key == k) for k in self.variable_keys}
+        self._repeats = Counter(e.key for e in self.elements if e.key is not None)
         self._tables: dict[Field, str] = {}
         if len(self.elements) > MAX_COMPILED_ELEMENTS:
             self.source = None
@@ -385,6 +386,10 @@ class ReportDecoder:
                 columns.setdefault(e.key, []).append(self._element_batch(arr, e))
         out: dict[Key, np.ndarray] = {}
         for key, cols in columns.items():
+            if len(cols) > 1 and len({(c.ndim, c.dtype) for c in cols}) > 1:
+                raise InvalidArgument(f"report {self.report_id}: usage {_name(key)} repeats in elements of different "
+                                      "widths (one over 64 bits, or 64-bit unsigned beside narrower): decode these "
+                                      "reports one by one")
             out[key] = cols[0] if len(cols) == 1 else np.stack(cols, axis=1)
         out.update(self._array_presence(arr))
         return out
@@ -398,6 +403,9 @@ class ReportDecoder:
             if e.key is not None or not e.field.is_array:
                 continue
             f = e.field
+            if f.bit_size > 64:
+                raise InvalidArgument(f"report {self.report_id}: the array at bit {f.bit_offset} has elements of "
+                                      f"{f.bit_size} bits; batches decode arrays of up to 64 (decode one by one)")
             if f.bit_size <= ARRAY_TABLE_BITS:  # a table over every raw value of the element's bits, one per field
                 if f not in luts:
                     luts[f] = np.array([-1 if k is None else index.setdefault(k, len(index))

@@ -15,7 +15,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from pixelpen.errors import ParseError
+from pixelpen.errors import InvalidArgumentType, ParseError
 
 if TYPE_CHECKING:
     from pixelpen.devices.hid.codec import ReportDecoder, ReportEncoder  # codec imports this module
@@ -223,6 +223,8 @@ class ReportDescriptor:
 
     def decode(self, report: bytes, kind: ReportKind = ReportKind.INPUT) -> Values:
         """The values of one report as read from the device, keyed by ``(usage_page, usage_id)``."""
+        if not isinstance(report, (bytes, bytearray, memoryview)):
+            raise InvalidArgumentType(f"a report is bytes, not {type(report).__name__} (bytes(row) for a numpy row)")
         functions = self._decode_functions[kind]  # the hot path: one dict lookup per report once compiled
         function = functions.get(report[0] if report and kind in self.numbered_kinds else None)
         if function is None:

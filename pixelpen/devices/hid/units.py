@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 from pixelpen.devices.hid.fields import Field
-from pixelpen.errors import InvalidArgument
+from pixelpen.errors import InvalidArgument, ParseError
 
 SYSTEMS = {1: "SI linear", 2: "SI rotation", 3: "English linear", 4: "English rotation"}
 """The unit system nibble."""
@@ -150,7 +150,16 @@ def to_physical(field: Field, value: float) -> float:
         pmin, pmax = field.logical_min, field.logical_max
     span = field.logical_max - field.logical_min
     physical = pmin + (value - field.logical_min) * (pmax - pmin) / span if span else float(pmin)
+    if abs(field.unit_exponent) > MAX_UNIT_EXPONENT:
+        raise ParseError(f"report {field.report_id}, field at bit {field.bit_offset}: unit exponent "
+                         f"{field.unit_exponent} is outside ±{MAX_UNIT_EXPONENT} (no physical quantity)",
+                         offset=field.offset, token=field.unit_exponent)
     return physical * 10.0 ** field.unit_exponent
+
+
+MAX_UNIT_EXPONENT = 38
+"""Unit exponents beyond this size (a 2- or 4-byte Unit Exponent item, which the kernel accepts) give no physical
+value: 10**±38 is past any real device's range and near float32's, and 10**±309 overflows a float."""
 
 
 def _unit_error(field: Field, wanted: str) -> InvalidArgument:

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pixelpen.devices.hid import codec
+from pixelpen.devices.hid import codec, parse_descriptor
 from pixelpen.devices.hid.codec import WHOLE_INT_BYTES, ReportDecoder, ReportEncoder, ShortReportWarning
 from pixelpen.devices.hid.fields import (
     MAIN_CONSTANT,
@@ -364,3 +364,16 @@ def test_random_reports_never_crash_the_decoder():
                 dec.values(report)
             except ParseError:
                 pass
+
+
+@pytest.mark.parametrize("hexdesc", [
+    "0509a101090115002501754895018102090175088102c0",  # Button 1 as a 72-bit and an 8-bit element
+    "0509a1010901150027ffffffff754095018102090175088102c0",  # as a 64-bit unsigned and an 8-bit one
+    "0507a1011900296515ff2505754895018100c0",  # an array of 72-bit elements
+])
+def test_batches_refuse_what_they_cannot_hold_exactly(hexdesc):
+    d = parse_descriptor(bytes.fromhex(hexdesc))
+    (kind, rid), lay = next(iter(d.layouts.items()))
+    with pytest.raises(InvalidArgument, match="one by one"):
+        d.decoder(kind, rid).decode_batch(bytes(3 * lay.length))
+    d.decode(bytes(lay.length))  # one by one they decode

@@ -30,3 +30,15 @@ def test_an_unnumbered_input_space_beside_a_numbered_feature_space():
     assert d.report_id_of(b"\x07") is None
     assert d.decode(b"\x07") == {(0xFF00, 2): 7}  # the first byte is data, not an ID
     assert d.decode(b"\x01\x2a", ReportKind.FEATURE) == {(0xFF00, 3): 0x2A}
+
+
+def test_a_report_that_is_not_bytes_is_refused_by_type():
+    import numpy as np
+    import pytest
+
+    from pixelpen.errors import InvalidArgumentType
+
+    d = parse_descriptor(MIXED)
+    for bad in (None, 5, "abc", [7], np.zeros(1, np.uint8)):
+        with pytest.raises(InvalidArgumentType, match="a report is bytes"):
+            d.decode(bad)  # type: ignore[arg-type]

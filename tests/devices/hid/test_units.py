@@ -9,7 +9,7 @@ import pytest
 
 from pixelpen.devices.hid.fields import MAIN_VARIABLE, Field, ReportKind
 from pixelpen.devices.hid.units import describe_unit, resolution, to_degrees, to_mm, to_physical
-from pixelpen.errors import InvalidArgument
+from pixelpen.errors import InvalidArgument, ParseError
 
 X, Y, RZ, WHEEL, TILT_X, PRESSURE, VENDOR = 0x10030, 0x10031, 0x10035, 0x10038, 0xD003D, 0xD0030, 0xFF000001
 
@@ -82,3 +82,11 @@ def test_physical_values():
         to_mm(dataclasses.replace(tilt, usages=(X,)), 1)
     with pytest.raises(InvalidArgument, match="is not an angle"):
         to_degrees(x, 1)
+
+
+@pytest.mark.parametrize("exponent", [1024, -400, 39])
+def test_an_unphysical_unit_exponent_is_a_parse_error_not_an_overflow(exponent):
+    x = axis(X, 0, 44800, 0, 22400, 0x11, exponent)  # a 2-byte Unit Exponent item, which the kernel accepts
+    with pytest.raises(ParseError, match=f"unit exponent {exponent} is outside"):
+        to_mm(x, 100)
+    assert to_mm(axis(X, 0, 44800, 0, 22400, 0x11, 38), 1) > 1e30  # the largest accepted
