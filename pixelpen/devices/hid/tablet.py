@@ -4,7 +4,7 @@
 Microsoft's pen protocol and the kernel's hid-input map them:
 
 * **Position** — absolute X/Y (Generic Desktop 0x30/0x31) as ``x``/``y`` normalised 0..1 over the
-  logical range (clamped) and ``x_mm``/``y_mm`` in millimetres from the physical range, unit and
+  logical range (clamped) and ``x_mm``/``y_mm`` in millimetres (clamped alike) from the physical range, unit and
   exponent (:func:`pixelpen.devices.hid.units.to_mm`, exact where the kernel's resolution rounds to
   whole counts per mm), or from the ``size`` option (``224x140``, ``8.8x5.5in``: the length the
   logical range spans).  Without either, mm are NaN and :meth:`Tablet.describe` says so.
@@ -196,12 +196,13 @@ class PositionAxis:
         return min(1.0, max(0.0, self.fraction(raw)))
 
     def mm(self, raw: int) -> float:
-        """The position in mm (physical, from the unit; or along the given size); NaN when unknown."""
+        """The position in mm (physical, from the unit; or along the given size), clamped to the surface as
+        ``normalised`` is; NaN when unknown."""
         if self.length_mm is not None:
-            return self.fraction(raw) * self.length_mm
+            return self.normalised(raw) * self.length_mm
         if not self.known:
             return math.nan
-        return units.to_mm(self.field, raw)
+        return units.to_mm(self.field, min(max(raw, self.field.logical_min), self.field.logical_max))
 
 
 def position_axes(fields: Sequence[Field], size: tuple[float, float] | None) -> tuple[PositionAxis | None, ...]:

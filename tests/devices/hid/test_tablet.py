@@ -137,6 +137,12 @@ def test_position_pressure_tilt_and_serial_decoded_by_hand(tablet):
     assert pen.serial == 0xDEADBEEF
 
 
+def test_a_position_past_the_logical_range_is_held_at_the_edge_in_mm_too(tablet):
+    [pen] = tablet.feed(pen_report(IN_RANGE | TIP, 20000, 11000), 0.0)  # logical maxima 16500 and 10500
+    assert (pen.x, pen.y) == (1.0, 1.0)
+    assert pen.x_mm == pytest.approx(8.25 * 25.4) and pen.y_mm == pytest.approx(5.25 * 25.4)  # the surface's edge
+
+
 def test_linear_pressure_and_the_pressure_range(tablet):
     [pen] = tablet.feed(pen_report(IN_RANGE | TIP, 0, 0, 512), 0.0)
     assert pen.pressure == pytest.approx(512 / 1023)
