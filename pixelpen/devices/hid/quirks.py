@@ -79,10 +79,10 @@ _KEYTOUCH_KEYBOARD = bytes([
 QUIRKS: list[Quirk] = [
     # Usage Maximum and Logical Maximum 0x7FFF (over HID_MAX_USAGES) become 0x2FFF on interface 1; the kernel
     # also checks the interface number, which a descriptor alone does not carry.
-    Quirk("holtek-mouse a067/a072", HOLTEK_ALT, (0xA067, 0xA072), "drivers/hid/hid-holtek-mouse.c",
+    Quirk("holtek-mouse a067/a072/a0c2", HOLTEK_ALT, (0xA067, 0xA072, 0xA0C2), "drivers/hid/hid-holtek-mouse.c",
           expect=((115, 0xFF), (116, 0x7F), (120, 0xFF), (121, 0x7F)), patch=((116, 0x2F), (121, 0x2F)),
           min_size=122),
-    Quirk("holtek-mouse a04a/a081", HOLTEK_ALT, (0xA04A, 0xA081), "drivers/hid/hid-holtek-mouse.c",
+    Quirk("holtek-mouse a04a/a070/a081", HOLTEK_ALT, (0xA04A, 0xA070, 0xA081), "drivers/hid/hid-holtek-mouse.c",
           expect=((106, 0xFF), (107, 0x7F), (111, 0xFF), (112, 0x7F)), patch=((107, 0x2F), (112, 0x2F)),
           min_size=113),
     # Model O/O-/D: consumer Inputs marked Constant (0x81 0x03) become Data, Variable, Relative (0x81 0x06).

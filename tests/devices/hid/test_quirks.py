@@ -31,6 +31,8 @@ def test_holtek_fix_patches_the_two_maxima_to_0x2fff():
     assert fixed[107] == 0x2F and fixed[112] == 0x2F and len(fixed) == len(data)
     assert fixed[:107] == data[:107] and fixed[108:112] == data[108:112] and fixed[113:] == data[113:]
     assert len(notes) == 1 and "hid-holtek-mouse.c" in notes[0] and "04d9:a04a" in notes[0]
+    for product in (0xA070, 0xA081):  # the other ids of the same case in Linux 6.6's holtek_mouse_report_fixup
+        assert fixup(data, 0x04D9, product)[0] == fixed
 
 
 def test_holtek_fix_needs_the_ids_and_the_original_bytes():
