@@ -31,7 +31,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from pixelpen.devices.hid.fields import Collection, Field, ReportDescriptor, ReportKind, ReportLayout
-from pixelpen.devices.hid.items import exponent_value, scan, signed_value
+from pixelpen.devices.hid.items import exponent_value, s32, scan, signed_value
 from pixelpen.devices.hid.quirks import fixup
 from pixelpen.errors import ParseError
 
@@ -59,11 +59,6 @@ _LOCAL_EXTRAS = {0x38: "designator_index", 0x48: "designator_minimum", 0x58: "de
 """Local items kept for the dump, by prefix without its size bits."""
 _REPORT_BITS = (MAX_BUFFER_SIZE - 1) * 8
 """Bits a report may hold after its ID byte (``hid_add_field``'s check)."""
-
-
-def _s32(value: int) -> int:
-    value &= _M32
-    return value - (1 << 32) if value & 0x80000000 else value
 
 
 @dataclass(slots=True)
@@ -205,7 +200,7 @@ def _parse(items: list[tuple[int, int, int]], data: bytes, source: str | None, r
                     report = reports[tag, rid] = _Report(_KINDS[tag], rid or None)
                 lo, hi = lmin, lmax
                 if lo < 0:
-                    hi = _s32(hi)
+                    hi = s32(hi)
                     if hi < lo:
                         raise error(f"Logical Maximum {hi} is below Logical Minimum {lo}", offset)
                 elif hi & _M32 < lo:
@@ -233,7 +228,7 @@ def _parse(items: list[tuple[int, int, int]], data: bytes, source: str | None, r
                         page = usage_page & 0xFFFF
                     report.fields.append(Field(
                         report.kind, report.report_id, page, kept, start + 8 if rid else start, report_size,
-                        report_count, lo, hi, pmin, _s32(pmax) if pmin < 0 else pmax & _M32, unit, exponent,
+                        report_count, lo, hi, pmin, s32(pmax) if pmin < 0 else pmax & _M32, unit, exponent,
                         value, open_[-1] if open_ else None, offset, dict(extra) if extra else {}))
             elif t == 0xA0:
                 if len(open_) == MAX_COLLECTION_DEPTH:

@@ -77,6 +77,12 @@ def signed_value(prefix: int, value: int) -> int:
     return value - (1 << bits) if bits and value >> (bits - 1) else value
 
 
+def s32(value: int) -> int:
+    """An int wrapped to the kernel's ``__s32`` (how it stores item data and how its wrapping multiplies end)."""
+    value &= 0xFFFFFFFF
+    return value - (1 << 32) if value & 0x80000000 else value
+
+
 def exponent_value(prefix: int, value: int) -> int:
     """A Unit Exponent item's value: 0..15 is the spec's 4-bit two's complement nibble (0x0E is -2), anything
     else the signed value itself (0xFE is -2 too), as the kernel reads both."""

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 from pixelpen.devices.hid.fields import Field
+from pixelpen.devices.hid.items import s32
 from pixelpen.errors import InvalidArgument, ParseError
 
 SYSTEMS = {1: "SI linear", 2: "SI rotation", 3: "English linear", 4: "English rotation"}
@@ -66,12 +67,6 @@ def describe_unit(unit: int, exponent: int = 0) -> str:
     return text + f"·10^{exponent}" if exponent else text
 
 
-def _s32(value: int) -> int:
-    """An int wrapped to the kernel's __s32 (its overflow checks compare after a wrapping multiply)."""
-    value &= 0xFFFFFFFF
-    return value - (1 << 32) if value & 0x80000000 else value
-
-
 def axis_kind(field: Field, usage: int | None = None) -> str | None:
     """``"length"``, ``"angle"`` or ``"pressure"``: by the usage when it is an axis the kernel knows, else by
     the unit (an extension: the kernel gives such usages no absolute axis); None for anything else."""
@@ -97,8 +92,8 @@ def resolution(field: Field, usage: int | None = None) -> int | None:
     inverted extents, an overflow of its 32-bit arithmetic).  ``usage`` picks the axis (default: the field's
     first usage; see :func:`axis_kind`)."""
     exponent = field.unit_exponent
-    logical = _s32(field.logical_max - field.logical_min)
-    physical = _s32(field.physical_max - field.physical_min)
+    logical = s32(field.logical_max - field.logical_min)
+    physical = s32(field.physical_max - field.physical_min)
     if logical <= 0 or physical <= 0:
         return None
     kind = axis_kind(field, usage)
@@ -106,7 +101,7 @@ def resolution(field: Field, usage: int | None = None) -> int | None:
         if field.unit == UNIT_CM:  # centimetres to millimetres
             exponent += 1
         elif field.unit == UNIT_INCH:  # inches to millimetres: x 25.4
-            physical, prev = _s32(physical * 254), physical
+            physical, prev = s32(physical * 254), physical
             if physical < prev:
                 return None
             exponent -= 1
@@ -114,7 +109,7 @@ def resolution(field: Field, usage: int | None = None) -> int | None:
             return None
     elif kind == "angle":
         if field.unit == UNIT_DEGREE:  # degrees to radians: x 57.3
-            logical, prev = _s32(logical * 573), logical
+            logical, prev = s32(logical * 573), logical
             if logical < prev:
                 return None
             exponent += 1
@@ -122,7 +117,7 @@ def resolution(field: Field, usage: int | None = None) -> int | None:
             return None
     elif kind == "pressure":
         if field.unit == UNIT_NEWTON:  # newtons to grams: x 101.97
-            physical, prev = _s32(physical * 10197), physical
+            physical, prev = s32(physical * 10197), physical
             if physical < prev:
                 return None
             exponent -= 2
@@ -131,11 +126,11 @@ def resolution(field: Field, usage: int | None = None) -> int | None:
     else:
         return None
     for _ in range(max(0, -exponent)):
-        logical, prev = _s32(logical * 10), logical
+        logical, prev = s32(logical * 10), logical
         if logical < prev:
             return None
     for _ in range(max(0, exponent)):
-        physical, prev = _s32(physical * 10), physical
+        physical, prev = s32(physical * 10), physical
         if physical < prev:
             return None
     res = (logical + physical // 2) // physical  # DIV_ROUND_CLOSEST of two positive values
