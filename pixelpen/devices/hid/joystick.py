@@ -43,7 +43,7 @@ from typing import Any, ClassVar
 
 from pixelpen.devices.hid import units
 from pixelpen.devices.hid.events import Axis, Button, DeviceId, Hat, InputEvent
-from pixelpen.devices.hid.fields import Field, ReportDescriptor, ReportKind, Values
+from pixelpen.devices.hid.fields import Field, ReportDescriptor, Values
 from pixelpen.devices.hid.gamecontrollerdb import GamepadMapping, GamepadState, parse_mapping
 from pixelpen.devices.hid.semantics import read_semantics_options
 from pixelpen.errors import ConfigError
@@ -347,7 +347,7 @@ class Joystick:
     def feed(self, report: bytes, time: float) -> list[InputEvent]:
         """The events of one input report: changed axes, then hats, then button edges."""
         report_id = self.descriptor.report_id_of(report)
-        values = self.descriptor.decoder(ReportKind.INPUT, report_id).decode(report)
+        values = self.descriptor.decode(report)  # the per-report compiled function, found by one lookup
         for axis in self._axes_by_report.get(report_id, ()):
             self._raw[axis.name] = _element(values, axis.usage, axis.index)
         changed = self._process()

@@ -213,7 +213,7 @@ class Keyboard:
         if plan is None:
             report_id = self.descriptor.report_id_of(report)
             if report_id not in self._plans:
-                self.descriptor.decoder(ReportKind.INPUT, report_id)  # a ParseError for an ID the device lacks
+                self.descriptor.layout(ReportKind.INPUT, report_id)  # a ParseError for an ID the device lacks
                 return []
             plan = self._plans[report_id]
         values = plan.decoder.values(report)

@@ -265,7 +265,7 @@ class Mouse:
     def feed(self, report: bytes, time: float) -> list[InputEvent]:
         """The events of one input report: Motion (or Axis x/y), Wheel, then Button edges."""
         report_id = self.descriptor.report_id_of(report)
-        values = self.descriptor.decoder(ReportKind.INPUT, report_id).decode(report)
+        values = self.descriptor.decode(report)  # the per-report compiled function, found by one lookup
         plan = self._plans[report_id]
         events: list[InputEvent] = []
         if self.absolute:

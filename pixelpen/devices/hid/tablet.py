@@ -41,7 +41,7 @@ import numpy as np
 
 from pixelpen.devices.hid import units
 from pixelpen.devices.hid.events import DeviceId, InputEvent, Pen
-from pixelpen.devices.hid.fields import Field, ReportDescriptor, ReportKind, Values
+from pixelpen.devices.hid.fields import Field, ReportDescriptor, Values
 from pixelpen.devices.hid.semantics import read_semantics_options
 from pixelpen.errors import ConfigError, InvalidArgument
 from pixelpen.options import OptionSpec
@@ -300,7 +300,7 @@ class Tablet:
     def feed(self, report: bytes, time: float) -> list[InputEvent]:
         """The events of one input report: a Pen event when the pen's state changed (or it left proximity)."""
         report_id = self.descriptor.report_id_of(report)
-        values = self.descriptor.decoder(ReportKind.INPUT, report_id).decode(report)
+        values = self.descriptor.decode(report)  # the per-report compiled function, found by one lookup
         plan = self._plans.get(report_id)
         if plan is None:
             return []

@@ -230,7 +230,7 @@ class TouchScreen:
         report_id = self.descriptor.report_id_of(report)
         plan = self._plans.get(report_id)
         if plan is None:
-            self.descriptor.decoder(ReportKind.INPUT, report_id)  # a ParseError for an ID the device lacks
+            self.descriptor.layout(ReportKind.INPUT, report_id)  # a ParseError for an ID the device lacks
             return []
         values = plan.decoder.values(report)
         contacts = [self._contact(i, slot, values) for i, slot in enumerate(plan.slots)]
