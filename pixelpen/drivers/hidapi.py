@@ -78,7 +78,8 @@ def short_items(descriptor: bytes) -> Iterator[tuple[int, int, int, int]]:
     i, n = 0, len(descriptor)
     while i < n:
         prefix = descriptor[i]
-        if prefix == 0xFE:  # long item: bDataSize, bLongItemTag, data (§6.2.2.3)
+        if prefix >> 4 == 0xF:  # long item: bDataSize, bLongItemTag, data (§6.2.2.3); any tag-15 prefix, as the
+            # kernel's fetch_item and the parser (devices/hid/items.py) read it
             i += 3 + (descriptor[i + 1] if i + 1 < n else 0)
             continue
         size = (0, 1, 2, 4)[prefix & 0x03]

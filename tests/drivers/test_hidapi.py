@@ -131,6 +131,7 @@ def test_numbered_reports_needs_a_report_id_item():
     assert numbered_reports(TRACKBALL)
     assert numbered_reports(bytes([0xFE, 0x02, 0xF0, 0xAA, 0xBB, 0x85, 0x01]))  # after a long item
     assert not numbered_reports(bytes([0xFE, 0x02, 0xF0, 0x85, 0x01]))  # 85 01 is the long item's data
+    assert not numbered_reports(bytes([0xF1, 0x02, 0x00, 0x85, 0x01]))  # any tag-15 prefix is a long item (kernel)
 
 
 def test_top_level_usages_one_per_application_collection():
