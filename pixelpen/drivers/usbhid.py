@@ -45,7 +45,6 @@ from pixelpen.errors import (
 
 HID_CLASS = 3
 BOOT_SUBCLASS = 1
-BOOT_PROTOCOLS = {1: "keyboard", 2: "mouse"}
 DESC_HID, DESC_REPORT = 0x21, 0x22
 GET_DESCRIPTOR = 0x06
 GET_REPORT, GET_IDLE, GET_PROTOCOL = 0x01, 0x02, 0x03

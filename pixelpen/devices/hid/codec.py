@@ -71,8 +71,8 @@ class Element:
 
     @property
     def signed(self) -> bool:
-        """Two's complement (the kernel's rule: logical minimum < 0)."""
-        return self.field.logical_min < 0
+        """Two's complement (the kernel's rule, ``Field.is_signed``)."""
+        return self.field.is_signed
 
 
 def elements(layout: ReportLayout) -> tuple[Element, ...]:

@@ -16,8 +16,6 @@ from pixelpen.errors import ParseError
 
 MAIN, GLOBAL, LOCAL, RESERVED = 0, 1, 2, 3
 """The item types (bType)."""
-LONG_ITEM_TAG = 15
-"""The tag nibble that makes a prefix a long item (0xFE in the spec; 0xF0..0xFF in the kernel)."""
 
 TYPE_NAMES = ("Main", "Global", "Local", "Reserved")
 """Item type names by bType."""

@@ -15,8 +15,6 @@ from pixelpen.devices.hid.fields import Field
 from pixelpen.devices.hid.items import s32
 from pixelpen.errors import InvalidArgument, ParseError
 
-SYSTEMS = {1: "SI linear", 2: "SI rotation", 3: "English linear", 4: "English rotation"}
-"""The unit system nibble."""
 BASE_UNITS = {
     1: ("cm", "g", "s", "K", "A", "cd"),
     2: ("rad", "g", "s", "K", "A", "cd"),
