@@ -135,6 +135,8 @@ class _Slot:
     path: bytes
     device: ReportDevice
     clock: Clock
+    numbered: bool
+    """The device numbers its reports (its descriptor has a Report ID item): read once, at plug-in."""
     queues: list[ReportQueue] = field(default_factory=list)
 
     def pump(self, joining: ReportQueue | None = None) -> None:
@@ -184,7 +186,8 @@ class SimHidapi:
                               f"{reached_through(device)}, not HID reports")
         path = f"sim:{device.model}:{self._plugs}"
         self._plugs += 1
-        self._slots.append(_Slot(path.encode(), device, self.clock if self.clock is not None else device.clock))
+        self._slots.append(_Slot(path.encode(), device, self.clock if self.clock is not None else device.clock,
+                                 numbered_reports(device.report_descriptor)))
         return path
 
     def unplug(self, which: str | bytes | ReportDevice) -> None:
@@ -336,7 +339,7 @@ class SimHidDevice:
         device = self._device()
         if max_length < 0:
             raise ValueError("max_length must not be negative")
-        numbered = numbered_reports(device.report_descriptor)
+        numbered = self._open_slot().numbered
         if not numbered and report_num != 0:
             self._error = f"ioctl (GFEATURE): {_STALL}"
             raise OSError("read error")
@@ -376,22 +379,23 @@ class SimHidDevice:
         raise OSError("get indexed string error")
 
     # ---- helpers ----------------------------------------------------------------------------------
-    def _device(self) -> ReportDevice:
+    def _open_slot(self) -> _Slot:
         if self._slot is None:
             raise ValueError("not open")
-        return self._slot.device
+        return self._slot
+
+    def _device(self) -> ReportDevice:
+        return self._open_slot().device
 
     def _info(self) -> dict[str, Any]:
-        self._device()
-        assert self._slot is not None
-        return SimHidapi._entry(self._slot)
+        return SimHidapi._entry(self._open_slot())
 
     def _strip(self, data: bytes) -> bytes | None:
         """The report the device receives for a hidapi buffer (ID rules); None with error() set when refused."""
         if not data:
             self._error = "Zero buffer/length"
             return None
-        numbered = numbered_reports(self._device().report_descriptor)
+        numbered = self._open_slot().numbered
         if numbered != (data[0] != 0):  # numbered: ID 1..255 first; unnumbered: 0x00 first
             self._error = _STALL
             return None
