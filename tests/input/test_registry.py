@@ -12,7 +12,7 @@ import pytest
 from pixelpen.clock import SimulatedClock
 from pixelpen.devices.hid.events import Button, Motion, Pen
 from pixelpen.errors import URLError
-from pixelpen.input import open_input
+from pixelpen.input import open_input, registry
 from pixelpen.input.registry import BUILTIN_INPUTS, input_opener, input_scheme_names, register_input
 from pixelpen.sim.hid.descriptors import BOOT_MOUSE
 
@@ -34,10 +34,11 @@ def test_unknown_scheme_lists_the_known() -> None:
         input_opener("nope")
 
 
-def test_register_input_refuses_a_second_owner() -> None:
+def test_register_input_refuses_a_second_owner(monkeypatch: pytest.MonkeyPatch) -> None:
     def opener(url, *, clock, options):  # type: ignore[no-untyped-def]
         raise AssertionError
 
+    monkeypatch.setattr(registry, "_OPENERS", dict(registry._OPENERS))  # the scheme leaves with the test
     register_input("test-scheme-x")(opener)
     assert input_opener("test-scheme-x") is opener
     with pytest.raises(URLError, match="already registered"):
