@@ -48,6 +48,8 @@ ARRAY_TABLE_BITS = 12
 """Array elements up to this many bits decode through a lookup table of every raw value."""
 MAX_COMPILED_ELEMENTS = 1024
 """Reports with more elements are decoded by a loop over a plan, not compiled source (bounded build time and memory)."""
+BITMAP_MIN_BITS = 16
+"""A report with at least this many one-bit variables decodes them by their set bits (a keyboard's NKRO bitmap)."""
 BATCH_MATRIX_BYTES = 64 * 2**20
 """decode_batch marks array usages in an (N, usages) boolean matrix up to this size, else usage by usage."""
 
@@ -209,11 +211,13 @@ class ReportDecoder:
         src = _Source()
         src.lines.append("def decode(r):")
         whole = self._prologue(src)
+        bitmap = self._bitmap()
+        in_bitmap = {e.bit_offset for e in bitmap}
         lists: dict[Key, list[str]] = {}
         arrays: list[str] = []
         skip = self.variable_keys
         for e in self.elements:
-            if e.key is not None:
+            if e.key is not None and e.bit_offset not in in_bitmap:
                 lists.setdefault(e.key, []).append(self._expr(e, whole))
             elif e.field.is_array:
                 arrays.append(self._array_statement(src, e, whole, skip))
@@ -221,13 +225,42 @@ class ReportDecoder:
         for key, exprs in lists.items():
             items.append(f"{key!r}: {exprs[0] if len(exprs) == 1 else '[' + ', '.join(exprs) + ']'}")
         body = "{" + ", ".join(items) + "}"
-        if not arrays:
+        if not arrays and not bitmap:
             src.lines.append(f"    return {body}")
+            return src
+        if bitmap:
+            self._bitmap_statements(src, bitmap, whole)
+            if items:
+                src.lines.append(f"    d.update({body})")
         else:
             src.lines.append(f"    d = {body}")
-            src.lines += arrays
-            src.lines += ["    d.pop(None, None)", "    return d"]
+        src.lines += arrays
+        if arrays:
+            src.lines.append("    d.pop(None, None)")
+        src.lines.append("    return d")
         return src
+
+    def _bitmap(self) -> list[Element]:
+        """The one-bit unsigned variables of distinct usages, when there are at least BITMAP_MIN_BITS of them."""
+        bitmap = [e for e in self.elements if e.key is not None and e.bit_size == 1 and not e.signed
+                  and self._repeats[e.key] == 1]
+        return bitmap if len(bitmap) >= BITMAP_MIN_BITS else []
+
+    def _bitmap_statements(self, src: _Source, bitmap: list[Element], whole: bool) -> None:
+        """``d`` as every one-bit variable at 0, then a 1 for each set bit (a keyboard's NKRO bitmap: its cost
+        follows the keys pressed, not the keys it has)."""
+        first = 0 if whole else bitmap[0].bit_offset // 8
+        last = max(e.bit_offset for e in bitmap) // 8
+        base = 8 * first
+        keys: list[Key | None] = [None] * (8 * (last - first + 1))
+        mask = 0
+        for e in bitmap:
+            keys[e.bit_offset - base] = e.key
+            mask |= 1 << (e.bit_offset - base)
+        word = "v" if whole else f"_from(r[{first}:{last + 1}], 'little')"
+        zero, table = src.const(dict.fromkeys((e.key for e in bitmap), 0)), src.const(tuple(keys))
+        src.lines += [f"    d = {zero}.copy()", f"    b = {word} & {mask}", "    while b:",
+                      "        low = b & -b", f"        d[{table}[low.bit_length() - 1]] = 1", "        b ^= low"]
 
     def _array_statement(self, src: _Source, e: Element, whole: bool, skip: frozenset[Key]) -> str:
         """``d[usage] = 1`` for one array element (None as the key of "nothing", popped at the end)."""

@@ -352,6 +352,36 @@ def test_the_loop_decoder_of_huge_reports_agrees_with_the_compiled_one(lay, nois
     assert looped.values(report) == compiled.values(report)
 
 
+@settings(max_examples=100, deadline=None)
+@given(layouts(), st.binary(min_size=0, max_size=80))
+def test_one_bit_variables_decoded_by_their_set_bits_agree_with_the_loop_decoder(lay, noise):
+    report = (noise * (lay.length // max(len(noise), 1) + 1))[:lay.length] or bytes(lay.length)
+    if lay.report_id is not None:
+        report = bytes([lay.report_id]) + report[1:]
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(codec, "BITMAP_MIN_BITS", 1)
+        by_bits = ReportDecoder(lay)
+        mp.setattr(codec, "MAX_COMPILED_ELEMENTS", -1)
+        looped = ReportDecoder(lay)
+    assert by_bits.decode(report) == looped.decode(report)
+
+
+@pytest.mark.parametrize("lead_bytes", [1, WHOLE_INT_BYTES + 3])  # read as one int, and field by field
+def test_an_nkro_bitmap_gives_every_key_with_the_pressed_ones_at_1(lead_bytes):
+    keys = 160
+    lay = layout(field(0, 8, lead_bytes, range(0xFF000001, 0xFF000001 + lead_bytes), 0, 255),
+                 field(8 * lead_bytes, 1, keys, range(0x70000, 0x70000 + keys), 0, 1))
+    report = bytearray(lay.length)
+    pressed = [0x04, 0x1D, 0x2C, 0x9F]  # a, z, space, the last bit
+    for u in pressed:
+        report[lead_bytes + u // 8] |= 1 << (u % 8)  # usage u is bit u % 8 of byte lead + u // 8, by hand
+    dec = ReportDecoder(lay)
+    assert "while b:" in "\n".join(dec.source.lines)
+    values = dec.decode(bytes(report))
+    assert {u: values[(KEYBOARD, u)] for u in range(keys)} == {u: int(u in pressed) for u in range(keys)}
+    assert [values[(0xFF00, i + 1)] for i in range(lead_bytes)] == [0] * lead_bytes
+
+
 @pytest.mark.slow
 def test_random_reports_never_crash_the_decoder():
     rnd = random.Random(11)
