@@ -3,6 +3,8 @@
 ``pixelpen.open(url)`` opens a display (``png:out.png``, ``svg:out.svg?size=a4``, ``sim:hp7475a``);
 pictures are built from the primitives in ``pixelpen.display.picture``.  ``pixelpen.open_input(url)`` opens
 an input device (``sim:tablet?script=signature``, ``hid:046d:c52b``, ``replay:FILE``; see ``docs/input.md``).
+``pixelpen.Scene(camera=dict(...))`` is a 3D scene that ``display.draw(scene)`` shows on any display
+(``docs/3d.md``).
 """
 
 from __future__ import annotations
@@ -35,12 +37,13 @@ if TYPE_CHECKING:
         Style,
         Text,
     )
+    from pixelpen.display.scene3d import Scene
 
 _moved.install()
 
 __version__ = "0.1.0"
 
-_LAZY = {"Display": "pixelpen.display.base"} | dict.fromkeys(
+_LAZY = {"Display": "pixelpen.display.base", "Scene": "pixelpen.display.scene3d"} | dict.fromkeys(
     ("Arc", "BSpline", "Bezier", "Circle", "Ellipse", "Fill", "Image", "Marker", "Picture", "Polygon", "Polyline",
      "Rectangle", "Segment", "Style", "Text"), "pixelpen.display.picture")
 """Public names imported on first use (so ``import pixelpen`` loads neither numpy nor Pillow)."""
@@ -78,6 +81,7 @@ __all__ = [
     "Polyline",
     "ProtocolError",
     "Rectangle",
+    "Scene",
     "Segment",
     "Style",
     "Text",

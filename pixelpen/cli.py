@@ -49,7 +49,7 @@ def _did_you_mean(word: str, choices: Sequence[str]) -> str:
 
 def build_parser() -> Parser:
     """The parser with every subcommand registered (``parser.commands`` maps names to their parsers)."""
-    from pixelpen.commands import core, hid, pen, plot, record, show, sim, udev, vector
+    from pixelpen.commands import core, hid, pen, plot, record, render, show, sim, udev, vector
 
     parser = Parser(prog="pixelpen", description="Draw on plotters, panels and files; simulate them.")
     parser.add_argument("--version", action="version", version=f"pixelpen {__version__}")
@@ -63,6 +63,7 @@ def build_parser() -> Parser:
     pen.register(sub)
     sim.register(sub)
     show.register(sub)
+    render.register(sub)
     hid.register(sub)
     udev.register(sub)
     record.register(sub)

@@ -17,6 +17,7 @@ FORBIDDEN: dict[str, tuple[str, ...]] = {
     "raster": ("display", "devices", "drivers", "sim", "input", "commands", "cli"),
     "vector": ("display", "devices", "drivers", "sim", "input", "commands", "cli"),
     "geometry": ("display", "devices", "drivers", "sim", "input", "commands", "cli", "raster", "vector", "profiles"),
+    "meshfiles": ("display", "devices", "drivers", "sim", "input", "commands", "cli", "raster", "vector", "profiles"),
     "profiles": ("display", "devices", "drivers", "sim", "input", "commands", "cli", "raster", "vector"),
     "drivers": ("devices", "display", "sim", "input", "commands", "cli"),
     "display": ("devices", "drivers", "sim", "input", "commands", "cli"),

@@ -7,7 +7,9 @@ it writes each panel's glass (``panel-MODEL.png``), the animation's glass frames
 the frame statistics of all panels (``panels.json``).  Its input part (:func:`input_demo`) records a simulated
 tablet's signature and a trackball in hid-recorder files, replays the signature into strokes smoothed to
 B-splines, drawn with a cursor echo on a simulated panel and plotted on a simulated plotter, and lets the
-trackball move a locator over the reference scene, picking what lies under it (``input.json``).
+trackball move a locator over the reference scene, picking what lies under it (``input.json``).  Its 3D
+part (:func:`scene3d_demo`) shows one 3D scene (:func:`demo_scene3d`: a cube, a sphere and a torus in
+perspective) as a hidden-line drawing on a simulated plotter and shaded on a simulated panel.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ import sys
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pixelpen.animation import PanelAnimation
 from pixelpen.commands.plot import plot_demo
@@ -33,6 +35,9 @@ from pixelpen.errors import ConfigError
 from pixelpen.options import OptionSpec, describe
 from pixelpen.scene import draw_reference, show_reference
 from pixelpen.urls import format_url
+
+if TYPE_CHECKING:
+    from pixelpen.display.scene3d import Scene
 
 log = logging.getLogger(__name__)
 
@@ -53,6 +58,10 @@ SIGNATURE_TOLERANCE_MM = 0.5
 """How far the smoothed signature may stray from the pen's points."""
 TABLET_MM = (224.0, 140.0)
 """The simulated tablet's active area (sim/hid/descriptors.py PEN_TABLET): the signature's world window."""
+SCENE3D_PLOTTER = "hp7475a"
+"""The simulated plotter the 3D scene is plotted on (hidden lines)."""
+SCENE3D_PANEL = ("st7789", {"size": "240x240"})
+"""The simulated panel the 3D scene is shaded on."""
 
 _ROLE = re.compile(r":[a-z]+(?::[a-z]+)?:`(?:([^`<]*?)\s*<[^`>]*>|~(?:[\w.]*\.)?([^`]*)|([^`]*))`")
 _LITERAL = re.compile(r"``(.+?)``|`([^`]+)`|\*\*(.+?)\*\*")
@@ -197,6 +206,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
               f"{r.bytes_per_frame:,.0f} bytes and {r.windows_per_frame:.1f} windows a frame, "
               f"{r.fps_at_bus_limit:,.0f} fps at the bus limit; full frames {r.full_frame_fps_at_bus_limit:.1f} fps)",
               file=sys.stderr)
+    plotted, shown = scene3d_demo(out)
+    print(f"  3D: a cube, a sphere and a torus in perspective, hidden lines plotted on {SCENE3D_PLOTTER}: "
+          f"{plotted.name}; shaded on {SCENE3D_PANEL[0]}: {shown.name}", file=sys.stderr)
     try:
         result = input_demo(out)
     except Exception as exc:  # noqa: BLE001 - a missing input piece must not stop the rest of the demo
@@ -411,3 +423,48 @@ def input_demo(out: Path) -> InputDemoResult:
         pick_glass.name)
     (out / "input.json").write_text(json.dumps(asdict(result), indent=2) + "\n")
     return result
+
+
+def demo_scene3d() -> Scene:
+    """The demo's 3D scene (millimetres, z up): a cube, a sphere and a torus, lit from above, left and behind."""
+    from pixelpen.display.scene3d import Scene
+    from pixelpen.geometry.mesh import Mesh
+    from pixelpen.geometry.surfaces import Sphere, Torus
+
+    scene = Scene(camera={"vrp": (0.0, 0.0, 10.0), "vpn": (1.0, -1.4, 0.9), "vup": (0.0, 0.0, 1.0),
+                          "projection": "perspective", "z_prp": 260.0, "z_vp": 0.0, "near": 90.0, "far": -90.0})
+    corners = [(x, y, z) for z in (0.0, 30.0) for y in (-15.0, 15.0) for x in (-60.0, -30.0)]
+    cube = Mesh.from_polygons(corners, [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2),
+                                        (1, 3, 7, 5)])
+    scene.add_mesh(cube, material={"colour": (0.9, 0.3, 0.2), "ka": 0.3, "kd": 0.7})
+    scene.add_surface(Sphere((5.0, 5.0, 18.0), 18.0),
+                      material={"colour": (0.2, 0.5, 0.9), "ka": 0.2, "kd": 0.7, "ks": 0.5, "n": 30.0})
+    scene.add_surface(Torus((50.0, 0.0, 8.0), 20.0, 8.0), material={"colour": (0.3, 0.8, 0.3), "ka": 0.2,
+                                                                     "kd": 0.8, "ks": 0.3, "n": 15.0})
+    scene.add_light("ambient", (1.0, 1.0, 1.0))
+    scene.add_light("directional", (1.0, 1.0, 1.0), direction=(0.4, 0.8, -1.0))
+    return scene
+
+
+def scene3d_demo(out: Path) -> tuple[Path, Path]:
+    """Plot :func:`demo_scene3d` with hidden lines removed on the simulated :data:`SCENE3D_PLOTTER` and shade it on
+    the simulated :data:`SCENE3D_PANEL`; write ``OUT/paper3d-PLOTTER.png`` and ``OUT/panel3d-PANEL.png``."""
+    import uuid
+
+    from pixelpen.sim.base import forget_simulator, named_simulator
+
+    scene = demo_scene3d()
+    ident = f"demo-3d-{uuid.uuid4().hex[:8]}"
+    paper = out / f"paper3d-{SCENE3D_PLOTTER}.png"
+    try:
+        with open_display(format_url("sim", SCENE3D_PLOTTER, {"speed": "fast", "id": ident})) as plotter:
+            plotter.draw(scene)
+        named_simulator(ident).save_paper(paper)
+    finally:
+        forget_simulator(ident)
+    model, options = SCENE3D_PANEL
+    glass = out / f"panel3d-{model}.png"
+    with open_display(format_url("sim", model, options)) as panel:
+        panel.draw(scene)
+        panel.simulator.glass().save(glass)  # type: ignore[attr-defined]
+    return paper, glass

@@ -2,16 +2,19 @@
 
 A device implements ``_open_device``, ``_close_device``, ``_render(shapes)``, ``_present()`` and
 ``_erase()`` (RasterDisplay and VectorDisplay already implement ``_render`` for their kind); shared
-code does the viewing pipeline, flattening, clipping, deferral and safe closing.
+code does the viewing pipeline, flattening, clipping, deferral and safe closing.  A 3D ``Scene`` is drawn
+through :mod:`pixelpen.display.render3d` (imported on first use): as hidden-line strokes here, shaded through
+the z-buffer by ``RasterDisplay``.
 """
 
 from __future__ import annotations
 
 import logging
+import sys
 from abc import ABC, abstractmethod
 from collections.abc import Iterable
 from types import TracebackType
-from typing import Any, ClassVar, Literal
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, TypeGuard, cast
 
 from pixelpen import geometry as geo
 from pixelpen.display.capabilities import Capabilities
@@ -20,6 +23,14 @@ from pixelpen.display.picture import PRIMITIVE_TYPES, Picture, Primitive, Segmen
 from pixelpen.errors import ConfigError, InvalidArgumentType, PixelpenError
 from pixelpen.options import OptionSpec, OptionValues, read_options
 from pixelpen.urls import DeviceURL
+
+if TYPE_CHECKING:
+    from typing import TypeAlias
+
+    from pixelpen.display.scene3d import Scene
+
+    Drawable: TypeAlias = Picture | Primitive | Segment | Scene
+    """What ``Display.draw`` takes (besides an iterable of primitives)."""
 
 log = logging.getLogger(__name__)
 
@@ -48,10 +59,12 @@ class Display(ABC):
         self.is_open = False
         w_mm, h_mm = capabilities.size_mm
         self._window: Rect = (0.0, 0.0, w_mm, h_mm)
+        self._window_set = False
+        """True once ``window()`` was called: a Scene drawn before that is fitted to the viewport instead."""
         self._window_angle = 0.0
         self._viewport: Rect = (0.0, 0.0, 1.0, 1.0)
         self._preserve_aspect = True
-        self._pending: list[tuple[Picture | Primitive | Segment, geo.ViewingPipeline]] = []
+        self._pending: list[tuple[Drawable, geo.ViewingPipeline]] = []
         """Items drawn but not yet rendered, each with the pipeline in force when it was drawn."""
         self._pipeline: geo.ViewingPipeline | None = None
 
@@ -122,6 +135,7 @@ class Display(ABC):
         """
         window, window_angle = geo.as_rect((xmin, ymin, xmax, ymax), "window"), geo.as_number(angle, "window angle")
         self._window, self._window_angle = window, window_angle
+        self._window_set = True
         self._pipeline = None
 
     def viewport(self, xmin: float, ymin: float, xmax: float, ymax: float, *, preserve_aspect: bool = True) -> None:
@@ -137,17 +151,39 @@ class Display(ABC):
     def pipeline(self) -> geo.ViewingPipeline:
         """The current world-to-device viewing pipeline."""
         if self._pipeline is None:
-            caps = self.capabilities
-            self._pipeline = geo.ViewingPipeline(
-                self._window, self._viewport, device_size=caps.size, y_down=caps.y_down,
-                window_angle=self._window_angle, preserve_aspect=self._preserve_aspect,
-            )
+            self._pipeline = self._pipeline_for(self._window)
         return self._pipeline
 
+    def _pipeline_for(self, window: Rect) -> geo.ViewingPipeline:
+        """The viewing pipeline of ``window`` with the display's viewport, angle and aspect rule."""
+        caps = self.capabilities
+        return geo.ViewingPipeline(
+            window, self._viewport, device_size=caps.size, y_down=caps.y_down,
+            window_angle=self._window_angle, preserve_aspect=self._preserve_aspect,
+        )
+
+    def scene_pipeline(self, scene: Scene) -> geo.ViewingPipeline:
+        """The pipeline a Scene is drawn with: the current one, or (window never set) one whose view-plane
+        window fits the scene's projected bounds to the viewport, aspect kept."""
+        if self._window_set:
+            return self.pipeline
+        caps = self.capabilities
+        x0, y0, x1, y1 = self._viewport
+        aspect = (x1 - x0) * caps.size[0] / ((y1 - y0) * caps.size[1])
+        from pixelpen.display.render3d import fitted_window
+
+        window = fitted_window(scene, geo.scale_factor(self.pipeline.matrix), caps.tolerance, aspect)
+        return self.pipeline if window is None else self._pipeline_for(window)
+
     # -- drawing -----------------------------------------------------------------------------
-    def draw(self, item: Picture | Primitive | Segment | Iterable[Primitive]) -> None:
-        """Draw a picture, segment or primitive now (deferral 'asap') or at the next ``flush()``."""
+    def draw(self, item: Drawable | Iterable[Primitive]) -> None:
+        """Draw a picture, segment, primitive or 3D Scene now (deferral 'asap') or at the next ``flush()``."""
         self._require_open()
+        if _is_scene(item):
+            self._pending.append((item, self.scene_pipeline(item)))
+            if self.deferral == "asap":
+                self.flush()
+            return
         if not isinstance(item, (Picture, Segment, *PRIMITIVE_TYPES)):
             if not isinstance(item, Iterable):
                 raise InvalidArgumentType(f"draw takes a Picture, Segment, primitive or an iterable of primitives, "
@@ -166,7 +202,10 @@ class Display(ABC):
         self._require_open()
         pending, self._pending = self._pending, []
         for item, pipeline in pending:
-            self._render(list(self.shapes(item, pipeline)))
+            if _is_scene(item):
+                self._render_scene(item, pipeline)
+            else:
+                self._render(list(self.shapes(cast("Picture | Primitive | Segment", item), pipeline)))
         self._present()
 
     def clear(self) -> None:
@@ -191,6 +230,13 @@ class Display(ABC):
         if not self.is_open:
             raise PixelpenError(f"{type(self).__name__} is not open: call open() or use it in a 'with' block")
 
+    def _render_scene(self, scene: Scene, pipeline: geo.ViewingPipeline) -> None:
+        """Render a 3D scene: its visible edges as strokes (raster displays shade it instead)."""
+        from pixelpen.display.render3d import scene_strokes
+
+        shapes, _ = scene_strokes(scene, pipeline, self.capabilities.tolerance)
+        self._render(shapes)
+
     # -- the device's core -------------------------------------------------------------------
     @abstractmethod
     def _open_device(self) -> None:
@@ -211,3 +257,9 @@ class Display(ABC):
     @abstractmethod
     def _erase(self) -> None:
         """Clear the drawing surface."""
+
+
+def _is_scene(item: object) -> TypeGuard[Scene]:
+    """True for a 3D Scene (one exists only once its module is imported, so the 3D code loads on first use)."""
+    module = sys.modules.get("pixelpen.display.scene3d")
+    return module is not None and isinstance(item, module.Scene)

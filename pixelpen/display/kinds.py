@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 from abc import abstractmethod
+from typing import TYPE_CHECKING
 
+from pixelpen import geometry as geo
 from pixelpen.colour import parse_colour
 from pixelpen.display.base import Deferral, Display
 from pixelpen.display.capabilities import Capabilities
@@ -12,6 +14,9 @@ from pixelpen.display.rasterize import rasterize
 from pixelpen.display.vectorize import PenLayerMap, build_display_list
 from pixelpen.raster.canvas import Canvas
 from pixelpen.vector.displaylist import DisplayList
+
+if TYPE_CHECKING:
+    from pixelpen.display.scene3d import Scene
 
 
 class RasterDisplay(Display):
@@ -33,6 +38,12 @@ class RasterDisplay(Display):
 
     def _render(self, shapes: list[DeviceShape]) -> None:
         rasterize(self.canvas, shapes, self.capabilities.unit_mm)
+
+    def _render_scene(self, scene: Scene, pipeline: geo.ViewingPipeline) -> None:
+        """Shade a 3D scene into the canvas through the z-buffer."""
+        from pixelpen.display.render3d import render_raster
+
+        render_raster(scene, pipeline, self.canvas, self.capabilities.tolerance)
 
     def _erase(self) -> None:
         self.canvas.fill(self.background)

@@ -44,6 +44,16 @@ def test_demo_writes_the_scene_as_png_svg_and_simulated_plotter_papers(tmp_path,
         assert (paper < 128).mean() > 0.005, model
     text = svg.read_text()
     assert 'width="260mm"' in text.replace(".0mm", "mm") and "<g" in text
+    # the 3D scene: hidden lines plotted on a simulated plotter, shaded on a simulated panel (red cube, blue
+    # sphere, green torus on black)
+    assert "3D: a cube, a sphere and a torus" in captured.err
+    paper3d = np.asarray(PILImage.open(tmp_path / "paper3d-hp7475a.png").convert("L"))
+    assert 0.001 < (paper3d < 128).mean() < 0.05  # outlines, not filled areas
+    glass3d = np.asarray(PILImage.open(tmp_path / "panel3d-st7789.png").convert("RGB")).astype(int)
+    for channel in range(3):
+        others = [c for c in range(3) if c != channel]
+        dominant = (glass3d[..., channel] > 1.5 * glass3d[..., others].max(axis=2) + 20)
+        assert dominant.mean() > 0.01, channel
     # and on every registered simulated panel: its glass, the animation and the frame statistics
     shown = [line for line in captured.err.splitlines() if "shown on a simulated panel" in line]
     assert len(shown) == len(json.loads((tmp_path / "panels.json").read_text())) >= 1

@@ -1,0 +1,263 @@
+"""A :class:`~pixelpen.display.scene3d.Scene` to pixels through the z-buffer, or to strokes by hidden-line removal.
+
+Both paths share the front end: every item's world mesh (surfaces tessellated to the device tolerance at the
+scale they are seen at), back faces culled unless the material is two-sided (a face is a front face when it is
+counter-clockwise seen from the viewer: :func:`front_faces`, in clip space),
+world -> clip space (:meth:`Camera.world_to_clip` with the display's window as the view-plane window), the
+front triangles of all items clipped together (``clip_triangles_homogeneous``), divided, and NDC x, y taken to
+device units by ``display.pipeline.matrix @ ViewVolume.ndc_to_window``.
+
+* Raster (:func:`render_raster`): one :class:`~pixelpen.raster.zbuffer.ZBuffer` over all items' triangles
+  (depth NDC z, perspective-correct weights from 1/w), fragments re-expressed against their source triangles,
+  shaded per item (:func:`pixelpen.raster.shading.shade`, world coordinates) and written into the canvas in
+  its colour model (:func:`pixelpen.raster.shading.write_colours`). The z-buffer lives for one draw: a scene
+  drawn over a picture covers it where it has pixels.
+* Vector (:func:`scene_strokes`): each item's feature edges of its front faces (``Mesh.feature_edges``),
+  clipped (``clip_segments_homogeneous``), divided, and split by :func:`pixelpen.vector.hiddenline.hidden_lines`
+  against all items' clipped front triangles; the visible pieces, joined, are stroke shapes in the item's style.
+
+:func:`fitted_window` is the view-plane window a display uses when its window was never set: the projected
+bounds of everything between the near and far planes, with :data:`FIT_MARGIN`, widened to the viewport's
+aspect ratio.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from pixelpen import geometry as geo
+from pixelpen.display.flatten import DeviceShape
+from pixelpen.display.scene3d import Camera, Scene, SceneItem
+from pixelpen.geometry.clip3d import clip_segments_homogeneous, clip_triangles_homogeneous, perspective_divide
+from pixelpen.geometry.mesh import Mesh
+from pixelpen.raster.canvas import Canvas
+from pixelpen.raster.shading import shade, write_colours
+from pixelpen.raster.zbuffer import ZBuffer
+from pixelpen.vector.hiddenline import HiddenLines, hidden_lines
+
+FIT_MARGIN = 0.05
+"""Margin of a fitted window on each side, as a fraction of the projected bounds' larger side."""
+
+EDGE_ON = 1e-9
+"""A face whose clip-space determinant is below this fraction of its bound is seen edge-on (a back face)."""
+
+Rect = tuple[float, float, float, float]
+
+
+@dataclass(frozen=True)
+class RenderStats:
+    """What one draw of a scene did: triangles in, after culling and after clipping; pixels or pieces out."""
+
+    triangles: int
+    front: int
+    clipped: int
+    fragments: int = 0
+    """Pixels written (raster)."""
+    pieces: int = 0
+    """Visible edge pieces (vector)."""
+
+
+@dataclass
+class _Item:
+    """One item ready to project: its world mesh, front-face mask, and vertices in clip space."""
+
+    item: SceneItem
+    mesh: Mesh
+    front: np.ndarray
+    clip: np.ndarray
+
+
+@dataclass
+class _Triangles:
+    """All items' front triangles after clipping, in device x, y + NDC z, with their source triangles."""
+
+    device: np.ndarray
+    """(K, 3, 3) device x, y and NDC depth."""
+    inv_w: np.ndarray
+    source: np.ndarray
+    """(K,) index into the concatenated front triangles of all items (ascending)."""
+    weights: np.ndarray
+    offsets: np.ndarray
+    """(items + 1,) start of each item's front triangles in the concatenation."""
+
+    def unclipped(self) -> bool:
+        """True when every triangle passed the clip whole (fragments need no re-expressing then)."""
+        count = int(self.offsets[-1])
+        return len(self.source) == count and bool((self.source == np.arange(count)).all()) and bool(
+            (self.weights == np.eye(3)).all())
+
+
+def _magnification(camera: Camera, mesh: Mesh) -> float:
+    """The largest view-plane units per world unit of a mesh's visible part (perspective: at its nearest point
+    no nearer than the near plane; oblique: the receding axis's factor when it exceeds 1)."""
+    if camera.z_prp is not None:
+        n = mesh.vertices @ camera.world_to_view[2, :3] + camera.world_to_view[2, 3]
+        nearest = min(float(n.max()), camera.near) if len(n) else camera.near
+        return (camera.z_prp - camera.z_vp) / (camera.z_prp - nearest)
+    if camera.alpha is not None:
+        return max(1.0, 1.0 / math.tan(camera.alpha))
+    return 1.0
+
+
+def item_meshes(scene: Scene, device_per_unit: float, tolerance: float) -> list[Mesh]:
+    """Each item's world mesh, surfaces tessellated to their chord tolerance at ``device_per_unit`` device units
+    per view-plane unit (times the perspective magnification of the surface's nearest visible point)."""
+    meshes = []
+    for item in scene.items:
+        mesh = item.mesh_at(device_per_unit, tolerance)
+        if item.surface is not None:
+            magnification = _magnification(scene.camera, mesh)
+            if magnification > 1.0:
+                mesh = item.mesh_at(device_per_unit * magnification, tolerance)
+        meshes.append(mesh)
+    return meshes
+
+
+def fitted_window(scene: Scene, device_per_unit: float, tolerance: float, aspect: float) -> Rect | None:
+    """The view-plane window that shows the whole scene (module docstring) at ``aspect`` = width / height;
+    None when nothing lies between the near and far planes."""
+    meshes = item_meshes(scene, device_per_unit, tolerance)
+    points = np.concatenate([m.vertices for m in meshes]) if meshes else np.zeros((0, 3))
+    clip = scene.camera.clip_coordinates(points, (-1.0, -1.0, 1.0, 1.0))
+    w = clip[:, 3]
+    inside = (w > 0.0) & (clip[:, 2] >= 0.0) & (clip[:, 2] <= w)
+    if not inside.any():
+        return None
+    uv = clip[inside, :2] / w[inside, None]  # with the window (-1, -1, 1, 1), NDC x, y are view-plane u, v
+    low, high = uv.min(axis=0), uv.max(axis=0)
+    size = max(float((high - low).max()), 1e-9 * max(1.0, float(np.abs(uv).max())))
+    width, height = max(high[0] - low[0], 0.0), max(high[1] - low[1], 0.0)
+    width, height = width + 2 * FIT_MARGIN * size, height + 2 * FIT_MARGIN * size
+    width, height = max(width, height * aspect), max(height, width / aspect)
+    cu, cv = (low + high) / 2.0
+    return (float(cu - width / 2), float(cv - height / 2), float(cu + width / 2), float(cv + height / 2))
+
+
+def front_faces(clip: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(M,) bool: True where a face (M, 3) of clip-space vertices (N, 4) is counter-clockwise seen by the viewer.
+
+    The determinant of the face's (x, y, w) rows is, up to a positive factor, the side of the face's plane the
+    centre of projection lies on (Olano & Greer's homogeneous test): one test for parallel and perspective
+    views, exact also for vertices behind the viewer, and no face normals needed."""
+    x, y, w = (clip[:, k][faces] for k in (0, 1, 3))
+    det = (x[:, 0] * (y[:, 1] * w[:, 2] - w[:, 1] * y[:, 2]) - y[:, 0] * (x[:, 1] * w[:, 2] - w[:, 1] * x[:, 2])
+           + w[:, 0] * (x[:, 1] * y[:, 2] - y[:, 1] * x[:, 2]))
+    # a face seen edge-on has det = 0 up to rounding: it is a back face (as a line it would hide edges behind);
+    # |det| is at most the product of the rows' lengths, each at most |x| + |y| + |w|
+    size = np.abs(clip[:, 0]) + np.abs(clip[:, 1]) + np.abs(clip[:, 3])
+    front: np.ndarray = det > EDGE_ON * size[faces].prod(axis=1)
+    return front
+
+
+def _prepare(scene: Scene, window: Sequence[float], meshes: list[Mesh]) -> list[_Item]:
+    """Front-face masks and clip coordinates of every item."""
+    prepared = []
+    for item, mesh in zip(scene.items, meshes, strict=True):
+        clip = scene.camera.clip_coordinates(mesh.vertices, window)
+        front = np.ones(len(mesh.faces), dtype=bool) if item.material.two_sided else front_faces(clip, mesh.faces)
+        prepared.append(_Item(item, mesh, front, clip))
+    return prepared
+
+
+def _device_matrix(camera: Camera, pipeline: geo.ViewingPipeline) -> np.ndarray:
+    """NDC x, y -> device 3x3: the view-plane window's matrix, then the display's window -> device pipeline."""
+    return geo.compose(pipeline.matrix, camera.volume(pipeline.window).ndc_to_window)
+
+
+def _to_device(ndc: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """(..., 3) NDC points to (..., 3) device x, y and NDC z (the pipeline is affine)."""
+    out = np.empty_like(ndc)
+    x, y = ndc[..., 0], ndc[..., 1]
+    out[..., 0] = matrix[0, 0] * x + matrix[0, 1] * y + matrix[0, 2]
+    out[..., 1] = matrix[1, 0] * x + matrix[1, 1] * y + matrix[1, 2]
+    out[..., 2] = ndc[..., 2]
+    return out
+
+
+def _triangles(items: list[_Item], matrix: np.ndarray) -> _Triangles:
+    """All items' front triangles clipped together, in device coordinates."""
+    parts = [it.clip[it.mesh.faces[it.front]] for it in items]
+    counts = [len(p) for p in parts]
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    tris = np.concatenate(parts) if parts else np.zeros((0, 3, 4))
+    out, source, weights = clip_triangles_homogeneous(tris.reshape(-1, 3, 4))
+    return _Triangles(_to_device(perspective_divide(out), matrix), 1.0 / out[..., 3], source, weights, offsets)
+
+
+def render_raster(scene: Scene, pipeline: geo.ViewingPipeline, canvas: Canvas, tolerance: float) -> RenderStats:
+    """Draw ``scene`` into ``canvas`` through one z-buffer (module docstring); return what was done."""
+    matrix = _device_matrix(scene.camera, pipeline)
+    items = _prepare(scene, pipeline.window, item_meshes(scene, geo.scale_factor(pipeline.matrix), tolerance))
+    tris = _triangles(items, matrix)
+    zbuffer = ZBuffer(canvas.width, canvas.height)
+    # the canvas's pixel (i, j) is centred on the device point (i, j); the z-buffer samples pixel centres at +0.5
+    fragments = zbuffer.rasterize(tris.device[..., :2] + 0.5, tris.device[..., 2], tris.inv_w)
+    if not tris.unclipped():
+        fragments = fragments.compose(tris.source, tris.weights)
+    viewer, lights = scene.camera.viewer(), scene.effective_lights()
+    total = int(tris.offsets[-1])
+    for index, it in enumerate(items):
+        lo, hi = int(tris.offsets[index]), int(tris.offsets[index + 1])
+        if lo == hi:
+            continue
+        mine = fragments
+        if (lo, hi) != (0, total):
+            mine = fragments.subset((fragments.face >= lo) & (fragments.face < hi))
+            mine = dataclasses.replace(mine, face=mine.face - lo)
+        mesh, item = it.mesh, it.item
+        smooth = item.shading != "flat"
+        rgb = shade(mine, mesh.vertices, mesh.faces[it.front], mode=item.shading, material=item.material,
+                    lights=lights, viewer=viewer,
+                    vertex_normals=mesh.vertex_normals() if smooth else None,
+                    face_colours=None if item.face_colours is None else item.face_colours[it.front])
+        write_colours(canvas, mine.xs, mine.ys, rgb)
+    return RenderStats(sum(len(it.front) for it in items), int(tris.offsets[-1]), len(tris.source),
+                       fragments=len(fragments.face))
+
+
+def scene_strokes(scene: Scene, pipeline: geo.ViewingPipeline, tolerance: float) -> tuple[list[DeviceShape],
+                                                                                           RenderStats]:
+    """The visible edges of ``scene`` as device stroke shapes, one per item (module docstring)."""
+    matrix = _device_matrix(scene.camera, pipeline)
+    items = _prepare(scene, pipeline.window, item_meshes(scene, geo.scale_factor(pipeline.matrix), tolerance))
+    tris = _triangles(items, matrix)
+    segments, edge_faces, owners = [], [], []
+    for index, it in enumerate(items):
+        if it.item.edges == "none":
+            continue
+        pairs, faces = it.mesh.feature_edges(it.front, crease_angle=it.item.crease_angle,
+                                             outlines=it.item.edges == "outlines")
+        segments.append(it.clip[pairs])
+        edge_faces.append(_occluder_index(faces, it.front, int(tris.offsets[index]), tris.source))
+        owners.append(np.full(len(pairs), index))
+    if not segments:
+        return [], RenderStats(sum(len(it.front) for it in items), int(tris.offsets[-1]), len(tris.source))
+    clipped, kept = clip_segments_homogeneous(np.concatenate(segments).reshape(-1, 2, 4))
+    edges = _to_device(perspective_divide(clipped), matrix)
+    visible = hidden_lines(tris.device, edges, np.concatenate(edge_faces)[kept])
+    owner = np.concatenate(owners)[kept][visible.edge]
+    shapes = []
+    for index, it in enumerate(items):
+        mine = owner == index
+        if mine.any():
+            paths = HiddenLines(visible.segments[mine], visible.edge[mine], visible.stats).polylines()
+            shapes.append(DeviceShape("stroke", paths, False, it.item.style, matrix=pipeline.matrix))
+    stats = RenderStats(sum(len(it.front) for it in items), int(tris.offsets[-1]), len(tris.source),
+                        pieces=len(visible.edge))
+    return shapes, stats
+
+
+def _occluder_index(faces: np.ndarray, front: np.ndarray, offset: int, source: np.ndarray) -> np.ndarray:
+    """Edge-adjacent faces (E, 2) of one item (−1 none) as indices of the first clipped triangle of each."""
+    front_index = np.full(len(front) + 1, -1, np.int64)  # the extra last entry serves face −1
+    front_index[np.flatnonzero(front)] = offset + np.arange(int(front.sum()))
+    concatenated = front_index[faces]
+    position = np.searchsorted(source, concatenated)
+    found = (concatenated >= 0) & (position < len(source))
+    found[found] &= source[position[found]] == concatenated[found]
+    return np.where(found, position, -1).astype(np.int64)

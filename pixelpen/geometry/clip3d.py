@@ -1,0 +1,219 @@
+"""Clipping in homogeneous clip space against the six planes of the canonical view volume, vectorised.
+
+Clip space (one z range used throughout pixelpen): a point [x, y, z, w] is inside when −w ≤ x ≤ w,
+−w ≤ y ≤ w, 0 ≤ z ≤ w and w > 0, so after the perspective divide NDC x, y lie in [−1, 1] and NDC z = z/w
+runs from 0 at the near plane to 1 at the far plane. Clipping happens before the divide, so points behind
+the viewer (w ≤ 0) never reach it. Each plane is a boundary function d(P) = P · c ≥ 0 that is linear along a
+segment; points exactly on a plane are inside. Intersection points are put exactly on the plane they were
+cut by (so x = w holds exactly there), and a shared edge is cut from its inside end on both sides, so two
+triangles sharing an edge get the same cut points. The one homogeneous point that passes the six planes
+but is no point at all, the zero vector (w = 0), is dropped from the results, and so are cut points that
+are the zero vector blurred by rounding (an edge from P to about −kP: no edge between world points, whose
+images lie in a hyperplane missing 0, does that).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pixelpen.errors import InvalidArgument
+from pixelpen.geometry.transforms import ArrayLike
+from pixelpen.geometry.transforms3d import as_homogeneous
+
+PLANES = np.array([
+    [1.0, 0.0, 0.0, 1.0],  # left:   x ≥ −w
+    [-1.0, 0.0, 0.0, 1.0],  # right:  x ≤ w
+    [0.0, 1.0, 0.0, 1.0],  # bottom: y ≥ −w
+    [0.0, -1.0, 0.0, 1.0],  # top:    y ≤ w
+    [0.0, 0.0, 1.0, 0.0],  # near:   z ≥ 0
+    [0.0, 0.0, -1.0, 1.0],  # far:    z ≤ w
+])
+"""The six clip planes as rows c of the boundary functions d(P) = P · c ≥ 0 (inside)."""
+PLANES.flags.writeable = False
+
+# A cut point this much smaller than the ends of its edge is the zero vector (the cone's apex, no point at
+# all) blurred by rounding: the edge ran from P to about −kP, which no segment between world points does.
+_APEX_TOL = 1e-12
+
+# For each plane: the coordinate a point cut by it has, as (index, factor): coordinate = factor · w.
+_ON_PLANE = ((0, -1.0), (0, 1.0), (1, -1.0), (1, 1.0), (2, 0.0), (2, 1.0))
+
+
+def _as_batch(value: ArrayLike, name: str, shape: tuple[int, ...], what: str) -> np.ndarray:
+    """Validate a float64 array (N, *shape) of finite numbers; errors name the first bad row."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgument(f"{name} must be an (N, {', '.join(map(str, shape))}) array of {what}: {exc}") from None
+    if arr.ndim != 1 + len(shape) or arr.shape[1:] != shape:
+        raise InvalidArgument(
+            f"{name} must be an (N, {', '.join(map(str, shape))}) array of {what}, got shape {arr.shape}"
+        )
+    bad = ~np.isfinite(arr.reshape(len(arr), int(np.prod(shape)))).all(axis=1)
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        raise InvalidArgument(f"{name} contains a non-finite value (NaN or inf) at row {row}: {arr[row].tolist()}")
+    return arr
+
+
+def _snap(points: np.ndarray, plane: int) -> None:
+    """Put points (..., 4+) cut by the plane exactly on it, in place."""
+    index, factor = _ON_PLANE[plane]
+    points[..., index] = factor * points[..., 3]
+
+
+def _distance(points: np.ndarray, plane: int) -> np.ndarray:
+    """The boundary function of one plane at points (..., 4+): P · PLANES[plane], written out (a tall matrix
+    product goes through BLAS, whose threads make it many times slower on small machines)."""
+    x, y, z, w = (points[..., k] for k in range(4))
+    d: np.ndarray = (w + x, w - x, w + y, w - y, z, w - z)[plane]
+    return d
+
+
+def _distances(points: np.ndarray) -> np.ndarray:
+    """(..., 6) boundary functions of all six planes at points (..., 4+)."""
+    d: np.ndarray = np.stack([_distance(points, plane) for plane in range(len(PLANES))], axis=-1)
+    return d
+
+
+def _at_apex(cut: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cut points that are the zero vector but for rounding: tiny beside the ends of their edge (mask)."""
+    size = np.abs(cut[..., :4]).max(axis=-1)
+    apex: np.ndarray = size <= _APEX_TOL * (np.abs(a[..., :4]).max(axis=-1) + np.abs(b[..., :4]).max(axis=-1))
+    return apex
+
+
+def clip_points_homogeneous(h: ArrayLike) -> np.ndarray:
+    """Inside mask (N,) bool of (N, 4) homogeneous points: −w ≤ x ≤ w, −w ≤ y ≤ w, 0 ≤ z ≤ w, w > 0."""
+    rows = as_homogeneous(h, "h")
+    inside: np.ndarray = (_distances(rows) >= 0.0).all(axis=1) & (rows[:, 3] > 0.0)
+    return inside
+
+
+def clip_segments_homogeneous(segments: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Liang–Barsky clip of (N, 2, 4) segments; return (clipped (K, 2, 4), indices (K,) of the segments kept)."""
+    segs = _as_batch(segments, "segments", (2, 4), "homogeneous endpoint pairs")
+    p0, p1 = segs[:, 0], segs[:, 1]
+    d0, d1 = _distances(p0), _distances(p1)  # (N, 6)
+    entering, exiting = (d0 < 0.0) & (d1 >= 0.0), (d1 < 0.0) & (d0 >= 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = d0 / (d0 - d1)
+    t_in, t_out = np.where(entering, t, -np.inf), np.where(exiting, t, np.inf)
+    enter_plane, exit_plane = t_in.argmax(axis=1), t_out.argmin(axis=1)  # the plane that cuts each end
+    rows = np.arange(len(segs))
+    te, tx = np.maximum(t_in[rows, enter_plane], 0.0), np.minimum(t_out[rows, exit_plane], 1.0)
+    keep = ~((d0 < 0.0) & (d1 < 0.0)).any(axis=1) & (te <= tx)
+    q0, q1 = p0.copy(), p1.copy()
+    for q, t_cut, plane_cut, crossing in ((q0, te, enter_plane, entering), (q1, tx, exit_plane, exiting)):
+        for plane in range(len(PLANES)):
+            cut = keep & crossing[:, plane] & (plane_cut == plane)
+            points = (1.0 - t_cut[cut, None]) * p0[cut] + t_cut[cut, None] * p1[cut]
+            _snap(points, plane)
+            q[cut] = points
+    keep &= (q0[:, 3] > 0.0) & (q1[:, 3] > 0.0) & ~_at_apex(q0, p0, p1) & ~_at_apex(q1, p0, p1)
+    kept = np.flatnonzero(keep)
+    return np.stack([q0[kept], q1[kept]], axis=1), kept.astype(np.int64)
+
+
+def _compact(candidates: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pack the masked entries of (T, L, C) rows to the front: return (out (T, K, C), counts (T,))."""
+    counts = mask.sum(axis=1)
+    width = int(counts.max()) if len(counts) else 0
+    out = np.zeros((len(candidates), width, candidates.shape[2]))
+    rows, cols = np.nonzero(mask)
+    out[rows, (np.cumsum(mask, axis=1) - 1)[rows, cols]] = candidates[rows, cols]
+    return out, counts
+
+
+def _clip_polygons(polygons: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sutherland–Hodgman on padded polygons (T, K, 4 + A) with vertex counts (T,); attributes interpolate along.
+
+    Every edge i -> i+1 (cyclic) emits its start vertex if inside, then its crossing point if it crosses the
+    plane; the crossing is computed from the inside end. Returns the clipped padded polygons and counts.
+    """
+    for plane in range(len(PLANES)):
+        width = polygons.shape[1]
+        if width == 0:
+            break
+        col = np.arange(width)
+        valid = col < counts[:, None]
+        following = np.where(col + 1 < counts[:, None], col + 1, 0)
+        nxt = np.take_along_axis(polygons, following[:, :, None], axis=1)
+        d = _distance(polygons, plane)
+        d_next = np.take_along_axis(d, following, axis=1)
+        inside, inside_next = d >= 0.0, d_next >= 0.0
+        crosses = valid & (inside != inside_next)
+        a = np.where(inside[:, :, None], polygons, nxt)  # the inside end of each edge
+        b = np.where(inside[:, :, None], nxt, polygons)
+        da, db = np.where(inside, d, d_next), np.where(inside, d_next, d)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(crosses, da / (da - db), 0.0)
+        cut = (1.0 - t[:, :, None]) * a + t[:, :, None] * b  # exact at both ends, whatever their scales
+        apex = _at_apex(cut, a, b)
+        _snap(cut, plane)
+        candidates = np.empty((len(polygons), 2 * width, polygons.shape[2]))
+        candidates[:, 0::2], candidates[:, 1::2] = polygons, cut
+        mask = np.empty((len(polygons), 2 * width), dtype=bool)
+        mask[:, 0::2], mask[:, 1::2] = valid & inside, crosses & ~apex
+        polygons, counts = _compact(candidates, mask)
+    col = np.arange(polygons.shape[1])
+    return _compact(polygons, (col < counts[:, None]) & (polygons[:, :, 3] > 0.0))
+
+
+def clip_polygon_homogeneous(vertices: ArrayLike) -> np.ndarray:
+    """Sutherland–Hodgman clip of one (N, 4) polygon; the clipped (M, 4) polygon, (0, 4) if under 3 vertices remain."""
+    rows = as_homogeneous(vertices, "vertices")
+    if 0 < len(rows) < 3:
+        raise InvalidArgument(f"vertices needs at least 3 points for a polygon, got {len(rows)}")
+    out, counts = _clip_polygons(rows[None], np.array([len(rows)]))
+    m = int(counts[0])
+    return out[0, :m].copy() if m >= 3 else np.zeros((0, 4))
+
+
+def clip_triangles_homogeneous(tris: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Clip (T, 3, 4) triangles; return (out (K, 3, 4), source (K,) int64 ascending, weights (K, 3, 3)).
+
+    out[k, i] = Σ_j weights[k, i, j] · tris[source[k], j] (to rounding): the weights re-express every output
+    vertex against its source triangle (for interpolating attributes). Triangles wholly inside pass unchanged
+    with identity weights; wholly outside one plane, they are dropped; the rest are clipped (Sutherland–Hodgman)
+    and the clipped convex polygon fan-triangulated from its first vertex, keeping the winding.
+    """
+    tri = _as_batch(tris, "tris", (3, 4), "homogeneous triangles")
+    d = _distances(tri)  # (T, 3, 6)
+    inside = (d >= 0.0).all(axis=(1, 2)) & (tri[:, :, 3] > 0.0).all(axis=1)
+    if inside.all():  # the common case: nothing near the volume's sides
+        return tri.copy(), np.arange(len(tri), dtype=np.int64), np.tile(np.eye(3), (len(tri), 1, 1))
+    outside = np.any(np.all(d < 0.0, axis=1), axis=1)
+    straddle = np.flatnonzero(~inside & ~outside)
+    padded = np.concatenate([tri[straddle], np.broadcast_to(np.eye(3), (len(straddle), 3, 3))], axis=2)
+    polygons, counts = _clip_polygons(padded, np.full(len(straddle), 3))
+    fans = np.maximum(counts - 2, 0)
+    owner = np.repeat(np.arange(len(straddle)), fans)
+    first = np.repeat(np.cumsum(fans) - fans, fans)
+    j = np.arange(len(owner)) - first + 1
+    fan = polygons[owner[:, None], np.stack([np.zeros_like(j), j, j + 1], axis=1)]  # (0, j, j + 1) per fan
+    whole = np.flatnonzero(inside)
+    source = np.concatenate([whole, straddle[owner]]).astype(np.int64)
+    out = np.concatenate([tri[whole], fan[:, :, :4]])
+    weights = np.concatenate([np.broadcast_to(np.eye(3), (len(whole), 3, 3)), fan[:, :, 4:]])
+    order = np.argsort(source, kind="stable")
+    return out[order], source[order], weights[order]
+
+
+def perspective_divide(h: ArrayLike) -> np.ndarray:
+    """(..., 4) homogeneous points to (..., 3) NDC x/w, y/w, z/w; InvalidArgument naming a point with w ≤ 0."""
+    try:
+        arr = np.asarray(h, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgument(f"h must be an (..., 4) array of homogeneous points: {exc}") from None
+    if arr.ndim == 0 or arr.shape[-1] != 4:
+        raise InvalidArgument(f"h must be an (..., 4) array of homogeneous points, got shape {arr.shape}")
+    bad = ~np.isfinite(arr).all(axis=-1) | ~(arr[..., 3] > 0.0)
+    if bad.any():
+        index = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise InvalidArgument(
+            f"h has a point with w ≤ 0 or a non-finite value at index {index}: {arr[index].tolist()} "
+            "(clip before dividing: points at or behind the viewer have no image)"
+        )
+    result: np.ndarray = arr[..., :3] / arr[..., 3:4]
+    return result

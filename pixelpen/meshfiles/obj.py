@@ -1,0 +1,267 @@
+"""Wavefront OBJ polygon meshes: ``v``, ``vn``, ``vt`` and ``f`` read with numpy, odd lines one by one.
+
+Read: ``v x y z [w] [r g b]`` (w and vertex colours ignored), ``vn i j k``, ``vt u [v [w]]`` (checked, not
+kept: a Mesh has no texture coordinates), ``f`` with corners ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn``; indices
+count from 1, a negative one counts back from the last vertex defined before its line, a positive one may
+name any vertex of the file.  Polygons are fanned into triangles by ``Mesh.from_polygons`` (the polygon id of
+each triangle is its ``f`` line's order).  Normals: when every corner names a ``vn``, every vertex is used and
+each vertex has one normal, they become the mesh's unit vertex normals; otherwise (hard edges, a zero normal)
+the mesh computes its own.  Grouping, materials, smoothing, lines (``l``), points (``p``) and the free-form
+statements of the format are accepted and ignored; any other statement is a ParseError.  Everything after a
+token starting with ``#`` is a comment.
+
+Speed: lines of the common forms (a keyword, then plain decimal numbers or ``a/b/c`` indices) are parsed
+together by :class:`~pixelpen.meshfiles.text.TextTable`; any other line (a ``+1``, an inline comment, an
+unknown keyword) goes through the per-line reader, which also finds and names the first bad field.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from typing import cast
+
+import numpy as np
+
+from pixelpen.errors import ParseError
+from pixelpen.geometry.mesh import Mesh
+from pixelpen.meshfiles.limits import LIMITS, Limits
+from pixelpen.meshfiles.text import SPACE, BoolArray, FloatArray, IntArray, TextTable, keyword_code, parse_float
+
+__all__ = ["read_obj"]
+
+V, VN, VT, F = (keyword_code(k) for k in (b"v", b"vn", b"vt", b"f"))
+IGNORED = frozenset((b"o", b"g", b"s", b"usemtl", b"mtllib", b"l", b"p", b"mg", b"lod", b"usemap", b"maplib",
+                     b"bevel", b"c_interp", b"d_interp", b"shadow_obj", b"trace_obj", b"ctech", b"stech", b"vp",
+                     b"cstype", b"deg", b"bmat", b"step", b"curv", b"curv2", b"surf", b"parm", b"trim", b"hole",
+                     b"scrv", b"sp", b"end", b"con", b"call", b"csh"))
+"""Statements read and ignored: grouping, display attributes, lines, points and free-form geometry."""
+VERTEX_NUMBERS = (3, 4, 6, 7)
+"""Numbers a ``v`` line may hold: x y z, with w, with r g b, with both."""
+CORNER = re.compile(rb"([+-]?\d{1,18})(?:/([+-]?\d{1,18})|/([+-]?\d{1,18})?/([+-]?\d{1,18}))?")
+"""One ``f`` corner: v, v/vt, v//vn or v/vt/vn."""
+
+_FACE_CHARS = SPACE.copy()
+_FACE_CHARS[list(b"0123456789-/")] = True
+
+
+class _Corners:
+    """Face corners gathered by both paths: line, token, and the raw v, vt, vn numbers (0 when absent)."""
+
+    def __init__(self) -> None:
+        self.parts: list[tuple[IntArray, IntArray, IntArray, IntArray, IntArray]] = []
+
+    def add(self, line: IntArray, token: IntArray, v: IntArray, vt: IntArray, vn: IntArray) -> None:
+        self.parts.append((line, token, v, vt, vn))
+
+    def joined(self) -> tuple[IntArray, IntArray, IntArray, IntArray, IntArray]:
+        """All corners in file order (corners of one line keep their order)."""
+        cols = [np.concatenate([p[k] for p in self.parts]) if self.parts else np.zeros(0, dtype=np.int64)
+                for k in range(5)]
+        order = np.argsort(cols[0], kind="stable")
+        line, token, v, vt, vn = (c[order].astype(np.int64) for c in cols)
+        return line, token, v, vt, vn
+
+
+def read_obj(data: bytes, source: str, *, limits: Limits = LIMITS) -> Mesh:
+    """The mesh of an OBJ file's bytes; a ParseError naming ``source``, the line and column when malformed."""
+    limits.check("max_bytes", len(data), "bytes in the file", source)
+    table = TextTable(data, source)
+    lengths = table.line_end - table.line_start
+    long = np.flatnonzero(lengths > limits.max_line_chars)
+    if len(long):
+        raise ParseError(f"a line of {int(lengths[long[0]]):,} bytes, more than the limit max_line_chars="
+                         f"{limits.max_line_chars:,}", source=source, line=table.line_number(int(long[0])))
+    keyword, count = table.keyword, table.tokens_per_line
+    comment = np.zeros(table.lines, dtype=bool)
+    words = np.flatnonzero(count > 0)
+    comment[words] = table.bytes[table.token_start[table.first_token[words]]] == ord("#")
+    for code, name in ((V, "vertices"), (VN, "normals"), (VT, "texture vertices")):
+        _check_count(table, keyword == code, limits, "max_vertices", name)
+    face_lines = np.flatnonzero(keyword == F)
+    corners = count[face_lines] - 1
+    big = np.flatnonzero(corners > limits.max_polygon_vertices)
+    if len(big):
+        raise ParseError(f"a polygon of {int(corners[big[0]]):,} corners, more than the limit max_polygon_vertices="
+                         f"{limits.max_polygon_vertices:,}", source=source,
+                         line=table.line_number(int(face_lines[big[0]])))
+    _check_count(table, keyword == F, limits, "max_faces", "triangles", np.maximum(count - 3, 1))
+
+    positions = np.full((int((keyword == V).sum()), 3), np.nan)
+    normals = np.full((int((keyword == VN).sum()), 3), np.nan)
+    vertex_row = np.cumsum(keyword == V) - 1
+    normal_row = np.cumsum(keyword == VN) - 1
+    slow = [np.flatnonzero(~comment & (count > 0) & ~np.isin(keyword, (V, VN, VT, F)))]
+    for code, out, rows, allowed in ((V, positions, vertex_row, VERTEX_NUMBERS), (VN, normals, normal_row, (3,)),
+                                     (VT, None, None, (1, 2, 3))):
+        lines = np.flatnonzero((keyword == code) & np.isin(count - 1, allowed))
+        slow.append(np.flatnonzero((keyword == code) & ~np.isin(count - 1, allowed)))
+        read, values, tokens, rest = table.numbers(lines, 1)
+        slow.append(rest)
+        bad = np.flatnonzero(~np.isfinite(values))
+        if len(bad):
+            raise table.error("a coordinate out of range", int(tokens[bad[0]]))
+        if out is not None and rows is not None:
+            first = np.cumsum(count[read] - 1) - (count[read] - 1)
+            out[rows[read]] = values[first[:, None] + np.arange(3)]
+    found = _Corners()
+    slow.append(_fast_faces(table, face_lines, found))
+    _slow_lines(table, np.unique(np.concatenate(slow)), positions, normals, vertex_row, normal_row, found)
+    return _mesh(table, positions, normals, found)
+
+
+def _check_count(table: TextTable, lines: BoolArray, limits: Limits, name: str, what: str,
+                 weight: IntArray | None = None) -> None:
+    """A ParseError at the line where a count of ``what`` (lines, or ``weight`` per line) passes limit ``name``."""
+    total = np.cumsum(np.where(lines, 1 if weight is None else weight, 0))
+    limit = int(getattr(limits, name))
+    if len(total) and total[-1] > limit:
+        line = int(np.searchsorted(total, limit, "right"))
+        raise ParseError(f"more {what} than the limit {name}={limit:,}", source=table.source,
+                         line=table.line_number(line))
+
+
+def _fast_faces(table: TextTable, lines: IntArray, found: _Corners) -> IntArray:
+    """Read the ``f`` lines of plain ``a``, ``a/b``, ``a//c``, ``a/b/c`` corners at once; return the others."""
+    kept, tokens, text, dropped = table.token_text(lines, 1, _FACE_CHARS)
+    dropped = np.union1d(dropped, lines[table.tokens_per_line[lines] < 4])
+    lines = kept[table.tokens_per_line[kept] >= 4]
+    if len(lines) < len(kept):  # a face of fewer than three corners: its text is read again, without it
+        lines, tokens, text, _ = table.token_text(lines, 1, _FACE_CHARS)
+    is_slash = text == ord("/")
+    slash = np.flatnonzero(is_slash)
+    double = slash[is_slash[np.minimum(slash + 1, len(text) - 1)] & (slash + 1 < len(text))]
+    minus = np.flatnonzero(text == ord("-"))
+    size = len(table.token_start)
+    owner = np.searchsorted(table.token_start, np.r_[slash, double], "right") - 1
+    slashes = np.bincount(owner[:len(slash)], minlength=size)[tokens]
+    doubles = np.bincount(owner[len(slash):], minlength=size)[tokens]
+    before = text[np.maximum(minus - 1, 0)]
+    after = text[np.minimum(minus + 1, len(text) - 1)]
+    odd = (slashes > 2) | (doubles > 1) | ((doubles == 1) & (slashes != 2))
+    wrong_minus = ~(SPACE[before] | (before == ord("/"))) | (after < ord("0")) | (after > ord("9"))
+    if odd.any() or wrong_minus.any():  # "1-2" would read as two numbers: such lines go one by one
+        return np.union1d(lines, dropped)
+    per = 1 + slashes - doubles
+    flat = text
+    flat[is_slash] = ord(" ")
+    try:  # a field past int64 saturates, so it is out of range below like any too large index
+        ints = np.fromstring(flat.tobytes(), dtype=np.int64, sep=" ") if len(tokens) else np.zeros(0, np.int64)
+    except ValueError:
+        return np.union1d(lines, dropped)
+    if len(ints) != int(per.sum()):  # an empty field: "1/" or "1/2/"
+        return np.union1d(lines, dropped)
+    first = np.cumsum(per) - per
+    vt = np.where((slashes >= 1) & (doubles == 0), ints[np.minimum(first + 1, len(ints) - 1)], 0)
+    vn = np.where(slashes == 2, ints[np.minimum(first + 2 - doubles, len(ints) - 1)], 0)
+    found.add(table.token_line[tokens], tokens, ints[first], vt, vn)
+    return dropped
+
+
+def _slow_lines(table: TextTable, lines: IntArray, positions: FloatArray, normals: FloatArray,
+                vertex_row: IntArray, normal_row: IntArray, found: _Corners) -> None:
+    """Read ``lines`` one by one (statements the fast path does not take), naming the first bad field."""
+    corner_line: list[int] = []
+    corner_token: list[int] = []
+    corner_v: list[int] = []
+    corner_vt: list[int] = []
+    corner_vn: list[int] = []
+    for line in lines.tolist():
+        first = int(table.first_token[line])
+        tokens = list(range(first, first + int(table.tokens_per_line[line])))
+        for k, index in enumerate(tokens):
+            if table.data[table.token_start[index]] == ord("#"):
+                del tokens[k:]
+                break
+        if not tokens:
+            continue
+        word = table.token(tokens[0])
+        fields = tokens[1:]
+        number = table.line_number(line)
+        if word in (b"v", b"vn", b"vt"):
+            allowed = {b"v": VERTEX_NUMBERS, b"vn": (3,), b"vt": (1, 2, 3)}[word]
+            if len(fields) not in allowed:
+                raise ParseError(f"a {word.decode()} line has {len(fields)} numbers, not "
+                                 f"{' or '.join(map(str, allowed))}", source=table.source, line=number,
+                                 column=table.column(tokens[0]))
+            values = [parse_float(table.token(t), f"field {k + 1}", table.source, number, table.column(t))
+                      for k, t in enumerate(fields)]
+            if word == b"v":
+                positions[vertex_row[line]] = values[:3]
+            elif word == b"vn":
+                normals[normal_row[line]] = values
+        elif word == b"f":
+            if len(fields) < 3:
+                raise ParseError(f"a face of {len(fields)} corners (at least 3)", source=table.source,
+                                 line=number, column=table.column(tokens[0]))
+            for t in fields:
+                match = CORNER.fullmatch(table.token(t))
+                if match is None:
+                    raise table.error("a face corner is not v, v/vt, v//vn or v/vt/vn", t)
+                v, vt2, vt3, vn = match.groups()
+                corner_line.append(line)
+                corner_token.append(t)
+                corner_v.append(int(v))
+                corner_vt.append(int(vt2 or vt3 or 0))
+                corner_vn.append(int(vn or 0))
+        elif word not in IGNORED:
+            raise table.error("an unknown OBJ statement", tokens[0])
+    if corner_line:
+        found.add(*(np.array(c, dtype=np.int64) for c in (corner_line, corner_token, corner_v, corner_vt,
+                                                           corner_vn)))
+
+
+def _resolve(table: TextTable, raw: IntArray, token: IntArray, defined_before: IntArray, total: int,
+             what: str, present: BoolArray) -> IntArray:
+    """0-based indices of 1-based or negative (relative) ones; a ParseError at the first one out of range."""
+    index = np.where(raw > 0, raw - 1, defined_before + raw)
+    bad = present & ((raw == 0) | (index < 0) | (index >= total))
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        if raw[k] == 0:
+            why = f"{what} index 0 (indices count from 1)"
+        elif raw[k] > 0:
+            why = f"{what} index {int(raw[k])} out of range: the file has {total}"
+        else:
+            why = f"{what} index {int(raw[k])} out of range: {int(defined_before[k])} defined before this line"
+        raise table.error(why, int(token[k]))
+    return index
+
+
+def _mesh(table: TextTable, positions: FloatArray, normals: FloatArray, found: _Corners) -> Mesh:
+    """The mesh of the corners read: indices resolved and checked, polygons fanned, normals kept if consistent."""
+    line, token, v, vt, vn = found.joined()
+    keyword = table.keyword
+    counts = {code: np.cumsum(keyword == code) for code in (V, VT, VN)}
+    vi = _resolve(table, v, token, counts[V][line], len(positions), "vertex", np.ones(len(v), dtype=bool))
+    _resolve(table, vt, token, counts[VT][line], int(counts[VT][-1]) if len(line) else 0, "texture vertex", vt != 0)
+    ni = _resolve(table, vn, token, counts[VN][line], len(normals), "normal", vn != 0)
+    if len(line) == 0:
+        raise ParseError("no faces: not a polygon mesh", source=table.source)
+    starts = np.flatnonzero(np.r_[True, line[1:] != line[:-1]])
+    sizes = np.diff(np.r_[starts, len(line)])
+    if (sizes == sizes[0]).all():  # all triangles, or all quads: one (P, k) array
+        mesh = Mesh.from_polygons(positions, vi.reshape(-1, int(sizes[0])))
+    else:
+        polygons = np.split(vi, starts[1:])  # index arrays: sequences of ints to from_polygons
+        mesh = Mesh.from_polygons(positions, cast(Sequence[Sequence[int]], polygons))
+    vertex_normals = _normals(positions, normals, vi, ni, vn != 0)
+    if vertex_normals is None:
+        return mesh
+    return Mesh(mesh.vertices, mesh.faces, mesh.polygon, vertex_normals)
+
+
+def _normals(positions: FloatArray, normals: FloatArray, vi: IntArray, ni: IntArray,
+             present: BoolArray) -> FloatArray | None:
+    """Unit vertex normals from the corners' ``vn``, or None unless every vertex has exactly one non-zero one."""
+    if len(vi) == 0 or not present.all():
+        return None
+    pairs = np.unique(np.stack([vi, ni], axis=1), axis=0)
+    if len(pairs) != len(positions) or not np.array_equal(pairs[:, 0], np.arange(len(positions))):
+        return None
+    chosen = normals[pairs[:, 1]]
+    length = np.linalg.norm(chosen, axis=1)
+    if not (length > 0).all():
+        return None
+    out: FloatArray = chosen / length[:, None]
+    return out

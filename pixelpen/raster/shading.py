@@ -1,0 +1,254 @@
+"""Shading z-buffer fragments (flat, Gouraud, Phong; Hearn & Baker §14-5) and writing intensities to a canvas.
+
+:func:`shade` lights the fragments :class:`pixelpen.raster.zbuffer.Fragments` of a triangle mesh with the
+model of :mod:`pixelpen.raster.illumination`, in world coordinates:
+
+* ``"flat"``: one evaluation per face, at its centroid with its face normal;
+* ``"gouraud"``: one evaluation per vertex with its vertex normal, intensities interpolated across the face
+  by the fragments' (perspective-correct) barycentric weights;
+* ``"phong"``: normals and positions interpolated per fragment, normals renormalised, one evaluation each.
+
+Default face normals are the unit normals (v1 − v0) × (v2 − v0) of counter-clockwise faces; default vertex
+normals are the area-weighted sums of the adjacent faces' normals, renormalised.
+
+:func:`write_colours` maps intensities in [0, 1] to the canvas's pixel mode: each channel to the 8-bit value
+round(255·c) (clamped), then to the native value by the rules of :meth:`Canvas.colour_values` ("RGB565" by
+truncation, :func:`pixelpen.raster.colour.rgb888_to_rgb565`; "L" by BT.601 :func:`pixelpen.raster.colour.luma`),
+except "1": ordered 4x4 Bayer dithering of that luma (:func:`pixelpen.raster.dither.ordered_mono`, frame-anchored) and
+"P" by ordered dithering to the palette: each channel is offset by g·((M + ½)/16 − ½), M the Bayer index of
+the pixel and g the largest gap between the distinct values the palette uses in that channel, before the
+nearest palette entry is taken. Each pixel should appear once per call (of repeated ones, which write wins
+is unspecified); the bounding box of the pixels written is recorded as damage.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from pixelpen.errors import InvalidArgument, InvalidArgumentType
+from pixelpen.geometry.transforms import ArrayLike
+from pixelpen.geometry.transforms3d import as_choice, as_points3d
+from pixelpen.raster.canvas import Canvas
+from pixelpen.raster.colour import luma, rgb888_to_rgb565
+from pixelpen.raster.dither import bayer_matrix, ordered_mono
+from pixelpen.raster.illumination import Light, Material, Viewer, as_colours, combine, illumination_terms
+from pixelpen.raster.palette import Palette
+from pixelpen.raster.zbuffer import Fragments
+
+SHADING_MODES: tuple[str, ...] = ("flat", "gouraud", "phong")
+"""The modes :func:`shade` offers."""
+
+BAYER_SIZE = 4
+"""Side of the Bayer matrix :func:`write_colours` dithers with on "1" and "P" canvases (17 grey levels)."""
+
+
+def _as_faces(faces: ArrayLike, vertex_count: int) -> np.ndarray:
+    """Validate (T, 3) integer vertex indices below vertex_count; return them as int64."""
+    arr = np.asarray(faces)
+    if arr.ndim != 2 or arr.shape[1] != 3 or (arr.size and arr.dtype.kind not in "iu"):
+        raise InvalidArgument(f"faces must be a (T, 3) integer array, got shape {arr.shape} {arr.dtype}")
+    arr = arr.astype(np.int64)
+    bad = ((arr < 0) | (arr >= vertex_count)).any(axis=1)
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        raise InvalidArgument(f"faces row {row} {arr[row].tolist()} indexes outside 0..{vertex_count - 1}")
+    return arr
+
+
+def _normals(values: ArrayLike | None, rows: int, name: str) -> np.ndarray | None:
+    """Validate optional (rows, 3) normals."""
+    if values is None:
+        return None
+    arr, _ = as_points3d(values, name)
+    if arr.shape[0] != rows:
+        raise InvalidArgument(f"{name} must have {rows} rows, got {arr.shape[0]}")
+    return arr
+
+
+def _face_cross(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(v1 − v0) × (v2 − v0) per face: twice the area along the outward normal."""
+    v0, v1, v2 = (vertices[faces[:, i]] for i in range(3))
+    out: np.ndarray = np.cross(v1 - v0, v2 - v0)
+    return out
+
+
+def _area_weighted_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Vertex normals: sums of the adjacent faces' area-weighted normals (unnormalised)."""
+    cross = _face_cross(vertices, faces)
+    corners = faces.ravel()
+    weights = np.repeat(cross, 3, axis=0)
+    return np.stack([np.bincount(corners, weights[:, c], vertices.shape[0]) for c in range(3)], axis=1)
+
+
+def _interpolate(fragments: Fragments, corners: np.ndarray) -> np.ndarray:
+    """Per-corner values (T, 3, K) at the fragments (F, K), in the affine form v0 + b1·(v1 − v0) + b2·(v2 − v0).
+
+    Equal to :meth:`Fragments.interpolate` up to rounding, but exact where the three corners agree (so a
+    face of one colour shows exactly that colour), and computed one component at a time from contiguous
+    (T,) rows, which is about twice as fast on large batches.
+    """
+    first = np.ascontiguousarray(corners[:, 0].T)
+    steps = [np.ascontiguousarray((corners[:, i] - corners[:, 0]).T) for i in (1, 2)]
+    weights = [np.ascontiguousarray(fragments.bary[:, i]) for i in (1, 2)]
+    face = fragments.face
+    out = np.empty((corners.shape[2], face.shape[0]))
+    for k, row in enumerate(out):  # a few components (3), each over all fragments
+        np.take(first[k], face, out=row)
+        for step, weight in zip(steps, weights, strict=True):
+            row += np.take(step[k], face) * weight
+    return out.T
+
+
+def shade(
+    fragments: Fragments,
+    vertices: ArrayLike,
+    faces: ArrayLike,
+    *,
+    mode: str = "flat",
+    material: Material,
+    lights: Light | Sequence[Light],
+    viewer: Viewer,
+    model: str = "phong",
+    face_normals: ArrayLike | None = None,
+    vertex_normals: ArrayLike | None = None,
+    face_colours: ArrayLike | None = None,
+) -> np.ndarray:
+    """Intensities (F, 3) in [0, 1] for the fragments of a mesh (world vertices (N, 3), faces (T, 3))."""
+    if not isinstance(fragments, Fragments):
+        raise InvalidArgumentType(f"fragments must be Fragments, got {type(fragments).__name__}")
+    if not isinstance(material, Material):
+        raise InvalidArgumentType(f"material must be a Material, got {type(material).__name__}")
+    mode = as_choice(mode, "shading mode", SHADING_MODES)
+    verts, _ = as_points3d(vertices, "vertices")
+    tris = _as_faces(faces, verts.shape[0])
+    count = tris.shape[0]
+    colours = None if face_colours is None else as_colours(face_colours, count, "face_colours")
+    base = np.array(material.colour)
+    face = np.asarray(fragments.face, dtype=np.int64)
+    if face.size and (face.min() < 0 or face.max() >= count):
+        raise InvalidArgument(f"fragments name faces outside 0..{count - 1}")
+    if mode == "flat":
+        normals = _normals(face_normals, count, "face_normals")
+        used = np.flatnonzero(np.bincount(face, minlength=count))  # light only the faces that have fragments
+        centroid = verts[tris[used]].mean(axis=1)
+        normal = _face_cross(verts, tris[used]) if normals is None else normals[used]
+        scale, specular = illumination_terms(centroid, normal, material, lights, viewer, model)
+        per_face = np.zeros((count, 3))
+        per_face[used] = combine(base if colours is None else colours[used], scale, specular)
+        return per_face[face]
+    given = _normals(vertex_normals, verts.shape[0], "vertex_normals")
+    normals = _area_weighted_normals(verts, tris) if given is None else given
+    if mode == "gouraud":
+        scale, specular = illumination_terms(verts, normals, material, lights, viewer, model)
+        if colours is None:
+            return _interpolate(fragments, combine(base, scale, specular)[tris])
+        return _interpolate(fragments, combine(colours[:, None, :], scale[tris], specular[tris]))
+    positions = _interpolate(fragments, verts[tris])
+    interpolated = _interpolate(fragments, normals[tris])
+    return combine(base if colours is None else colours[face], *illumination_terms(
+        positions, interpolated, material, lights, viewer, model))
+
+
+def _pixels(canvas: Canvas, xs: ArrayLike, ys: ArrayLike, rows: int) -> tuple[np.ndarray, np.ndarray]:
+    """Validate integer pixel coordinates (rows,) inside the canvas; return them as int64."""
+    out = []
+    for name, values, size in (("xs", xs, canvas.width), ("ys", ys, canvas.height)):
+        arr = np.asarray(values)
+        if arr.ndim != 1 or (arr.size and arr.dtype.kind not in "iu"):
+            raise InvalidArgument(f"{name} must be a 1-D integer array, got shape {arr.shape} {arr.dtype}")
+        if arr.shape[0] != rows:
+            raise InvalidArgument(f"{name} has {arr.shape[0]} entries for {rows} colours")
+        arr = arr.astype(np.int64, copy=False)
+        if arr.size and (arr.min() < 0 or arr.max() >= size):
+            i = int(np.flatnonzero((arr < 0) | (arr >= size))[0])
+            raise InvalidArgument(f"{name}[{i}] = {int(arr[i])} lies outside the {canvas.width}x{canvas.height} canvas")
+        out.append(arr)
+    return out[0], out[1]
+
+
+def _intensities(rgb: ArrayLike) -> np.ndarray:
+    """Validate (F, 3) finite intensities (values outside [0, 1] are clamped later)."""
+    try:
+        arr = np.asarray(rgb, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgument(f"rgb must be an (F, 3) array of numbers: {exc}") from None
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise InvalidArgument(f"rgb must be an (F, 3) array of intensities, got shape {arr.shape}")
+    if not np.isfinite(arr).all():
+        row = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
+        raise InvalidArgument(f"rgb row {row} is not finite: {arr[row].tolist()}")
+    return arr
+
+
+def _rgb8(scaled: np.ndarray) -> np.ndarray:
+    """Values already multiplied by 255 to uint8: rounded to nearest (ties to even), clamped to 0..255."""
+    np.rint(scaled, out=scaled)
+    np.clip(scaled, 0.0, 255.0, out=scaled)
+    return scaled.astype(np.uint8)
+
+
+def _mono(xs: np.ndarray, ys: np.ndarray, rgb8: np.ndarray) -> np.ndarray:
+    """0/1 values: ordered dither of the fragments' luma, anchored to the frame (over their bounding box)."""
+    x0, y0 = int(xs.min()), int(ys.min())
+    width = int(xs.max()) - x0 + 1
+    local = (ys - y0) * width + (xs - x0)
+    grey = np.zeros((int(ys.max()) - y0 + 1, width), dtype=np.uint8)
+    np.put(grey.reshape(-1), local, luma(rgb8))
+    return np.take(ordered_mono(grey, BAYER_SIZE, (x0, y0)).reshape(-1), local).view(np.uint8)
+
+
+def _palette_gaps(palette: np.ndarray) -> np.ndarray:
+    """Per channel, the largest gap between the distinct values the palette uses (0 if only one)."""
+    gaps = []
+    for c in range(3):
+        values = np.unique(palette[:, c].astype(np.float64))
+        gaps.append(float(np.diff(values).max()) if values.size > 1 else 0.0)
+    return np.array(gaps)
+
+
+def _indexed(canvas: Canvas, xs: np.ndarray, ys: np.ndarray, scaled: np.ndarray) -> np.ndarray:
+    """Palette indices: ordered dither of 255·rgb to the canvas palette (see the module doc)."""
+    assert canvas.palette is not None
+    n2 = BAYER_SIZE * BAYER_SIZE
+    threshold = (bayer_matrix(BAYER_SIZE)[ys % BAYER_SIZE, xs % BAYER_SIZE] + 0.5) / n2 - 0.5
+    scaled += threshold[:, None] * _palette_gaps(canvas.palette)
+    return Palette(canvas.palette).nearest(_rgb8(scaled)[:, None, :]).reshape(-1)
+
+
+def _native(mode: str, rgb8: np.ndarray) -> np.ndarray:
+    """Native values of (F, 3) uint8 colours in modes "RGB", "RGBA", "RGB565", "L" (as Canvas.colour_values)."""
+    if mode == "RGB":
+        return rgb8
+    if mode == "RGBA":
+        return np.concatenate([rgb8, np.full((rgb8.shape[0], 1), 255, dtype=np.uint8)], axis=1)
+    return rgb888_to_rgb565(rgb8) if mode == "RGB565" else luma(rgb8)
+
+
+def _scatter(array: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
+    """array.flat-by-pixel[index] = values; multi-channel pixels move as one item each (np.put on a void view)."""
+    if array.ndim == 2:
+        np.put(array.reshape(-1), index, values)
+        return
+    item = f"V{array.shape[2] * array.itemsize}"
+    np.put(array.reshape(-1).view(item), index, np.ascontiguousarray(values, dtype=array.dtype).reshape(-1).view(item))
+
+
+def write_colours(canvas: Canvas, xs: ArrayLike, ys: ArrayLike, rgb: ArrayLike) -> None:
+    """Write (F, 3) intensities in [0, 1] to pixels (xs[i], ys[i]) in the canvas's mode; marks the damage."""
+    if not isinstance(canvas, Canvas):
+        raise InvalidArgumentType(f"canvas must be a Canvas, got {type(canvas).__name__}")
+    colours = _intensities(rgb)
+    px, py = _pixels(canvas, xs, ys, colours.shape[0])
+    if not px.size:
+        return
+    scaled = colours * 255.0
+    if canvas.mode == "P":
+        values = _indexed(canvas, px, py, scaled)
+    elif canvas.mode == "1":
+        values = _mono(px, py, _rgb8(scaled))
+    else:
+        values = _native(canvas.mode, _rgb8(scaled))
+    _scatter(canvas.array, py * canvas.width + px, values)
+    canvas.mark_damaged(int(px.min()), int(py.min()), int(px.max()) + 1, int(py.max()) + 1)

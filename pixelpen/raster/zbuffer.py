@@ -1,0 +1,458 @@
+"""A vectorised z-buffer (Hearn & Baker §13-3): triangles in device pixels -> the visible fragments per pixel.
+
+Conventions:
+
+* Device coordinates: x to the right, y down; pixel ``(i, j)`` is the square ``[i, i+1) x [j, j+1)``, sampled
+  at its centre ``(i + 0.5, j + 0.5)``.  Depth is NDC z (0 at near, 1 at far): smaller is nearer.
+* Coverage follows the *top-left rule*: a centre exactly on an edge belongs to the triangle when the edge is a
+  left edge or a horizontal top edge, so triangles sharing an edge cover each pixel exactly once.  Vertices
+  are snapped to 1/256 pixel (:data:`pixelpen.raster.polygons.SUBPIXEL`) and each edge's crossing of a pixel
+  row is computed exactly on integers below 2**53 (the same crossing whichever triangle the edge belongs to),
+  giving the pixels :func:`pixelpen.raster.polygons.triangle_spans` fills for the vertices shifted by -1/2.
+  Both windings are drawn (the caller culls); zero-area triangles cover nothing.
+* Depth is interpolated linearly in screen space (NDC z is affine there); the barycentric weights of the
+  triangle's vertices are perspective-corrected with ``inv_w`` (1/w of each vertex) when it is given.
+* Resolution: nearest depth wins; within one :meth:`ZBuffer.rasterize` call equal depths go to the lower
+  triangle index; against earlier calls a fragment must be strictly nearer than the stored depth.
+* Output: one fragment per pixel won, in no particular order; ``xs``, ``ys``, ``face`` int64, ``depth``
+  float64, ``bary`` an (F, 3) float64 view of a (3, F) array.  Depth is evaluated as a plane in the flat pixel
+  index (absolute error about 1e-16·|dz/dx|·width·height); weights as planes in x along each row.
+
+Algorithm: per triangle, vertices sorted by y (A, B, C); the long edge AC bounds one side of every row, the
+edges AB and BC the other (the nearer of their two crossings, as the triangle is convex).  Triangles are
+bucketed by (row count, side) and each bucket's rows are one (rows x triangles) broadcast of exact crossings.
+Rows become pixel runs by a ragged expansion in chunks of about :data:`CHUNK` pixels (cache-sized buffers);
+pass 1 takes ``np.minimum.at`` of the depths into the buffer; pass 2 (on pass 1's chunks, or regenerated ones
+past :data:`KEEP_PIXELS`) keeps the fragments equal to the new depth and strictly nearer than before - all of
+them, without comparing, when the number of pixels lowered equals the number of candidates (a convex mesh
+after culling); a scatter-and-check finds the (rare) pixels where several triangles tie and keeps the lowest
+index.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+
+from pixelpen.errors import InvalidArgument, InvalidArgumentType
+from pixelpen.geometry.transforms import ArrayLike
+from pixelpen.raster.polygons import SUBPIXEL, VERTEX_LIMIT
+
+CHUNK = 1 << 16
+"""Pixels expanded per vectorised step of the resolve passes (buffers stay in L2 cache)."""
+
+KEEP_PIXELS = 1 << 21
+"""Up to this many candidate pixels per call, pass 1 keeps its expansion for pass 2 (else recomputes it)."""
+
+MAX_SIDE = 1 << 16
+"""Largest z-buffer width or height."""
+
+_NEUTRAL = float(1 << 60)
+"""Crossing numerator standing for 'no bound' (a horizontal edge): far outside any canvas."""
+
+_NO_FACE = np.iinfo(np.int64).max
+
+
+def _as_array(value: ArrayLike, name: str, shape: tuple[int, ...]) -> np.ndarray:
+    """value as a finite float64 array of the given shape (-1 = any length); errors name the first bad row."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgumentType(f"{name} must be an array of numbers: {exc}") from None
+    if arr.ndim != len(shape) or any(want not in (-1, got) for want, got in zip(shape, arr.shape, strict=True)):
+        want = "(" + ", ".join("T" if s == -1 else str(s) for s in shape) + ")"
+        raise InvalidArgument(f"{name} must have shape {want}, got {arr.shape}")
+    if not np.isfinite(arr).all():
+        row = int(np.flatnonzero(~np.isfinite(arr.reshape(arr.shape[0], -1)).all(axis=1))[0])
+        raise InvalidArgument(f"{name} row {row} is not finite (NaN or inf): {arr[row].tolist()}")
+    return arr
+
+
+def _as_index(value: ArrayLike, name: str) -> np.ndarray:
+    """value as a 1-D int64 array of integers."""
+    arr = np.asarray(value)
+    if arr.ndim != 1 or (arr.size and arr.dtype.kind not in "iu"):
+        raise InvalidArgument(f"{name} must be a 1-D integer array, got shape {arr.shape} {arr.dtype}")
+    return arr.astype(np.int64, copy=False)
+
+
+@dataclass
+class Fragments:
+    """Visible fragments: pixel ``(xs[k], ys[k])`` shows triangle ``face[k]`` at ``depth[k]``.
+
+    ``bary[k]`` are the (perspective-correct) weights of the triangle's three vertices at the pixel centre.
+    """
+
+    xs: np.ndarray
+    ys: np.ndarray
+    face: np.ndarray
+    bary: np.ndarray
+    depth: np.ndarray
+
+    def __len__(self) -> int:
+        """Number of fragments."""
+        return int(self.face.shape[0])
+
+    def subset(self, mask: ArrayLike) -> Fragments:
+        """The fragments selected by a boolean mask (F,) or an index array."""
+        sel = np.asarray(mask)
+        if sel.dtype == bool and sel.shape != self.face.shape:
+            raise InvalidArgument(f"mask must be a boolean array of shape {self.face.shape}, got {sel.shape}")
+        if sel.dtype != bool:
+            sel = _as_index(sel, "mask")
+        return Fragments(self.xs[sel], self.ys[sel], self.face[sel], self.bary[sel], self.depth[sel])
+
+    def interpolate(self, values: ArrayLike) -> np.ndarray:
+        """Per-vertex values (T, 3, K) of the triangles interpolated at each fragment -> (F, K)."""
+        vals = np.asarray(values, dtype=np.float64)
+        if vals.ndim != 3 or vals.shape[1] != 3:
+            raise InvalidArgument(f"values must have shape (T, 3, K), got {vals.shape}")
+        if len(self) and int(self.face.max()) >= vals.shape[0]:
+            raise InvalidArgument(f"values has {vals.shape[0]} triangles but a fragment shows triangle "
+                                  f"{int(self.face.max())}")
+        corners = vals[self.face]
+        out = corners[:, 0] * self.bary[:, 0, None]
+        out += corners[:, 1] * self.bary[:, 1, None]
+        out += corners[:, 2] * self.bary[:, 2, None]
+        return out
+
+    def compose(self, source: ArrayLike, weights: ArrayLike) -> Fragments:
+        """Re-express against source triangles: face = source[face], bary = bary @ weights[face].
+
+        For triangles made by :func:`pixelpen.geometry.clip3d.clip_triangles_homogeneous`, whose vertex i is
+        ``sum_j weights[k, i, j] * tris[source[k], j]``.
+        """
+        src = _as_index(source, "source")
+        wts = _as_array(weights, "weights", (-1, 3, 3))
+        if wts.shape[0] != src.shape[0]:
+            raise InvalidArgument(f"source has {src.shape[0]} rows but weights has {wts.shape[0]}")
+        if len(self) and int(self.face.max()) >= src.shape[0]:
+            raise InvalidArgument(f"source has {src.shape[0]} rows but a fragment shows triangle "
+                                  f"{int(self.face.max())}")
+        bary = np.einsum("fi,fij->fj", self.bary, wts[self.face])
+        return Fragments(self.xs, self.ys, src[self.face], bary, self.depth)
+
+
+def _empty_fragments() -> Fragments:
+    """No fragments."""
+    none = np.zeros(0, dtype=np.int64)
+    return Fragments(none, none.copy(), none.copy(), np.zeros((0, 3)), np.zeros(0))
+
+
+@dataclass
+class _Rows:
+    """Pixel runs, one per (triangle, row): flat index of the first pixel, length, depth = z0 + gz·index."""
+
+    start: np.ndarray
+    length: np.ndarray
+    z0: np.ndarray
+    gz: np.ndarray
+    face: np.ndarray
+    weight0: np.ndarray  # (K, R): the weight planes of _Triangles at column 0 of the row
+
+
+@dataclass
+class _Triangles:
+    """Per-triangle weight planes on the snapped geometry (pixel units, centres at integers).
+
+    Plane k is ``slope[k]·x + rise[k]·y + const[k]``: k = 0, 1 give the weights of vertices 1 and 2 times their
+    1/w and k = 2 their sum over the three vertices (absent without ``inv_w``: the sum is 1), so the
+    perspective-correct weights are planes 0 and 1 divided by plane 2.
+    """
+
+    slope: np.ndarray
+    rise: np.ndarray
+    const: np.ndarray
+
+
+def _sorted_by_y(sx: np.ndarray, sy: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Each triangle's vertex columns sorted by y (a three-comparator network): ax, ay, bx, by, cx, cy."""
+    x0, x1, x2 = sx[:, 0], sx[:, 1], sx[:, 2]
+    y0, y1, y2 = sy[:, 0], sy[:, 1], sy[:, 2]
+    for i, j in ((0, 1), (1, 2), (0, 1)):
+        xs, ys = [x0, x1, x2], [y0, y1, y2]
+        swap = ys[i] > ys[j]
+        xs[i], xs[j] = np.where(swap, xs[j], xs[i]), np.where(swap, xs[i], xs[j])
+        ys[i], ys[j] = np.where(swap, ys[j], ys[i]), np.where(swap, ys[i], ys[j])
+        x0, x1, x2 = xs
+        y0, y1, y2 = ys
+    return x0, y0, x1, y1, x2, y2
+
+
+def _edge(px: np.ndarray, py: np.ndarray, qx: np.ndarray, qy: np.ndarray,
+          neutral: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Edge P->Q (P on top) as (n0, step, den): its crossing of row r is ceil((n0 + step·r) / den).
+
+    Horizontal edges get a constant crossing of ``neutral`` (no bound).
+    """
+    dx, dy = qx - px, qy - py
+    flat = dy == 0
+    n0 = np.where(flat, neutral, px * dy - py * dx)
+    step = np.where(flat, 0.0, SUBPIXEL * dx)
+    den = np.where(flat, 1.0, SUBPIXEL * dy)
+    return n0, step, den
+
+
+def _setup(xy: np.ndarray, z: np.ndarray, inv_w: np.ndarray | None, width: int,
+           height: int) -> tuple[_Triangles, _Rows]:
+    """Snap, sort and bucket the triangles; the pixel runs of every row they cover."""
+    sx = np.rint(xy[:, :, 0] * SUBPIXEL)
+    sx -= SUBPIXEL // 2
+    sy = np.rint(xy[:, :, 1] * SUBPIXEL)
+    sy -= SUBPIXEL // 2
+    # screen-space plane of depth and barycentric gradients, in pixel units
+    px, py = sx / SUBPIXEL, sy / SUBPIXEL
+    e1x, e1y = px[:, 1] - px[:, 0], py[:, 1] - py[:, 0]
+    e2x, e2y = px[:, 2] - px[:, 0], py[:, 2] - py[:, 0]
+    det = e1x * e2y - e1y * e2x
+    live = det != 0
+    inv = np.divide(1.0, det, out=np.zeros_like(det), where=live)
+    lam = np.stack([e2y * inv, -e2x * inv, -e1y * inv, e1x * inv])
+    dz1, dz2 = z[:, 1] - z[:, 0], z[:, 2] - z[:, 0]
+    gx = dz1 * lam[0] + dz2 * lam[2]
+    gy = dz1 * lam[1] + dz2 * lam[3]
+    zc = z[:, 0] - gx * px[:, 0] - gy * py[:, 0]
+    # screen weights l1 = lam0·x + lam1·y + c1, l2 likewise; times 1/w and their sum for perspective
+    c1 = -(lam[0] * px[:, 0] + lam[1] * py[:, 0])
+    c2 = -(lam[2] * px[:, 0] + lam[3] * py[:, 0])
+    planes = [(lam[0], lam[1], c1), (lam[2], lam[3], c2)]
+    if inv_w is not None:
+        q0, d1, d2 = inv_w[:, 0], inv_w[:, 1] - inv_w[:, 0], inv_w[:, 2] - inv_w[:, 0]
+        planes = [(a * inv_w[:, k + 1], b * inv_w[:, k + 1], c * inv_w[:, k + 1]) for k, (a, b, c) in enumerate(planes)]
+        planes.append((d1 * lam[0] + d2 * lam[2], d1 * lam[1] + d2 * lam[3], q0 + d1 * c1 + d2 * c2))
+    tris = _Triangles(*(np.stack([plane[i] for plane in planes]) for i in range(3)))
+
+    ax, ay, bx, by, cx, cy = _sorted_by_y(sx, sy)
+    r0 = np.clip(np.ceil(ay / SUBPIXEL), 0, height)
+    count = (np.clip(np.ceil(cy / SUBPIXEL), 0, height) - r0).astype(np.int64)
+    xmin = np.minimum(np.minimum(ax, bx), cx)
+    xmax = np.maximum(np.maximum(ax, bx), cx)
+    live &= (count > 0) & (xmax >= 0) & (xmin <= (width - 1) * SUBPIXEL)
+    pair_left = (bx - ax) * (cy - ay) < (by - ay) * (cx - ax)  # B left of AC (y down)
+    keep = np.flatnonzero(live)
+    if keep.size == 0:
+        return tris, _no_rows()
+    key = count[keep] * 2 + pair_left[keep]
+    if int(key.max()) <= np.iinfo(np.uint16).max:
+        key = key.astype(np.uint16)  # a radix sort
+    order = keep[np.argsort(key, kind="stable")]
+    # per selected triangle, in bucket order
+    ax, ay, bx, by, cx, cy, r0, xmin, xmax, gxo, gyo, zco = (
+        np.take(v, order) for v in (ax, ay, bx, by, cx, cy, r0, xmin, xmax, gx, gy, zc))
+    left_side = np.take(pair_left, order)
+    n_planes = tris.rise.shape[0]
+    rise = np.stack([np.take(v, order) for v in tris.rise])
+    weight0 = np.stack([np.take(v, order) for v in tris.const])
+    weight0 += rise * r0
+    key = count[order] * 2 + left_side
+    side = np.where(left_side, -_NEUTRAL, _NEUTRAL)
+    edges = [_edge(ax, ay, bx, by, side), _edge(bx, by, cx, cy, side), _edge(ax, ay, cx, cy, 0.0)]
+    edges = [(n0 + step * r0, step, den) for n0, step, den in edges]
+    inside = (xmin >= 0) & (xmax <= width * SUBPIXEL - SUBPIXEL)
+    z0 = zco + gyo * r0 - gxo * (r0 * width)
+    zstep = gyo - gxo * width
+    base = r0 * width
+    bounds = np.concatenate(([0], np.flatnonzero(np.diff(key)) + 1, [key.size])).tolist()
+    total = int(count[order].sum())
+    rows = _Rows(np.empty(total), np.empty(total), np.empty(total), np.empty(total),
+                 np.empty(total, dtype=np.int64), np.empty((n_planes, total)))
+    j = np.arange(int(count[order[-1]]), dtype=np.float64)[:, None]
+    pos = 0
+    for lo, hi in itertools.pairwise(bounds):
+        n, left = divmod(int(key[lo]), 2)
+        size = n * (hi - lo)
+        jj = j[:n]
+        sl = slice(lo, hi)
+        shape = (n, hi - lo)
+        first = rows.start[pos:pos + size].reshape(shape)
+        cross = [first, np.empty(shape), np.empty(shape)]
+        for c, (n0, step, den) in zip(cross, edges, strict=True):
+            np.multiply(step[sl], jj, out=c)
+            c += n0[sl]
+            c /= den[sl]
+            np.ceil(c, out=c)
+        pair, other, single = cross
+        if left:
+            np.maximum(pair, other, out=first)
+            last = single
+        else:
+            np.minimum(pair, other, out=other)
+            first[...] = single
+            last = other
+        if not inside[sl].all():
+            np.clip(first, 0, width, out=first)
+            np.clip(last, 0, width, out=last)
+        np.subtract(last, first, out=rows.length[pos:pos + size].reshape(shape))
+        first += base[sl]
+        first += jj * width
+        zr = rows.z0[pos:pos + size].reshape(shape)
+        np.multiply(zstep[sl], jj, out=zr)
+        zr += z0[sl]
+        rows.gz[pos:pos + size].reshape(shape)[...] = gxo[sl]
+        rows.face[pos:pos + size].reshape(shape)[...] = order[sl]
+        w0 = rows.weight0[:, pos:pos + size].reshape((-1, *shape))
+        np.multiply(rise[:, None, sl], jj, out=w0)
+        w0 += weight0[:, None, sl]
+        pos += size
+    return tris, rows
+
+
+def _no_rows() -> _Rows:
+    """No pixel runs."""
+    return _Rows(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros((3, 0)))
+
+
+def _chunks(length: np.ndarray) -> list[tuple[int, int]]:
+    """Consecutive row ranges of about CHUNK pixels each (a row is never split)."""
+    cum = np.cumsum(length)
+    total = int(cum[-1]) if cum.size else 0
+    cuts = np.searchsorted(cum, np.arange(CHUNK, total, CHUNK), side="left") + 1
+    bounds = np.unique(np.concatenate(([0], cuts, [length.size]))).tolist()
+    return list(itertools.pairwise(bounds))
+
+
+def _expand(rows: _Rows, offset: np.ndarray, first: np.ndarray, lo: int, hi: int,
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pixels of rows lo..hi: (flat index, depth, owning row)."""
+    length = rows.length[lo:hi]
+    owner = np.repeat(np.arange(lo, hi), length)
+    pix = np.arange(first[lo], first[hi], dtype=np.int64)
+    pix += offset[owner]
+    depth = rows.gz[owner]
+    depth *= pix
+    depth += rows.z0[owner]
+    return pix, depth, owner
+
+
+class ZBuffer:
+    """A width x height depth buffer (``.depth``, +inf where nothing is drawn) that rasterizes triangles."""
+
+    def __init__(self, width: int, height: int) -> None:
+        for name, v in (("width", width), ("height", height)):
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+                raise InvalidArgumentType(f"{name} must be an integer, got {type(v).__name__} {v!r}")
+            if not 1 <= v <= MAX_SIDE:
+                raise InvalidArgument(f"{name} must be 1..{MAX_SIDE}, got {v}")
+        self.width = int(width)
+        self.height = int(height)
+        self.depth: np.ndarray = np.full((self.height, self.width), np.inf)
+        self._owner: np.ndarray | None = None
+
+    def clear(self) -> None:
+        """Reset every depth to +inf."""
+        self.depth.fill(np.inf)
+
+    def rasterize(self, xy: ArrayLike, depth: ArrayLike, inv_w: ArrayLike | None = None) -> Fragments:
+        """Draw triangles (device xy (T, 3, 2), NDC depth (T, 3), optional 1/w (T, 3)); return what they won.
+
+        One fragment per pixel won in this call (in no particular order); ``.depth`` is updated.
+        """
+        pts = _as_array(xy, "xy", (-1, 3, 2))
+        count = pts.shape[0]
+        z = _as_array(depth, "depth", (count, 3))
+        q = None if inv_w is None else _as_array(inv_w, "inv_w", (count, 3))
+        if count and max(-float(pts.min()), float(pts.max())) > VERTEX_LIMIT:
+            row = int(np.flatnonzero(np.abs(pts).max(axis=(1, 2)) > VERTEX_LIMIT)[0])
+            raise InvalidArgument(f"xy row {row} has a vertex beyond ±{VERTEX_LIMIT} px: {pts[row].tolist()}")
+        if q is not None and count and float(q.min()) <= 0:
+            row = int(np.flatnonzero((q <= 0).any(axis=1))[0])
+            raise InvalidArgument(f"inv_w row {row} must be > 0 (clip before rasterizing): {q[row].tolist()}")
+        if count == 0:
+            return _empty_fragments()
+        tris, rows = _setup(pts, z, q, self.width, self.height)
+        np.maximum(rows.length, 0, out=rows.length)
+        length = rows.length.astype(np.int64)
+        if not length.any():
+            return _empty_fragments()
+        rows.length = length
+        first = np.zeros(length.size + 1, dtype=np.int64)
+        np.cumsum(length, out=first[1:])
+        offset = rows.start.astype(np.int64) - first[:-1]
+        flat = self.depth.reshape(-1)
+        lo = int(rows.start.min())
+        before = flat[lo:int((rows.start + length).max())].copy()
+        chunks = _chunks(length)
+        keep = first[-1] <= KEEP_PIXELS
+        expanded = []
+        for a, b in chunks:
+            pix, zz, owner = _expand(rows, offset, first, a, b)
+            np.minimum.at(flat, pix, zz)
+            if keep:
+                expanded.append((pix, zz, owner))
+
+        def again(i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+            """The pixels of chunk i, kept from pass 1 or expanded again."""
+            return expanded[i] if keep else _expand(rows, offset, first, *chunks[i])
+
+        lowered = int(np.count_nonzero(flat[lo:lo + before.size] < before))
+        if lowered == first[-1]:  # every candidate is alone at its pixel and nearer: all of them win
+            out = _Columns(lowered)
+            for i, (a, _) in enumerate(chunks):
+                pix, zz, owner = again(i)
+                out.put(int(first[a]), pix, owner, zz, rows, tris, self.width)
+            return out.fragments()
+        pieces = []
+        for i in range(len(chunks)):
+            pix, zz, owner = again(i)
+            win = zz == flat[pix]
+            win &= zz < before[pix - lo]
+            pieces.append((pix[win], owner[win], zz[win]))
+        out = _Columns(sum(piece[0].size for piece in pieces))
+        pos = 0
+        for piece in pieces:
+            out.put(pos, *piece, rows, tris, self.width)
+            pos += piece[0].size
+        fragments = out.fragments()
+        if lowered == len(fragments):
+            return fragments
+        return fragments.subset(self._lowest_face(fragments.ys * self.width + fragments.xs, fragments.face))
+
+    def _lowest_face(self, pix: np.ndarray, face: np.ndarray) -> np.ndarray:
+        """Mask keeping, at each pixel won by several equally near triangles, the lowest face."""
+        if self._owner is None:
+            self._owner = np.empty(self.width * self.height, dtype=np.int64)
+        owner = self._owner
+        owner[pix] = face
+        alone = owner[pix] == face
+        owner[pix[~alone]] = _NO_FACE
+        tied = owner[pix] == _NO_FACE
+        np.minimum.at(owner, pix[tied], face[tied])
+        return ~tied | (owner[pix] == face)
+
+
+class _Columns:
+    """Output arrays of a known number of fragments, filled piece by piece."""
+
+    def __init__(self, size: int) -> None:
+        self.xs = np.empty(size, dtype=np.int64)
+        self.ys = np.empty(size, dtype=np.int64)
+        self.face = np.empty(size, dtype=np.int64)
+        self.depth = np.empty(size)
+        self.bary = np.empty((3, size))  # one row per vertex: contiguous writes; handed out transposed
+
+    def put(self, pos: int, pix: np.ndarray, owner: np.ndarray, depth: np.ndarray, rows: _Rows,
+            tris: _Triangles, width: int) -> None:
+        """Store fragments (flat pixel index, owning row, depth) from pos on, with their weights."""
+        sl = slice(pos, pos + pix.size)
+        ys = np.floor_divide(pix, width, out=self.ys[sl])
+        xs = np.subtract(pix, ys * width, out=self.xs[sl])
+        face = np.take(rows.face, owner, out=self.face[sl])
+        self.depth[sl] = depth
+        l0, l1, l2 = self.bary[0, sl], self.bary[1, sl], self.bary[2, sl]
+        for k, out in ((0, l1), (1, l2)):
+            np.multiply(tris.slope[k][face], xs, out=out)
+            out += rows.weight0[k][owner]
+        if tris.slope.shape[0] == 3:
+            total = tris.slope[2][face] * xs
+            total += rows.weight0[2][owner]
+            np.divide(1.0, total, out=total)
+            l1 *= total
+            l2 *= total
+        np.subtract(1.0, l1, out=l0)
+        l0 -= l2
+
+    def fragments(self) -> Fragments:
+        """The filled arrays as Fragments."""
+        return Fragments(self.xs, self.ys, self.face, self.bary.T, self.depth)
