@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
 from pixelpen.colour import parse_colour
-from pixelpen.errors import ConfigError, URLError, quote_token
+from pixelpen.errors import ConfigError, PixelpenError, URLError, quote_token
 from pixelpen.urls import parse_size
 
 T = TypeVar("T")
@@ -69,8 +69,10 @@ def read_options(specs: Iterable[OptionSpec[Any]], options: Mapping[str, str], w
     return OptionValues(values, frozenset(options))
 
 
-def check_known(known: Iterable[str], options: Iterable[str], where: str) -> None:
-    """Refuse option names not in ``known``, listing the known ones and the closest match."""
+def check_known(known: Iterable[str], options: Iterable[str], where: str, *, kind: str = "option",
+                error: type[PixelpenError] = URLError) -> None:
+    """Refuse names not in ``known`` (URL options, or the keys of a dict argument: ``kind="key"``), listing the
+    known ones and the closest match."""
     names = sorted(set(known))
     unknown = sorted(set(options) - set(names))
     if not unknown:
@@ -83,7 +85,7 @@ def check_known(known: Iterable[str], options: Iterable[str], where: str) -> Non
         hint = f" (did you mean {close[0]!r}?)"
     elif _NESTED_PORT_OPTIONS & set(unknown) or "://" in where:
         hint = " (options of a nested port URL go inside brackets: scheme:[rfc2217://host:port?logging=debug])"
-    raise URLError(f"{where}: unknown option(s) {', '.join(unknown)}; known: {', '.join(names) or 'none'}{hint}")
+    raise error(f"{where}: unknown {kind}(s) {', '.join(unknown)}; known: {', '.join(names) or 'none'}{hint}")
 
 
 def describe(specs: Iterable[OptionSpec[Any]]) -> list[tuple[str, str]]:

@@ -25,6 +25,7 @@ from pixelpen.display.scene3d import CAMERA_KEYS, Scene
 from pixelpen.errors import ConfigError, InvalidArgument
 from pixelpen.geometry.mesh import Mesh
 from pixelpen.geometry.viewing3d import CABINET, STANDARD_VIEWS
+from pixelpen.options import check_known
 from pixelpen.raster.shading import SHADING_MODES
 
 Vector = tuple[float, float, float]
@@ -74,8 +75,7 @@ def parse_camera_items(items: list[str]) -> tuple[str, dict[str, Any]]:
                 raise ConfigError(f"--camera {item!r}: not a view ({', '.join(VIEWS)}) nor KEY=VALUE")
             view = name
             continue
-        if name not in CAMERA_KEYS:
-            raise ConfigError(f"--camera {item!r}: unknown camera key {name!r} (known: {', '.join(CAMERA_KEYS)})")
+        check_known(CAMERA_KEYS, [name], f"--camera {item!r}", kind="camera key", error=ConfigError)
         if name == "projection":
             raise ConfigError("--camera projection=...: use --projection")
         try:

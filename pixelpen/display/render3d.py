@@ -214,7 +214,8 @@ def render_raster(scene: Scene, pipeline: geo.ViewingPipeline, canvas: Canvas, t
         rgb = shade(mine, mesh.vertices, mesh.faces[it.front], mode=item.shading, material=item.material,
                     lights=lights, viewer=viewer,
                     vertex_normals=mesh.vertex_normals() if smooth else None,
-                    face_colours=None if item.face_colours is None else item.face_colours[it.front])
+                    face_colours=None if item.face_colours is None else item.face_colours[it.front],
+                    polygons=mesh.polygon[it.front])
         write_colours(canvas, mine.xs, mine.ys, rgb)
     return RenderStats(sum(len(it.front) for it in items), int(tris.offsets[-1]), len(tris.source),
                        fragments=len(fragments.face))

@@ -27,6 +27,7 @@ from pixelpen.geometry.surfaces import Surface
 from pixelpen.geometry.transforms import ArrayLike, as_number
 from pixelpen.geometry.transforms3d import as_choice, as_matrix3d, as_triple, compose3d
 from pixelpen.geometry.viewing3d import ViewVolume, view_orientation
+from pixelpen.options import check_known
 from pixelpen.raster.illumination import Light, Material, Viewer, as_colours
 from pixelpen.raster.shading import SHADING_MODES
 
@@ -74,9 +75,7 @@ class Camera:
         """A camera from a dict with keys among :data:`CAMERA_KEYS`; near and far are required."""
         if not isinstance(values, Mapping):
             raise InvalidArgumentType(f"camera must be a dict, got {type(values).__name__} {values!r}")
-        unknown = [key for key in values if key not in CAMERA_KEYS]
-        if unknown:
-            raise InvalidArgument(f"unknown camera key(s) {unknown}: use {list(CAMERA_KEYS)}")
+        check_known(CAMERA_KEYS, values, "camera", kind="key", error=InvalidArgument)
         missing = [key for key in ("near", "far") if key not in values]
         if missing:
             raise InvalidArgument(f"camera needs {' and '.join(missing)} (n coordinates of the clipping planes, "

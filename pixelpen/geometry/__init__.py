@@ -1,4 +1,5 @@
-"""Device-independent 2D/3D geometry: homogeneous transforms, viewing, clipping, curves, hatching, dashes.
+"""Device-independent 2D/3D geometry: homogeneous transforms, viewing, clipping, curves, hatching, dashes;
+in 3D also projections, clipping in homogeneous clip space, meshes, polygon tables and surfaces.
 
 Imports nothing of pixelpen but its errors.
 
@@ -20,6 +21,13 @@ from pixelpen.geometry.clip import (
     clip_segments_convex,
     outcodes,
 )
+from pixelpen.geometry.clip3d import (
+    clip_points_homogeneous,
+    clip_polygon_homogeneous,
+    clip_segments_homogeneous,
+    clip_triangles_homogeneous,
+    perspective_divide,
+)
 from pixelpen.geometry.curves import (
     BEZIER_BASIS,
     BSPLINE_BASIS,
@@ -38,6 +46,8 @@ from pixelpen.geometry.curves import (
     uniform_knots,
 )
 from pixelpen.geometry.dashes import as_pattern, dash_polylines
+from pixelpen.geometry.mesh import Mesh, MeshEdges, PolygonTable, plane_equation, quad_mesh, triangle_strip
+from pixelpen.geometry.surfaces import BezierSurface, BSplineSurface, Ellipsoid, Sphere, Surface, Torus
 from pixelpen.geometry.transforms import (
     apply,
     as_matrix,
@@ -55,7 +65,21 @@ from pixelpen.geometry.transforms import (
     shear,
     translate,
 )
+from pixelpen.geometry.transforms3d import (
+    apply3d,
+    compose3d,
+    invert3d,
+    reflect3d,
+    rotate_axis,
+    rotate_x,
+    rotate_y,
+    rotate_z,
+    scale3d,
+    shear3d,
+    translate3d,
+)
 from pixelpen.geometry.viewing import Rect, ViewingPipeline, as_rect, window_to_viewport
+from pixelpen.geometry.viewing3d import ViewVolume, oblique, orthographic, perspective, view_orientation
 
 __all__ = [
     "BEZIER_BASIS",
@@ -65,9 +89,20 @@ __all__ = [
     "LEFT",
     "RIGHT",
     "TOP",
+    "BSplineSurface",
+    "BezierSurface",
+    "Ellipsoid",
+    "Mesh",
+    "MeshEdges",
+    "PolygonTable",
     "Rect",
+    "Sphere",
+    "Surface",
+    "Torus",
+    "ViewVolume",
     "ViewingPipeline",
     "apply",
+    "apply3d",
     "as_convex_window",
     "as_matrix",
     "as_number",
@@ -81,12 +116,17 @@ __all__ = [
     "bezier_point",
     "bspline_basis",
     "bspline_point",
+    "clip_points_homogeneous",
     "clip_polygon",
     "clip_polygon_convex",
+    "clip_polygon_homogeneous",
     "clip_polylines",
     "clip_segments",
     "clip_segments_convex",
+    "clip_segments_homogeneous",
+    "clip_triangles_homogeneous",
     "compose",
+    "compose3d",
     "dash_polylines",
     "eval_basis",
     "flatten_arc",
@@ -95,15 +135,32 @@ __all__ = [
     "flatten_bspline",
     "identity",
     "invert",
+    "invert3d",
+    "oblique",
     "open_uniform_knots",
+    "orthographic",
     "outcodes",
+    "perspective",
+    "perspective_divide",
     "place",
+    "plane_equation",
+    "quad_mesh",
     "reflect",
+    "reflect3d",
     "rotate",
+    "rotate_axis",
+    "rotate_x",
+    "rotate_y",
+    "rotate_z",
     "scale",
+    "scale3d",
     "scale_factor",
     "shear",
+    "shear3d",
     "translate",
+    "translate3d",
+    "triangle_strip",
     "uniform_knots",
+    "view_orientation",
     "window_to_viewport",
 ]

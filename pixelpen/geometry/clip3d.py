@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from pixelpen.errors import InvalidArgument
-from pixelpen.geometry.transforms import ArrayLike
+from pixelpen.geometry.transforms import ArrayLike, as_batch
 from pixelpen.geometry.transforms3d import as_homogeneous
 
 PLANES = np.array([
@@ -37,23 +37,6 @@ _APEX_TOL = 1e-12
 
 # For each plane: the coordinate a point cut by it has, as (index, factor): coordinate = factor · w.
 _ON_PLANE = ((0, -1.0), (0, 1.0), (1, -1.0), (1, 1.0), (2, 0.0), (2, 1.0))
-
-
-def _as_batch(value: ArrayLike, name: str, shape: tuple[int, ...], what: str) -> np.ndarray:
-    """Validate a float64 array (N, *shape) of finite numbers; errors name the first bad row."""
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidArgument(f"{name} must be an (N, {', '.join(map(str, shape))}) array of {what}: {exc}") from None
-    if arr.ndim != 1 + len(shape) or arr.shape[1:] != shape:
-        raise InvalidArgument(
-            f"{name} must be an (N, {', '.join(map(str, shape))}) array of {what}, got shape {arr.shape}"
-        )
-    bad = ~np.isfinite(arr.reshape(len(arr), int(np.prod(shape)))).all(axis=1)
-    if bad.any():
-        row = int(np.flatnonzero(bad)[0])
-        raise InvalidArgument(f"{name} contains a non-finite value (NaN or inf) at row {row}: {arr[row].tolist()}")
-    return arr
 
 
 def _snap(points: np.ndarray, plane: int) -> None:
@@ -92,7 +75,7 @@ def clip_points_homogeneous(h: ArrayLike) -> np.ndarray:
 
 def clip_segments_homogeneous(segments: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Liang–Barsky clip of (N, 2, 4) segments; return (clipped (K, 2, 4), indices (K,) of the segments kept)."""
-    segs = _as_batch(segments, "segments", (2, 4), "homogeneous endpoint pairs")
+    segs = as_batch(segments, "segments", (2, 4), "homogeneous endpoint pairs")
     p0, p1 = segs[:, 0], segs[:, 1]
     d0, d1 = _distances(p0), _distances(p1)  # (N, 6)
     entering, exiting = (d0 < 0.0) & (d1 >= 0.0), (d1 < 0.0) & (d0 >= 0.0)
@@ -178,7 +161,7 @@ def clip_triangles_homogeneous(tris: ArrayLike) -> tuple[np.ndarray, np.ndarray,
     with identity weights; wholly outside one plane, they are dropped; the rest are clipped (Sutherland–Hodgman)
     and the clipped convex polygon fan-triangulated from its first vertex, keeping the winding.
     """
-    tri = _as_batch(tris, "tris", (3, 4), "homogeneous triangles")
+    tri = as_batch(tris, "tris", (3, 4), "homogeneous triangles")
     d = _distances(tri)  # (T, 3, 6)
     inside = (d >= 0.0).all(axis=(1, 2)) & (tri[:, :, 3] > 0.0).all(axis=1)
     if inside.all():  # the common case: nothing near the volume's sides

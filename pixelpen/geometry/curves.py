@@ -236,7 +236,7 @@ def basis_to_bezier(basis: ArrayLike, geometry: ArrayLike) -> np.ndarray:
     return np.linalg.solve(BEZIER_BASIS, m @ g)
 
 
-def _degree(degree: object) -> int:
+def as_degree(degree: object) -> int:
     """Validate a spline degree (integer >= 1)."""
     if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
         raise InvalidArgument(f"degree must be an integer >= 1, got {degree!r}")
@@ -252,13 +252,13 @@ def _count(n: object, degree: int) -> int:
 
 def uniform_knots(n: int, degree: int) -> np.ndarray:
     """Uniform (periodic-style) knot vector 0, 1, ..., n + degree for n control points; domain [degree, n]."""
-    degree = _degree(degree)
+    degree = as_degree(degree)
     return np.arange(_count(n, degree) + degree + 1, dtype=np.float64)
 
 
 def open_uniform_knots(n: int, degree: int) -> np.ndarray:
     """Open uniform (clamped) knots: degree + 1 zeros, 1 .. n - degree - 1, degree + 1 copies of n - degree."""
-    degree = _degree(degree)
+    degree = as_degree(degree)
     n = _count(n, degree)
     inner = np.arange(1, n - degree, dtype=np.float64)
     return np.concatenate([np.zeros(degree + 1), inner, np.full(degree + 1, float(n - degree))])
@@ -283,7 +283,7 @@ def _knot_vector(knots: ArrayLike, degree: int) -> np.ndarray:
     return k
 
 
-def _spline_knots(knots: ArrayLike | None, n: int, degree: int) -> np.ndarray:
+def spline_knots(knots: ArrayLike | None, n: int, degree: int) -> np.ndarray:
     """The knot vector for n control points of this degree: validated, or open uniform when None."""
     if knots is None:
         return open_uniform_knots(n, degree)
@@ -329,7 +329,7 @@ def bspline_basis(knots: ArrayLike, degree: int, t: ArrayLike) -> np.ndarray:
     belongs to the last non-empty span. Only degree + 1 functions are non-zero at any t; to evaluate a
     curve use :func:`bspline_point`, which never builds this (len(t), n) matrix.
     """
-    degree = _degree(degree)
+    degree = as_degree(degree)
     k = _knot_vector(knots, degree)
     tt, _ = _parameters(t)
     span, values = _span_basis(k, degree, tt)
@@ -352,9 +352,9 @@ def bspline_point(control_points: ArrayLike, degree: int, knots: ArrayLike | Non
 
     Memory is O(len(t) x degree): only the degree + 1 basis functions non-zero in each knot span are computed.
     """
-    degree = _degree(degree)
+    degree = as_degree(degree)
     ctrl = _control_array(control_points, min_rows=degree + 1)
-    k = _spline_knots(knots, len(ctrl), degree)
+    k = spline_knots(knots, len(ctrl), degree)
     tt, scalar = _parameters(t)
     pts = _spline_points(ctrl, k, degree, tt)
     return pts[0] if scalar else pts
@@ -371,11 +371,11 @@ def flatten_bspline(
     the curve, so the tolerance is guaranteed rather than estimated from samples. The result runs over
     the whole domain [knots[degree], knots[n]]; interior knots may repeat up to ``degree`` times.
     """
-    degree = _degree(degree)
+    degree = as_degree(degree)
     tol = _tolerance(tolerance)
     ctrl = _control_array(control_points, min_rows=degree + 1)
     n, dim = ctrl.shape
-    k = _spline_knots(knots, n, degree)
+    k = spline_knots(knots, n, degree)
     values, multiplicity = np.unique(k[degree + 1:n], return_counts=True)
     if (multiplicity > degree).any():
         bad = float(values[np.argmax(multiplicity > degree)])

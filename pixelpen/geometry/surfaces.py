@@ -25,7 +25,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from pixelpen.errors import InvalidArgument
-from pixelpen.geometry.curves import _degree, _spline_knots, bernstein, bspline_basis
+from pixelpen.geometry.curves import as_degree, bernstein, bspline_basis, spline_knots
 from pixelpen.geometry.mesh import Mesh, quad_mesh
 from pixelpen.geometry.transforms import ArrayLike, as_number
 from pixelpen.geometry.transforms3d import as_triple
@@ -356,13 +356,13 @@ class BSplineSurface(_TensorProduct):
         """Validate the net, the degrees and the knots (interior multiplicity at most the degree)."""
         if not isinstance(degree, tuple | list) or len(degree) != 2:
             raise InvalidArgument(f"degree must be a pair (p, q), got {degree!r}")
-        p, q = _degree(degree[0]), _degree(degree[1])
+        p, q = as_degree(degree[0]), as_degree(degree[1])
         net = _control_net(control, p + 1, q + 1)
         if knots is not None and (not isinstance(knots, tuple | list) or len(knots) != 2):
             raise InvalidArgument("knots must be None or a pair (knots_u, knots_v)")
         pair = []
         for axis, d in ((0, p), (1, q)):
-            k = _spline_knots(None if knots is None else knots[axis], net.shape[axis], d)
+            k = spline_knots(None if knots is None else knots[axis], net.shape[axis], d)
             values, counts = np.unique(k[d + 1:net.shape[axis]], return_counts=True)
             if (counts > d).any():
                 raise InvalidArgument(f"interior knot {float(values[counts > d][0])} of axis {axis} repeats more "

@@ -13,22 +13,22 @@ from pixelpen.errors import InvalidArgument, InvalidArgumentType
 
 ArrayLike = np.ndarray | Sequence[Any]
 
-# A homogeneous matrix whose linear part has |det| below this fraction of the product of its
-# row norms is treated as singular: its inverse would be dominated by rounding error.
-_SINGULAR_RATIO = 1e-12
+SINGULAR_RATIO = 1e-12
+"""A matrix whose :func:`singular_ratio` is below this is singular: its inverse would be rounding error."""
 
 
-def as_points(points: ArrayLike, name: str = "points", *, min_rows: int = 0) -> tuple[np.ndarray, bool]:
-    """Validate an (N, 2) array or a single (2,) point of finite numbers; return (float64 (N, 2), was_single)."""
+def as_points(points: ArrayLike, name: str = "points", *, min_rows: int = 0, dim: int = 2) -> tuple[np.ndarray, bool]:
+    """Validate an (N, dim) array or a single (dim,) point of finite numbers; return (float64 (N, dim), was_single)."""
+    axes = "(x, y)" if dim == 2 else "(x, y, z)" if dim == 3 else f"({dim} coordinates)"
     try:
         arr = np.asarray(points, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise InvalidArgument(f"{name} must be an (N, 2) array of numbers: {exc}") from None
-    single = arr.shape == (2,)
+        raise InvalidArgument(f"{name} must be an (N, {dim}) array of numbers: {exc}") from None
+    single = arr.shape == (dim,)
     if single:
-        arr = arr.reshape(1, 2)
-    if arr.ndim != 2 or arr.shape[1] != 2:
-        raise InvalidArgument(f"{name} must be an (N, 2) array or a single (x, y) point, got shape {arr.shape}")
+        arr = arr.reshape(1, dim)
+    if arr.ndim != 2 or arr.shape[1] != dim:
+        raise InvalidArgument(f"{name} must be an (N, {dim}) array or a single {axes} point, got shape {arr.shape}")
     if arr.shape[0] < min_rows:
         raise InvalidArgument(f"{name} needs at least {min_rows} points, got {arr.shape[0]}")
     if not np.isfinite(arr).all():
@@ -37,20 +37,39 @@ def as_points(points: ArrayLike, name: str = "points", *, min_rows: int = 0) -> 
     return arr, single
 
 
+def as_batch(value: ArrayLike, name: str, shape: tuple[int, ...], what: str) -> np.ndarray:
+    """Validate a float64 (N, *shape) array of finite numbers (an empty input gives N = 0); errors name the
+    first bad row."""
+    dims = f"(N, {', '.join(map(str, shape))})"
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidArgument(f"{name} must be an {dims} array of {what}: {exc}") from None
+    if arr.size == 0:
+        return np.zeros((0, *shape))
+    if arr.ndim != 1 + len(shape) or arr.shape[1:] != shape:
+        raise InvalidArgument(f"{name} must be an {dims} array of {what}, got shape {arr.shape}")
+    bad = ~np.isfinite(arr.reshape(len(arr), -1)).all(axis=1)
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        raise InvalidArgument(f"{name} contains a non-finite value (NaN or inf) at row {row}: {arr[row].tolist()}")
+    return arr
+
+
 def split_rows(array: np.ndarray, starts: np.ndarray) -> list[np.ndarray]:
     """Cut an array into consecutive row blocks beginning at the given (increasing) row offsets, as views."""
     bounds = [*starts.tolist(), len(array)]
     return [array[begin:end] for begin, end in itertools.pairwise(bounds)]
 
 
-def as_matrix(m: ArrayLike, name: str = "matrix") -> np.ndarray:
-    """Validate a 3x3 homogeneous matrix of finite numbers and return it as float64."""
+def as_matrix(m: ArrayLike, name: str = "matrix", *, size: int = 3) -> np.ndarray:
+    """Validate a size x size homogeneous matrix of finite numbers (3x3 in 2D, 4x4 in 3D) and return it as float64."""
     try:
         arr = np.asarray(m, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise InvalidArgument(f"{name} must be a 3x3 array of numbers: {exc}") from None
-    if arr.shape != (3, 3):
-        raise InvalidArgument(f"{name} must be a 3x3 homogeneous matrix, got shape {arr.shape}")
+        raise InvalidArgument(f"{name} must be a {size}x{size} array of numbers: {exc}") from None
+    if arr.shape != (size, size):
+        raise InvalidArgument(f"{name} must be a {size}x{size} homogeneous matrix, got shape {arr.shape}")
     if not np.isfinite(arr).all():
         raise InvalidArgument(f"{name} contains NaN or inf: {arr.tolist()}")
     return arr
@@ -182,14 +201,14 @@ def compose(*matrices: ArrayLike) -> np.ndarray:
     return result
 
 
-def apply(m: ArrayLike, points: ArrayLike) -> np.ndarray:
-    """Map an (N, 2) array (or one (2,) point) through the homogeneous matrix m; InvalidArgument if it overflows."""
-    mat = as_matrix(m)
-    pts, single = as_points(points)
-    with np.errstate(over="ignore", invalid="ignore"):
-        out = pts @ mat[:2, :2].T + mat[:2, 2]
-        if not (mat[2, 0] == 0.0 and mat[2, 1] == 0.0 and mat[2, 2] == 1.0):
-            w = pts @ mat[2, :2] + mat[2, 2]
+def map_points(mat: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Validated (N, d) points through a validated (d+1, d+1) homogeneous matrix, dividing by w (2D and 3D);
+    InvalidArgument naming the row that maps to infinity or overflows."""
+    d = pts.shape[1]
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        out = pts @ mat[:d, :d].T + mat[:d, d]
+        if not ((mat[d, :d] == 0.0).all() and mat[d, d] == 1.0):
+            w = pts @ mat[d, :d] + mat[d, d]
             if (np.abs(w) < 1e-300).any():
                 row = int(np.flatnonzero(np.abs(w) < 1e-300)[0])
                 raise InvalidArgument(
@@ -199,27 +218,37 @@ def apply(m: ArrayLike, points: ArrayLike) -> np.ndarray:
     if not np.isfinite(out).all():
         row = int(np.flatnonzero(~np.isfinite(out).all(axis=1))[0])
         raise InvalidArgument(f"point {pts[row].tolist()} (row {row}) maps beyond the floating-point range")
-    result: np.ndarray = out[0] if single else out
+    result: np.ndarray = out
     return result
 
 
-def _singular_ratio(mat: np.ndarray) -> float:
-    """|det| over the product of row norms (Hadamard ratio, 1 for orthogonal rows, 0 when singular)."""
-    if mat[2, 0] == 0.0 and mat[2, 1] == 0.0 and mat[2, 2] != 0.0:
-        block = mat[:2, :2]  # affine: invertible iff the linear part is
-        det = float(np.linalg.det(block)) * mat[2, 2]
-        norms = float(np.prod(np.linalg.norm(block, axis=1))) * abs(mat[2, 2])
-    else:
-        det = float(np.linalg.det(mat))
-        norms = float(np.prod(np.linalg.norm(mat, axis=1)))
-    return 0.0 if norms == 0.0 else abs(det) / norms
+def apply(m: ArrayLike, points: ArrayLike) -> np.ndarray:
+    """Map an (N, 2) array (or one (2,) point) through the homogeneous matrix m; InvalidArgument if it overflows."""
+    pts, single = as_points(points)
+    out = map_points(as_matrix(m), pts)
+    return out[0] if single else out
+
+
+def singular_ratio(mat: np.ndarray) -> float:
+    """|det| over the product of row norms of a square (homogeneous) matrix: 1 for orthogonal rows, 0 when
+    singular (Hadamard's ratio; of the linear part when the matrix is affine)."""
+    d = len(mat) - 1
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        if d > 0 and (mat[d, :d] == 0.0).all() and mat[d, d] != 0.0:
+            block = mat[:d, :d]  # affine: invertible iff the linear part is
+            det = abs(float(np.linalg.det(block)))
+            norms = float(np.prod(np.linalg.norm(block, axis=1)))
+        else:
+            det = abs(float(np.linalg.det(mat)))
+            norms = float(np.prod(np.linalg.norm(mat, axis=1)))
+    return 0.0 if norms == 0.0 or not math.isfinite(det / norms) else det / norms
 
 
 def invert(m: ArrayLike) -> np.ndarray:
     """Inverse of a homogeneous matrix; ValueError when it is singular (e.g. a scale by zero)."""
     mat = as_matrix(m)
-    ratio = _singular_ratio(mat)
-    if ratio < _SINGULAR_RATIO:
+    ratio = singular_ratio(mat)
+    if ratio < SINGULAR_RATIO:
         raise InvalidArgument(
             f"matrix is singular (|det| / row norms = {ratio:.3g}); it collapses the plane onto a line or point "
             f"and has no inverse: {mat.tolist()}"

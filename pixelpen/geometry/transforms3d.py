@@ -15,60 +15,35 @@ from typing import Literal
 import numpy as np
 
 from pixelpen.errors import InvalidArgument, InvalidArgumentType
-from pixelpen.geometry.transforms import _SINGULAR_RATIO, ArrayLike, as_number
+from pixelpen.geometry.transforms import (
+    SINGULAR_RATIO,
+    ArrayLike,
+    as_batch,
+    as_matrix,
+    as_number,
+    as_points,
+    map_points,
+    singular_ratio,
+)
 
 Plane = Literal["xy", "yz", "xz"]
 Axis = Literal["x", "y", "z"]
 RotationMethod = Literal["composition", "quaternion"]
 
 
-def _as_float_array(value: ArrayLike, name: str, what: str) -> np.ndarray:
-    """np.asarray(value, float64) with an InvalidArgument naming the argument when it is not numeric."""
-    try:
-        return np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidArgument(f"{name} must be {what} of numbers: {exc}") from None
-
-
-def _check_finite_rows(arr: np.ndarray, name: str) -> None:
-    """InvalidArgument naming the first row of a 2D array holding NaN or inf."""
-    bad = ~np.isfinite(arr).all(axis=1)
-    if bad.any():
-        row = int(np.flatnonzero(bad)[0])
-        raise InvalidArgument(f"{name} contains a non-finite value (NaN or inf) at row {row}: {arr[row].tolist()}")
-
-
 def as_matrix3d(m: ArrayLike, name: str = "matrix") -> np.ndarray:
     """Validate a 4x4 homogeneous matrix of finite numbers and return it as float64."""
-    arr = _as_float_array(m, name, "a 4x4 array")
-    if arr.shape != (4, 4):
-        raise InvalidArgument(f"{name} must be a 4x4 homogeneous matrix, got shape {arr.shape}")
-    if not np.isfinite(arr).all():
-        raise InvalidArgument(f"{name} contains NaN or inf: {arr.tolist()}")
-    return arr
+    return as_matrix(m, name, size=4)
 
 
 def as_points3d(points: ArrayLike, name: str = "points", *, min_rows: int = 0) -> tuple[np.ndarray, bool]:
     """Validate an (N, 3) array or a single (3,) point of finite numbers; return (float64 (N, 3), was_single)."""
-    arr = _as_float_array(points, name, "an (N, 3) array")
-    single = arr.shape == (3,)
-    if single:
-        arr = arr.reshape(1, 3)
-    if arr.ndim != 2 or arr.shape[1] != 3:
-        raise InvalidArgument(f"{name} must be an (N, 3) array or a single (x, y, z) point, got shape {arr.shape}")
-    if arr.shape[0] < min_rows:
-        raise InvalidArgument(f"{name} needs at least {min_rows} points, got {arr.shape[0]}")
-    _check_finite_rows(arr, name)
-    return arr, single
+    return as_points(points, name, min_rows=min_rows, dim=3)
 
 
 def as_homogeneous(h: ArrayLike, name: str = "points") -> np.ndarray:
     """Validate an (N, 4) array of finite homogeneous points [x, y, z, w]; return it as float64."""
-    arr = _as_float_array(h, name, "an (N, 4) array")
-    if arr.ndim != 2 or arr.shape[1] != 4:
-        raise InvalidArgument(f"{name} must be an (N, 4) array of homogeneous rows x, y, z, w, got shape {arr.shape}")
-    _check_finite_rows(arr, name)
-    return arr
+    return as_batch(h, name, (4,), "homogeneous rows x, y, z, w")
 
 
 def as_triple(value: object, name: str) -> tuple[float, float, float]:
@@ -144,10 +119,10 @@ def quaternion(axis: Sequence[float], theta: float) -> np.ndarray:
 
 def quaternion_matrix(q: ArrayLike) -> np.ndarray:
     """4x4 rotation matrix of the quaternion (w, x, y, z), normalised first (H&B's M_R with s = w, (a, b, c))."""
-    arr = _as_float_array(q, "q", "a (4,) array")
-    if arr.shape != (4,):
-        raise InvalidArgument(f"q must be a quaternion (w, x, y, z), got shape {arr.shape}")
-    s, a, b, c = _unit_quaternion(arr)
+    rows, single = as_points(q, "q (a quaternion w, x, y, z)", dim=4)
+    if not single:
+        raise InvalidArgument(f"q must be one quaternion (w, x, y, z), got {len(rows)} rows")
+    s, a, b, c = _unit_quaternion(rows[0])
     m = np.eye(4)
     m[:3, :3] = [
         [1 - 2 * b * b - 2 * c * c, 2 * a * b - 2 * s * c, 2 * a * c + 2 * s * b],
@@ -231,20 +206,11 @@ def compose3d(*matrices: ArrayLike) -> np.ndarray:
     return result
 
 
-def _singular_ratio(mat: np.ndarray) -> float:
-    """|det| over the product of row norms (Hadamard ratio: 1 for orthogonal rows, 0 when singular)."""
-    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-        det = abs(float(np.linalg.det(mat)))
-        norms = float(np.prod(np.linalg.norm(mat, axis=1)))
-    return 0.0 if norms == 0.0 or not math.isfinite(det / norms) else det / norms
-
-
 def invert3d(m: ArrayLike) -> np.ndarray:
     """Inverse of a 4x4 homogeneous matrix; InvalidArgument when it is singular (e.g. a projection)."""
     mat = as_matrix3d(m)
-    affine = mat[3, 0] == 0.0 and mat[3, 1] == 0.0 and mat[3, 2] == 0.0 and mat[3, 3] != 0.0
-    ratio = _singular_ratio(mat[:3, :3]) if affine else _singular_ratio(mat)
-    if ratio < _SINGULAR_RATIO:
+    ratio = singular_ratio(mat)
+    if ratio < SINGULAR_RATIO:
         raise InvalidArgument(
             f"matrix is singular (|det| / row norms = {ratio:.3g}); it collapses space onto a plane, line or point "
             f"(a projection or a scale by zero) and has no inverse: {mat.tolist()}"
@@ -255,8 +221,8 @@ def invert3d(m: ArrayLike) -> np.ndarray:
 def normal_matrix(m: ArrayLike) -> np.ndarray:
     """3x3 inverse-transpose of the linear part of m: it maps surface normals (renormalise afterwards)."""
     linear = as_matrix3d(m)[:3, :3]
-    ratio = _singular_ratio(linear)
-    if ratio < _SINGULAR_RATIO:
+    ratio = singular_ratio(linear)
+    if ratio < SINGULAR_RATIO:
         raise InvalidArgument(
             f"the linear part of the matrix is singular (|det| / row norms = {ratio:.3g}): normals have no image"
         )
@@ -284,23 +250,9 @@ def transform_homogeneous(m: ArrayLike, h: ArrayLike) -> np.ndarray:
 
 def apply3d(m: ArrayLike, points: ArrayLike) -> np.ndarray:
     """Map an (N, 3) array (or one (3,) point) through m, dividing by w; InvalidArgument naming a row with w = 0."""
-    mat = as_matrix3d(m)
     pts, single = as_points3d(points)
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        out = pts @ mat[:3, :3].T + mat[:3, 3]
-        if not (mat[3, 0] == 0.0 and mat[3, 1] == 0.0 and mat[3, 2] == 0.0 and mat[3, 3] == 1.0):
-            w = pts @ mat[3, :3] + mat[3, 3]
-            if (np.abs(w) < 1e-300).any():
-                row = int(np.flatnonzero(np.abs(w) < 1e-300)[0])
-                raise InvalidArgument(
-                    f"point {pts[row].tolist()} (row {row}) maps to infinity (w = 0) under this matrix"
-                )
-            out = out / w[:, None]
-    if not np.isfinite(out).all():
-        row = int(np.flatnonzero(~np.isfinite(out).all(axis=1))[0])
-        raise InvalidArgument(f"point {pts[row].tolist()} (row {row}) maps beyond the floating-point range")
-    result: np.ndarray = out[0] if single else out
-    return result
+    out = map_points(as_matrix3d(m), pts)
+    return out[0] if single else out
 
 
 def as_choice(value: object, name: str, allowed: Sequence[str]) -> str:

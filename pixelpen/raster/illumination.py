@@ -37,6 +37,7 @@ import numpy as np
 from pixelpen.errors import InvalidArgument, InvalidArgumentType
 from pixelpen.geometry.transforms import ArrayLike, as_number
 from pixelpen.geometry.transforms3d import as_choice, as_points3d, as_triple
+from pixelpen.options import check_known
 
 LightKind = Literal["ambient", "point", "directional", "spot"]
 Model = Literal["phong", "blinn"]
@@ -147,9 +148,7 @@ class Material:
         """A material from a dict with keys among :data:`MATERIAL_KEYS` (the others keep their defaults)."""
         if not isinstance(values, Mapping):
             raise InvalidArgumentType(f"material must be a dict, got {type(values).__name__} {values!r}")
-        unknown = [key for key in values if key not in MATERIAL_KEYS]
-        if unknown:
-            raise InvalidArgument(f"unknown material key(s) {unknown}: use {list(MATERIAL_KEYS)}")
+        check_known(MATERIAL_KEYS, values, "material", kind="key", error=InvalidArgument)
         return cls(**values)  # type: ignore[arg-type]
 
 

@@ -28,6 +28,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from pixelpen.errors import InvalidArgument, InvalidArgumentType
+from pixelpen.geometry.mesh import Mesh
 from pixelpen.geometry.transforms import ArrayLike
 from pixelpen.geometry.transforms3d import as_choice, as_points3d
 from pixelpen.raster.canvas import Canvas
@@ -67,19 +68,25 @@ def _normals(values: ArrayLike | None, rows: int, name: str) -> np.ndarray | Non
     return arr
 
 
-def _face_cross(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """(v1 − v0) × (v2 − v0) per face: twice the area along the outward normal."""
-    v0, v1, v2 = (vertices[faces[:, i]] for i in range(3))
-    out: np.ndarray = np.cross(v1 - v0, v2 - v0)
-    return out
+def _polygon_groups(polygons: ArrayLike | None, count: int) -> np.ndarray:
+    """Validate (T,) polygon ids and renumber them 0..P-1 (default: each face its own polygon)."""
+    if polygons is None:
+        return np.arange(count)
+    arr = np.asarray(polygons)
+    if arr.shape != (count,) or (arr.size and arr.dtype.kind not in "iu"):
+        raise InvalidArgument(f"polygons must be ({count},) integer polygon ids, got shape {arr.shape} {arr.dtype}")
+    group: np.ndarray = np.unique(arr, return_inverse=True)[1].reshape(-1)
+    return group
 
 
-def _area_weighted_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Vertex normals: sums of the adjacent faces' area-weighted normals (unnormalised)."""
-    cross = _face_cross(vertices, faces)
-    corners = faces.ravel()
-    weights = np.repeat(cross, 3, axis=0)
-    return np.stack([np.bincount(corners, weights[:, c], vertices.shape[0]) for c in range(3)], axis=1)
+def _polygon_means(group: np.ndarray, size: int, weight: np.ndarray, centroids: np.ndarray,
+                   normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per polygon (of ``size`` renumbered by ``group``'s slots): the weighted centroid and mean normal."""
+    slots = np.unique(group, return_inverse=True)[1].reshape(-1)
+    total = np.bincount(slots, weight, size)
+    centroid = np.stack([np.bincount(slots, weight * centroids[:, k], size) for k in range(3)], axis=1)
+    normal = np.stack([np.bincount(slots, weight * normals[:, k], size) for k in range(3)], axis=1)
+    return centroid / total[:, None], normal
 
 
 def _interpolate(fragments: Fragments, corners: np.ndarray) -> np.ndarray:
@@ -114,8 +121,10 @@ def shade(
     face_normals: ArrayLike | None = None,
     vertex_normals: ArrayLike | None = None,
     face_colours: ArrayLike | None = None,
+    polygons: ArrayLike | None = None,
 ) -> np.ndarray:
-    """Intensities (F, 3) in [0, 1] for the fragments of a mesh (world vertices (N, 3), faces (T, 3))."""
+    """Intensities (F, 3) in [0, 1] for the fragments of a mesh (world vertices (N, 3), faces (T, 3)); flat
+    shading lights each polygon once (``polygons``: (T,) the polygon id of each face, default one per face)."""
     if not isinstance(fragments, Fragments):
         raise InvalidArgumentType(f"fragments must be Fragments, got {type(fragments).__name__}")
     if not isinstance(material, Material):
@@ -131,15 +140,20 @@ def shade(
         raise InvalidArgument(f"fragments name faces outside 0..{count - 1}")
     if mode == "flat":
         normals = _normals(face_normals, count, "face_normals")
-        used = np.flatnonzero(np.bincount(face, minlength=count))  # light only the faces that have fragments
-        centroid = verts[tris[used]].mean(axis=1)
-        normal = _face_cross(verts, tris[used]) if normals is None else normals[used]
+        group = _polygon_groups(polygons, count)
+        used = np.flatnonzero(np.bincount(group[face], minlength=count))  # polygons that have fragments
+        mine = np.flatnonzero(np.isin(group, used))
+        sub = Mesh(verts, tris[mine])
+        weight = sub.face_areas() + 1e-300  # area-weighted over each polygon's faces (all count if all degenerate)
+        centroid, normal = _polygon_means(group[mine], len(used), weight, verts[tris[mine]].mean(axis=1),
+                                          sub.face_normals() if normals is None else normals[mine])
         scale, specular = illumination_terms(centroid, normal, material, lights, viewer, model)
-        per_face = np.zeros((count, 3))
-        per_face[used] = combine(base if colours is None else colours[used], scale, specular)
-        return per_face[face]
+        slot = np.zeros(count, np.int64)
+        slot[used] = np.arange(len(used))
+        at = slot[group[face]]
+        return combine(base if colours is None else colours[face], scale[at], specular[at])
     given = _normals(vertex_normals, verts.shape[0], "vertex_normals")
-    normals = _area_weighted_normals(verts, tris) if given is None else given
+    normals = Mesh(verts, tris).vertex_normals() if given is None else given
     if mode == "gouraud":
         scale, specular = illumination_terms(verts, normals, material, lights, viewer, model)
         if colours is None:

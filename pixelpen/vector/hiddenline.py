@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pixelpen.errors import InvalidArgument, InvalidArgumentType
-from pixelpen.geometry.transforms import ArrayLike, as_number
+from pixelpen.geometry.transforms import ArrayLike, as_batch, as_number
 from pixelpen.vector.displaylist import DisplayList
 from pixelpen.vector.merge import merge_paths
 
@@ -80,23 +80,6 @@ class HiddenLines:
         k = len(self.segments)
         dl = DisplayList(self.segments.reshape(-1, 2), np.arange(0, 2 * k + 1, 2), np.ones(k), np.zeros(k))
         return [stroke.copy() for stroke in merge_paths(dl, tolerance).strokes()]
-
-
-def _as_coordinates(value: ArrayLike, name: str, corners: int) -> np.ndarray:
-    """Validate an (N, corners, 3) float64 array of finite x, y, z (an empty input gives N = 0)."""
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidArgumentType(f"{name} must be an (N, {corners}, 3) array of numbers: {exc}") from None
-    if arr.size == 0:
-        return np.zeros((0, corners, 3))
-    if arr.ndim != 3 or arr.shape[1:] != (corners, 3):
-        raise InvalidArgument(f"{name} must be an (N, {corners}, 3) array of x, y, z, got shape {arr.shape}")
-    bad = ~np.isfinite(arr).all(axis=(1, 2))
-    if bad.any():
-        row = int(np.flatnonzero(bad)[0])
-        raise InvalidArgument(f"{name} contains a non-finite value (NaN or inf) at row {row}: {arr[row].tolist()}")
-    return arr
 
 
 def _as_edge_faces(value: ArrayLike | None, edges: int, triangles: int) -> np.ndarray:
@@ -372,8 +355,8 @@ def hidden_lines(
     hide it. ``eps`` is the depth tolerance (NDC units) below which a triangle is not nearer. Pieces shorter
     than ``min_length`` device units, and pieces of no length, are left out.
     """
-    tris = _as_coordinates(triangles, "triangles", 3)
-    segs = _as_coordinates(edges, "edges", 2)
+    tris = as_batch(triangles, "triangles", (3, 3), "x, y, z corners")
+    segs = as_batch(edges, "edges", (2, 3), "x, y, z ends")
     faces = _as_edge_faces(edge_faces, len(segs), len(tris))
     eps = _as_tolerance(eps, "eps")
     min_length = _as_tolerance(min_length, "min_length")

@@ -81,7 +81,7 @@ def test_camera_items_are_views_or_keys():
 
 @pytest.mark.parametrize(("item", "message"), [
     ("sideways", "not a view"),
-    ("fov=60", "unknown camera key 'fov'"),
+    ("fov=60", "unknown camera key(s) fov; known: "),
     ("vpn=1,2", "vpn takes three numbers"),
     ("near=x", "near takes numbers"),
     ("projection=parallel", "use --projection"),

@@ -61,6 +61,20 @@ def test_flat_lights_the_centroid_with_the_face_normal():
     np.testing.assert_allclose(out, np.tile(expected, (5, 1)), rtol=1e-12)
 
 
+def test_flat_lights_a_polygon_once_at_its_centroid_so_a_quad_shows_no_seam():
+    # the unit square (two triangles of one polygon) under a point light: one intensity, that of the square's
+    # centre (0.5, 0.5, 0) with normal +z, worked by the scalar reference
+    light = [Light("point", position=(2, 0.3, 1.5), attenuation=(1, 0.2, 0))]
+    material = Material(ka=0.1, kd=0.7, ks=0.4, n=5)
+    frags = fragments([0, 0, 1, 1], random_bary(np.random.default_rng(3), 4))
+    seamless = shade(frags, VERTICES, FACES, mode="flat", material=material, lights=light, viewer=OVERHEAD,
+                     polygons=[7, 7])
+    expected = reference_intensity([0.5, 0.5, 0.0], [0.0, 0.0, 1.0], material, light, OVERHEAD, "phong")
+    np.testing.assert_allclose(seamless, np.tile(expected, (4, 1)), rtol=1e-12)
+    per_triangle = shade(frags, VERTICES, FACES, mode="flat", material=material, lights=light, viewer=OVERHEAD)
+    assert not np.allclose(per_triangle[0], per_triangle[2])  # each triangle at its own centroid: a seam
+
+
 def test_gouraud_is_linear_in_the_barycentric_weights():
     rng = np.random.default_rng(3)
     normals = rng.normal(size=(4, 3)) + np.array([0.0, 0.0, 2.0])

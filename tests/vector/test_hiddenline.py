@@ -370,7 +370,7 @@ def test_empty_inputs():
         (dict(edges=np.zeros((1, 3, 3))), InvalidArgument, "edges must be an (N, 2, 3)"),
         (dict(triangles=np.array([np.zeros((3, 3)), np.full((3, 3), np.nan)])), InvalidArgument, "at row 1"),
         (dict(edges=[[[0, 0, 0], [1, math.inf, 0]]]), InvalidArgument, "edges contains a non-finite"),
-        (dict(triangles=[["a", "b", "c"]] * 3), InvalidArgumentType, "triangles must be"),
+        (dict(triangles=[["a", "b", "c"]] * 3), InvalidArgument, "triangles must be"),
         (dict(edge_faces=[[0, 0], [0, 0]]), InvalidArgument, "shape (1, 2)"),
         (dict(edge_faces=[[0, 2]]), InvalidArgument, "edge_faces row 0 is [0, 2]"),
         (dict(edge_faces=[[-2, 0]]), InvalidArgument, "edge_faces row 0"),
