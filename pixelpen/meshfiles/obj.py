@@ -10,9 +10,11 @@ the mesh computes its own.  Grouping, materials, smoothing, lines (``l``), point
 statements of the format are accepted and ignored; any other statement is a ParseError.  Everything after a
 token starting with ``#`` is a comment.
 
-Speed: lines of the common forms (a keyword, then plain decimal numbers or ``a/b/c`` indices) are parsed
-together by :class:`~pixelpen.meshfiles.text.TextTable`; any other line (a ``+1``, an inline comment, an
-unknown keyword) goes through the per-line reader, which also finds and names the first bad field.
+Speed: a plain file (only ``v`` lines, ``f`` lines of plain indices and ``#`` lines) is read by
+:func:`_plain_obj`, whole blocks of numbers at once; any other file by the general reader: lines of the common
+forms (a keyword, then plain decimal numbers or ``a/b/c`` indices) are parsed together by
+:class:`~pixelpen.meshfiles.text.TextTable`; any other line (a ``+1``, an inline comment, an unknown keyword)
+goes through the per-line reader, which also finds and names the first bad field.
 """
 
 from __future__ import annotations
@@ -26,7 +28,16 @@ import numpy as np
 from pixelpen.errors import ParseError
 from pixelpen.geometry.mesh import Mesh
 from pixelpen.meshfiles.limits import LIMITS, Limits
-from pixelpen.meshfiles.text import SPACE, BoolArray, FloatArray, IntArray, TextTable, keyword_code, parse_float
+from pixelpen.meshfiles.text import (
+    SPACE,
+    BoolArray,
+    FloatArray,
+    IntArray,
+    TextTable,
+    keyword_code,
+    parse_float,
+    plain_numbers,
+)
 
 __all__ = ["read_obj"]
 
@@ -66,6 +77,61 @@ class _Corners:
 def read_obj(data: bytes, source: str, *, limits: Limits = LIMITS) -> Mesh:
     """The mesh of an OBJ file's bytes; a ParseError naming ``source``, the line and column when malformed."""
     limits.check("max_bytes", len(data), "bytes in the file", source)
+    mesh = _plain_obj(data, limits)
+    return mesh if mesh is not None else _general_obj(data, source, limits)
+
+
+def _plain_obj(data: bytes, limits: Limits) -> Mesh | None:
+    """The mesh of a plain file (only ``v`` numbers, ``f`` vertex indices, ``#`` lines), else None.
+
+    Every line must begin with ``v ``, ``f `` or ``#`` or be empty; ``v`` lines hold 3, 4, 6 or 7 plain
+    decimals and ``f`` lines at least 3 plain integer indices, all in range and within ``limits``.  Anything
+    else (and every error) is left to the general reader, which reads the same files to the same mesh.
+    """
+    if b"\r" in data or b"\\\n" in data or not data:
+        return None
+    if not data.endswith(b"\n"):
+        data += b"\n"
+    work = np.frombuffer(data, dtype=np.uint8).copy()
+    ends = np.flatnonzero(work == 10)
+    starts = np.r_[0, ends[:-1] + 1]
+    if int((ends - starts).max()) > limits.max_line_chars:
+        return None
+    head = work[starts]
+    spaced = work[np.minimum(starts + 1, len(work) - 1)] == 32
+    vertex, face = (head == ord("v")) & spaced, (head == ord("f")) & spaced
+    if not (vertex | face | (head == ord("#")) | (starts == ends)).all():
+        return None
+    work[starts[vertex | face]] = 32
+    kind = np.repeat(vertex.view(np.int8) + 2 * face.view(np.int8), ends - starts + 1)
+    numbers = plain_numbers(work[kind == 1], integer=False)
+    indices = plain_numbers(work[kind == 2], integer=True)
+    if numbers is None or indices is None:
+        return None
+    per_vertex = np.diff(np.searchsorted(numbers[1], numbers[2]), prepend=0)
+    per_face = np.diff(np.searchsorted(indices[1], indices[2]), prepend=0)
+    total = len(per_vertex)
+    if (total > limits.max_vertices or not np.isin(per_vertex, VERTEX_NUMBERS).all() or len(per_face) == 0
+            or per_face.min() < 3 or per_face.max() > limits.max_polygon_vertices
+            or int((per_face - 2).sum()) > limits.max_faces):
+        return None
+    first = np.cumsum(per_vertex) - per_vertex
+    coords = numbers[0].astype(np.float64, copy=False)
+    positions = coords.reshape(-1, 3) if (per_vertex == 3).all() else coords[first[:, None] + np.arange(3)]
+    raw = indices[0]
+    line = np.repeat(np.arange(len(per_face)), per_face)
+    if (raw < 0).any():
+        before = np.cumsum(vertex)[face]  # vertices defined before each face line
+        index = np.where(raw > 0, raw - 1, before[line] + raw)
+    else:
+        index = raw - 1
+    if (raw == 0).any() or index.min() < 0 or index.max() >= total:
+        return None
+    return _polygons(positions, index, line)
+
+
+def _general_obj(data: bytes, source: str, limits: Limits) -> Mesh:
+    """The mesh of any OBJ file: plain lines together, odd ones one by one, errors named."""
     table = TextTable(data, source)
     lengths = table.line_end - table.line_start
     long = np.flatnonzero(lengths > limits.max_line_chars)
@@ -238,17 +304,21 @@ def _mesh(table: TextTable, positions: FloatArray, normals: FloatArray, found: _
     ni = _resolve(table, vn, token, counts[VN][line], len(normals), "normal", vn != 0)
     if len(line) == 0:
         raise ParseError("no faces: not a polygon mesh", source=table.source)
-    starts = np.flatnonzero(np.r_[True, line[1:] != line[:-1]])
-    sizes = np.diff(np.r_[starts, len(line)])
-    if (sizes == sizes[0]).all():  # all triangles, or all quads: one (P, k) array
-        mesh = Mesh.from_polygons(positions, vi.reshape(-1, int(sizes[0])))
-    else:
-        polygons = np.split(vi, starts[1:])  # index arrays: sequences of ints to from_polygons
-        mesh = Mesh.from_polygons(positions, cast(Sequence[Sequence[int]], polygons))
+    mesh = _polygons(positions, vi, line)
     vertex_normals = _normals(positions, normals, vi, ni, vn != 0)
     if vertex_normals is None:
         return mesh
     return Mesh(mesh.vertices, mesh.faces, mesh.polygon, vertex_normals)
+
+
+def _polygons(positions: FloatArray, vi: IntArray, line: IntArray) -> Mesh:
+    """The mesh of polygons given as corner vertex indices ``vi`` and each corner's line (lines ascending)."""
+    starts = np.flatnonzero(np.r_[True, line[1:] != line[:-1]])
+    sizes = np.diff(np.r_[starts, len(line)])
+    if (sizes == sizes[0]).all():  # all triangles, or all quads: one (P, k) array
+        return Mesh.from_polygons(positions, vi.reshape(-1, int(sizes[0])))
+    polygons = np.split(vi, starts[1:])  # index arrays: sequences of ints to from_polygons
+    return Mesh.from_polygons(positions, cast(Sequence[Sequence[int]], polygons))
 
 
 def _normals(positions: FloatArray, normals: FloatArray, vi: IntArray, ni: IntArray,

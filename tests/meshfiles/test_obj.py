@@ -180,3 +180,37 @@ def test_a_long_malformed_number_is_refused_in_linear_time():
     with pytest.raises(ParseError, match="field 3 is not a number"):
         read_obj(b"v 1 2 " + b"9" * 60_000 + b"y\n", "long.obj")
     assert time.perf_counter() - started < 1.0  # a backtracking number pattern took seconds here
+
+
+def test_the_plain_file_reader_gives_the_general_readers_mesh_or_leaves_the_file_to_it():
+    from pixelpen.meshfiles import LIMITS
+    from pixelpen.meshfiles.obj import _general_obj, _plain_obj
+
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    plain = [obj_text(sphere.vertices, sphere.faces).split(b"\nvt")[0] + b"\n" + b"\n".join(
+        b"f " + b" ".join(str(i + 1).encode() for i in f) for f in sphere.faces.tolist()),
+        b"# c\n\nv 0 0 0 1\nv 5. -0.0 0.000\nv 0 1 0 0.5 0.5 0.5\nv 1 1 1 1 0 0 0\nf 1 2 3 4\nf -1 -2 -3\n",
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nv 0 0 1\nf -4 -1 -2 2 3"]  # no final line break
+    for text in plain:
+        fast, general = _plain_obj(text, LIMITS), _general_obj(text, "t.obj", LIMITS)
+        assert fast is not None
+        for name in ("vertices", "faces", "polygon"):
+            assert np.array_equal(getattr(fast, name), getattr(general, name)), name
+        assert np.array_equal(np.signbit(fast.vertices), np.signbit(general.vertices))
+    for odd in (b"v 1e5 0 0\nf 1 1 1\n", b"v +1 0 0\nf 1 1 1\n", b"v .5 0 0\nf 1 1 1\n", b" v 1 0 0\nf 1 1 1\n",
+                b"v 1 0 0\nf 1/1 1/1 1/1\n", b"v 1 0 0\nf 1 1 2\n", b"v 1 0 0\nf 1 1 0\n", b"v 1 0 0\r\nf 1 1 1\n",
+                b"v 1 0 0\no x\nf 1 1 1\n", b"v 1 0 0 # c\nf 1 1 1\n", b"v 1-2 0 0\nf 1 1 1\n",
+                b"v 1 0 0\nf 1 1 1 -\n", b"v 1 0 0\nf 1 1\n", b"v 1 0\nf 1 1 1\n", b"v 1.2.3 0 0\nf 1 1 1\n",
+                b"v 1 0 0\n"):
+        assert _plain_obj(odd, LIMITS) is None, odd
+
+
+def test_plain_decimals_are_read_to_the_same_bits_as_float():
+    from pixelpen.meshfiles.text import plain_numbers
+
+    rng = np.random.default_rng(7)
+    tokens = [f"{rng.uniform(-1e6, 1e6):.{int(rng.integers(0, 9))}f}" for _ in range(2000)]
+    tokens += ["0", "-0", "-0.0", "5.", "123456789012345", "0.1", "-0.30000000000000004", "0.8506508083520399"]
+    values, _, _ = plain_numbers(np.frombuffer(" ".join(tokens).encode() + b"\n", np.uint8), integer=False)
+    expected = np.array([float(t) for t in tokens])
+    assert np.array_equal(values.view(np.uint64), expected.view(np.uint64))
