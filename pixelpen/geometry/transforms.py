@@ -244,16 +244,22 @@ def singular_ratio(mat: np.ndarray) -> float:
     return 0.0 if norms == 0.0 or not math.isfinite(det / norms) else det / norms
 
 
-def invert(m: ArrayLike) -> np.ndarray:
-    """Inverse of a homogeneous matrix; ValueError when it is singular (e.g. a scale by zero)."""
-    mat = as_matrix(m)
+def inverse(mat: np.ndarray) -> np.ndarray:
+    """Inverse of a validated 3x3 (2D) or 4x4 (3D) homogeneous matrix; InvalidArgument when it is singular."""
     ratio = singular_ratio(mat)
     if ratio < SINGULAR_RATIO:
+        collapse = ("the plane onto a line or point" if len(mat) == 3 else
+                    "space onto a plane, line or point (a projection or a scale by zero)")
         raise InvalidArgument(
-            f"matrix is singular (|det| / row norms = {ratio:.3g}); it collapses the plane onto a line or point "
+            f"matrix is singular (|det| / row norms = {ratio:.3g}); it collapses {collapse} "
             f"and has no inverse: {mat.tolist()}"
         )
     return np.linalg.inv(mat)
+
+
+def invert(m: ArrayLike) -> np.ndarray:
+    """Inverse of a homogeneous matrix; ValueError when it is singular (e.g. a scale by zero)."""
+    return inverse(as_matrix(m))
 
 
 def scale_factor(m: ArrayLike) -> float:

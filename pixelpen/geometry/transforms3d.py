@@ -22,6 +22,7 @@ from pixelpen.geometry.transforms import (
     as_matrix,
     as_number,
     as_points,
+    inverse,
     map_points,
     singular_ratio,
 )
@@ -208,14 +209,7 @@ def compose3d(*matrices: ArrayLike) -> np.ndarray:
 
 def invert3d(m: ArrayLike) -> np.ndarray:
     """Inverse of a 4x4 homogeneous matrix; InvalidArgument when it is singular (e.g. a projection)."""
-    mat = as_matrix3d(m)
-    ratio = singular_ratio(mat)
-    if ratio < SINGULAR_RATIO:
-        raise InvalidArgument(
-            f"matrix is singular (|det| / row norms = {ratio:.3g}); it collapses space onto a plane, line or point "
-            f"(a projection or a scale by zero) and has no inverse: {mat.tolist()}"
-        )
-    return np.linalg.inv(mat)
+    return inverse(as_matrix3d(m))
 
 
 def normal_matrix(m: ArrayLike) -> np.ndarray:

@@ -133,11 +133,7 @@ def _plain_obj(data: bytes, limits: Limits) -> Mesh | None:
 def _general_obj(data: bytes, source: str, limits: Limits) -> Mesh:
     """The mesh of any OBJ file: plain lines together, odd ones one by one, errors named."""
     table = TextTable(data, source)
-    lengths = table.line_end - table.line_start
-    long = np.flatnonzero(lengths > limits.max_line_chars)
-    if len(long):
-        raise ParseError(f"a line of {int(lengths[long[0]]):,} bytes, more than the limit max_line_chars="
-                         f"{limits.max_line_chars:,}", source=source, line=table.line_number(int(long[0])))
+    table.check_line_length(limits.max_line_chars)
     keyword, count = table.keyword, table.tokens_per_line
     comment = np.zeros(table.lines, dtype=bool)
     words = np.flatnonzero(count > 0)

@@ -86,11 +86,7 @@ def _binary(data: bytes, source: str, limits: Limits) -> FloatArray:
 def _ascii(data: bytes, source: str, limits: Limits) -> FloatArray:
     """The (3n, 3) corners of an ASCII STL: checked with numpy, walked line by line only when malformed."""
     table = TextTable(data, source)
-    lengths = table.line_end - table.line_start
-    long = np.flatnonzero(lengths > limits.max_line_chars)
-    if len(long):
-        raise ParseError(f"a line of {int(lengths[long[0]]):,} bytes, more than the limit max_line_chars="
-                         f"{limits.max_line_chars:,}", source=source, line=table.line_number(int(long[0])))
+    table.check_line_length(limits.max_line_chars)
     lines = np.flatnonzero(table.tokens_per_line > 0)
     words = table.keyword[lines]
     facets = np.cumsum(words == FACET_WORD)

@@ -161,6 +161,14 @@ class TextTable:
         """The number of lines."""
         return len(self.line_start)
 
+    def check_line_length(self, limit: int) -> None:
+        """ParseError naming the first line longer than ``limit`` bytes (the limit max_line_chars)."""
+        lengths = self.line_end - self.line_start
+        long = np.flatnonzero(lengths > limit)
+        if len(long):
+            raise ParseError(f"a line of {int(lengths[long[0]]):,} bytes, more than the limit max_line_chars="
+                             f"{limit:,}", source=self.source, line=self.line_number(int(long[0])))
+
     def _codes(self, token: IntArray, present: BoolArray) -> IntArray:
         """The packed keyword code of token ``token[i]`` where ``present[i]``, else 0 (and 0 when too long)."""
         codes = np.zeros(len(token), dtype=np.int64)

@@ -89,25 +89,6 @@ def _polygon_means(group: np.ndarray, size: int, weight: np.ndarray, centroids: 
     return centroid / total[:, None], normal
 
 
-def _interpolate(fragments: Fragments, corners: np.ndarray) -> np.ndarray:
-    """Per-corner values (T, 3, K) at the fragments (F, K), in the affine form v0 + b1·(v1 − v0) + b2·(v2 − v0).
-
-    Equal to :meth:`Fragments.interpolate` up to rounding, but exact where the three corners agree (so a
-    face of one colour shows exactly that colour), and computed one component at a time from contiguous
-    (T,) rows, which is about twice as fast on large batches.
-    """
-    first = np.ascontiguousarray(corners[:, 0].T)
-    steps = [np.ascontiguousarray((corners[:, i] - corners[:, 0]).T) for i in (1, 2)]
-    weights = [np.ascontiguousarray(fragments.bary[:, i]) for i in (1, 2)]
-    face = fragments.face
-    out = np.empty((corners.shape[2], face.shape[0]))
-    for k, row in enumerate(out):  # a few components (3), each over all fragments
-        np.take(first[k], face, out=row)
-        for step, weight in zip(steps, weights, strict=True):
-            row += np.take(step[k], face) * weight
-    return out.T
-
-
 def shade(
     fragments: Fragments,
     vertices: ArrayLike,
@@ -157,10 +138,10 @@ def shade(
     if mode == "gouraud":
         scale, specular = illumination_terms(verts, normals, material, lights, viewer, model)
         if colours is None:
-            return _interpolate(fragments, combine(base, scale, specular)[tris])
-        return _interpolate(fragments, combine(colours[:, None, :], scale[tris], specular[tris]))
-    positions = _interpolate(fragments, verts[tris])
-    interpolated = _interpolate(fragments, normals[tris])
+            return fragments.interpolate(combine(base, scale, specular)[tris])
+        return fragments.interpolate(combine(colours[:, None, :], scale[tris], specular[tris]))
+    positions = fragments.interpolate(verts[tris])
+    interpolated = fragments.interpolate(normals[tris])
     return combine(base if colours is None else colours[face], *illumination_terms(
         positions, interpolated, material, lights, viewer, model))
 

@@ -298,6 +298,7 @@ def test_interpolate_and_subset():
     part = fr.subset(fr.xs < 2)
     assert len(part) == int((fr.xs < 2).sum()) and (part.xs < 2).all()
     assert len(fr.subset(np.array([0, 2]))) == 2
+    assert (fr.interpolate(np.full((1, 3, 1), 0.1)) == 0.1).all()  # equal corners: exactly their value
     with pytest.raises(InvalidArgument, match="values"):
         fr.interpolate(np.zeros((1, 2, 2)))
     with pytest.raises(InvalidArgument, match="mask"):
