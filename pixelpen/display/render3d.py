@@ -7,11 +7,14 @@ world -> clip space (:meth:`Camera.world_to_clip` with the display's window as t
 front triangles of all items clipped together (``clip_triangles_homogeneous``), divided, and NDC x, y taken to
 device units by ``display.pipeline.matrix @ ViewVolume.ndc_to_window``.
 
-* Raster (:func:`render_raster`): one :class:`~pixelpen.raster.zbuffer.ZBuffer` over all items' triangles
-  (depth NDC z, perspective-correct weights from 1/w), fragments re-expressed against their source triangles,
-  shaded per item (:func:`pixelpen.raster.shading.shade`, world coordinates) and written into the canvas in
-  its colour model (:func:`pixelpen.raster.shading.write_colours`). The z-buffer lives for one draw: a scene
-  drawn over a picture covers it where it has pixels.
+* Raster (:func:`render_raster`): the frame is drawn in horizontal bands of about :data:`BAND_PIXELS`
+  pixels, on up to :data:`MAX_WORKERS` threads: per band a :class:`~pixelpen.raster.zbuffer.ZBuffer` over its
+  rows and the triangles that reach them (depth NDC z, perspective-correct weights from 1/w), fragments
+  re-expressed against their source triangles, shaded per item by a :class:`~pixelpen.raster.shading.Shader`
+  prepared once per draw (world coordinates) and converted to the canvas's values
+  (:func:`~pixelpen.raster.shading.native_pixels`); the calling thread stores them band by band. A band's
+  buffers stay in the CPU's caches, and the result is the whole-frame z-buffer's, pixel for pixel. The
+  z-buffers live for one draw: a scene drawn over a picture covers it where it has pixels.
 * Vector (:func:`scene_strokes`): each item's feature edges of its front faces (``Mesh.feature_edges``),
   clipped (``clip_segments_homogeneous``), divided, and split by :func:`pixelpen.vector.hiddenline.hidden_lines`
   against all items' clipped front triangles; the visible pieces, joined, are stroke shapes in the item's style.
@@ -23,9 +26,11 @@ aspect ratio.
 
 from __future__ import annotations
 
-import dataclasses
 import math
+import os
+import threading
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,10 +38,15 @@ import numpy as np
 from pixelpen import geometry as geo
 from pixelpen.display.flatten import DeviceShape
 from pixelpen.display.scene3d import Camera, Scene, SceneItem
-from pixelpen.geometry.clip3d import clip_segments_homogeneous, clip_triangles_homogeneous, perspective_divide
+from pixelpen.geometry.clip3d import (
+    clip_points_homogeneous,
+    clip_segments_homogeneous,
+    clip_triangles_homogeneous,
+    perspective_divide,
+)
 from pixelpen.geometry.mesh import Mesh
 from pixelpen.raster.canvas import Canvas
-from pixelpen.raster.shading import shade, write_colours
+from pixelpen.raster.shading import NativePixels, Shader, native_pixels
 from pixelpen.raster.zbuffer import ZBuffer
 from pixelpen.vector.hiddenline import HiddenLines, hidden_lines
 
@@ -45,6 +55,12 @@ FIT_MARGIN = 0.05
 
 EDGE_ON = 1e-9
 """A face whose clip-space determinant is below this fraction of its bound is seen edge-on (a back face)."""
+
+BAND_PIXELS = 1 << 17
+"""Pixels per band of the raster path (width x rows): a band's buffers stay in the CPU's caches."""
+
+MAX_WORKERS = 4
+"""Most threads drawing bands at once (numpy releases the GIL in most of a band's work)."""
 
 Rect = tuple[float, float, float, float]
 
@@ -84,12 +100,8 @@ class _Triangles:
     weights: np.ndarray
     offsets: np.ndarray
     """(items + 1,) start of each item's front triangles in the concatenation."""
-
-    def unclipped(self) -> bool:
-        """True when every triangle passed the clip whole (fragments need no re-expressing then)."""
-        count = int(self.offsets[-1])
-        return len(self.source) == count and bool((self.source == np.arange(count)).all()) and bool(
-            (self.weights == np.eye(3)).all())
+    clipped: bool
+    """False when every triangle passed the clip whole (source is 0..K-1, weights the identity)."""
 
 
 def _magnification(camera: Camera, mesh: Mesh) -> float:
@@ -144,13 +156,18 @@ def front_faces(clip: np.ndarray, faces: np.ndarray) -> np.ndarray:
     The determinant of the face's (x, y, w) rows is, up to a positive factor, the side of the face's plane the
     centre of projection lies on (Olano & Greer's homogeneous test): one test for parallel and perspective
     views, exact also for vertices behind the viewer, and no face normals needed."""
-    x, y, w = (clip[:, k][faces] for k in (0, 1, 3))
-    det = (x[:, 0] * (y[:, 1] * w[:, 2] - w[:, 1] * y[:, 2]) - y[:, 0] * (x[:, 1] * w[:, 2] - w[:, 1] * x[:, 2])
-           + w[:, 0] * (x[:, 1] * y[:, 2] - y[:, 1] * x[:, 2]))
+    corners = np.ascontiguousarray(faces.T)
+    columns = np.ascontiguousarray(clip[:, (0, 1, 3)].T)
+    (x0, x1, x2), (y0, y1, y2), (w0, w1, w2) = ([np.take(c, k) for k in corners] for c in columns)
+    det = x0 * (y1 * w2 - w1 * y2) - y0 * (x1 * w2 - w1 * x2) + w0 * (x1 * y2 - y1 * x2)
     # a face seen edge-on has det = 0 up to rounding: it is a back face (as a line it would hide edges behind);
     # |det| is at most the product of the rows' lengths, each at most |x| + |y| + |w|
-    size = np.abs(clip[:, 0]) + np.abs(clip[:, 1]) + np.abs(clip[:, 3])
-    front: np.ndarray = det > EDGE_ON * size[faces].prod(axis=1)
+    size = np.abs(columns).sum(axis=0)
+    bound = np.take(size, corners[0])
+    bound *= np.take(size, corners[1])
+    bound *= np.take(size, corners[2])
+    bound *= EDGE_ON
+    front: np.ndarray = det > bound
     return front
 
 
@@ -180,45 +197,107 @@ def _to_device(ndc: np.ndarray, matrix: np.ndarray) -> np.ndarray:
 
 
 def _triangles(items: list[_Item], matrix: np.ndarray) -> _Triangles:
-    """All items' front triangles clipped together, in device coordinates."""
-    parts = [it.clip[it.mesh.faces[it.front]] for it in items]
-    counts = [len(p) for p in parts]
+    """All items' front triangles clipped together, in device coordinates: triangles whose three vertices are
+    inside the view volume pass whole (projected once per vertex), the rest go through the clipper."""
+    counts = [int(it.front.sum()) for it in items]
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    tris = np.concatenate(parts) if parts else np.zeros((0, 3, 4))
-    out, source, weights = clip_triangles_homogeneous(tris.reshape(-1, 3, 4))
-    return _Triangles(_to_device(perspective_divide(out), matrix), 1.0 / out[..., 3], source, weights, offsets)
+    device, inv_w, whole, cut = [], [], [], []
+    for it, offset in zip(items, offsets.tolist(), strict=False):
+        faces = it.mesh.faces[it.front]
+        inside = clip_points_homogeneous(it.clip)
+        vertices = np.zeros((len(inside), 3))
+        vertices[inside] = _to_device(perspective_divide(it.clip[inside]), matrix)
+        passed = inside[faces].all(axis=1)
+        kept = faces[passed]
+        device.append(vertices[kept])
+        inv_w.append(1.0 / np.where(inside, it.clip[:, 3], 1.0)[kept])
+        whole.append(offset + np.flatnonzero(passed))
+        cut.append((offset + np.flatnonzero(~passed), it.clip[faces[~passed]]))
+    source = np.concatenate(whole) if whole else np.zeros(0, np.int64)
+    dev = np.concatenate(device) if device else np.zeros((0, 3, 3))
+    q = np.concatenate(inv_w) if inv_w else np.zeros((0, 3))
+    straddle = np.concatenate([index for index, _ in cut]) if cut else np.zeros(0, np.int64)
+    if not straddle.size:
+        return _Triangles(dev, q, source, np.broadcast_to(np.eye(3), (len(source), 3, 3)), offsets, False)
+    out, local, weights = clip_triangles_homogeneous(np.concatenate([tris for _, tris in cut]))
+    source = np.concatenate([source, straddle[local]])
+    order = np.argsort(source, kind="stable")
+    weights = np.concatenate([np.broadcast_to(np.eye(3), (len(dev), 3, 3)), weights])[order]
+    dev = np.concatenate([dev, _to_device(perspective_divide(out), matrix)])[order]
+    q = np.concatenate([q, 1.0 / out[..., 3]])[order]
+    return _Triangles(dev, q, source[order], weights, offsets, True)
+
+
+def _bands(y: np.ndarray, rows: int, height: int) -> list[tuple[int, np.ndarray]]:
+    """Horizontal bands of ``rows`` rows (the last may be shorter): (top row, indices of the triangles whose
+    device ``y`` (K, 3) reach it)."""
+    centre = y + 0.5  # the z-buffer's device y of the canvas pixel centres
+    first = np.floor(centre.min(axis=1) / rows)
+    last = np.floor(centre.max(axis=1) / rows)
+    bands = []
+    for band, top in enumerate(range(0, height, rows)):
+        index = np.flatnonzero((first <= band) & (last >= band))
+        if index.size:
+            bands.append((top, index))
+    return bands
+
+
+def _workers() -> int:
+    """Threads for the bands: the CPUs this process may run on, at most MAX_WORKERS."""
+    available = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return max(1, min(MAX_WORKERS, available))
 
 
 def render_raster(scene: Scene, pipeline: geo.ViewingPipeline, canvas: Canvas, tolerance: float) -> RenderStats:
-    """Draw ``scene`` into ``canvas`` through one z-buffer (module docstring); return what was done."""
+    """Draw ``scene`` into ``canvas`` through a z-buffer (module docstring); return what was done."""
     matrix = _device_matrix(scene.camera, pipeline)
     items = _prepare(scene, pipeline.window, item_meshes(scene, geo.scale_factor(pipeline.matrix), tolerance))
     tris = _triangles(items, matrix)
-    zbuffer = ZBuffer(canvas.width, canvas.height)
     # the canvas's pixel (i, j) is centred on the device point (i, j); the z-buffer samples pixel centres at +0.5
-    fragments = zbuffer.rasterize(tris.device[..., :2] + 0.5, tris.device[..., 2], tris.inv_w)
-    if not tris.unclipped():
-        fragments = fragments.compose(tris.source, tris.weights)
+    xy, depth = tris.device[..., :2] + 0.5, tris.device[..., 2]
     viewer, lights = scene.camera.viewer(), scene.effective_lights()
-    total = int(tris.offsets[-1])
-    for index, it in enumerate(items):
-        lo, hi = int(tris.offsets[index]), int(tris.offsets[index + 1])
-        if lo == hi:
-            continue
-        mine = fragments
-        if (lo, hi) != (0, total):
-            mine = fragments.subset((fragments.face >= lo) & (fragments.face < hi))
-            mine = dataclasses.replace(mine, face=mine.face - lo)
-        mesh, item = it.mesh, it.item
-        smooth = item.shading != "flat"
-        rgb = shade(mine, mesh.vertices, mesh.faces[it.front], mode=item.shading, material=item.material,
-                    lights=lights, viewer=viewer,
-                    vertex_normals=mesh.vertex_normals() if smooth else None,
-                    face_colours=None if item.face_colours is None else item.face_colours[it.front],
-                    polygons=mesh.polygon[it.front])
-        write_colours(canvas, mine.xs, mine.ys, rgb)
+    shaders = []
+    for it in items:
+        smooth = it.item.shading != "flat"
+        shaders.append(Shader(
+            it.mesh.vertices, it.mesh.faces[it.front], mode=it.item.shading, material=it.item.material,
+            lights=lights, viewer=viewer, vertex_normals=it.mesh.vertex_normals() if smooth else None,
+            face_colours=None if it.item.face_colours is None else it.item.face_colours[it.front],
+            polygons=it.mesh.polygon[it.front]))
+    offsets = tris.offsets.tolist()
+    rows = max(1, min(canvas.height, BAND_PIXELS // canvas.width))
+    local = threading.local()  # z-buffers per thread, moved from band to band (their work arrays are kept)
+
+    def band(top: int, index: np.ndarray) -> list[NativePixels]:
+        """One band's pixels per item, shaded and converted to the canvas's values."""
+        height = min(rows, canvas.height - top)
+        buffers: dict[int, ZBuffer] = local.__dict__.setdefault("buffers", {})
+        if height not in buffers:
+            buffers[height] = ZBuffer(canvas.width, height, top=top)
+        zbuffer = buffers[height]
+        zbuffer.clear(top)
+        fragments = zbuffer.rasterize(xy[index], depth[index], tris.inv_w[index], reuse=True)
+        np.take(index, fragments.face, out=fragments.face)
+        if tris.clipped:
+            fragments = fragments.compose(tris.source, tris.weights)
+        out = []
+        for shader, lo, hi in zip(shaders, offsets[:-1], offsets[1:], strict=True):
+            mine = fragments
+            if (lo, hi) != (0, offsets[-1]):
+                mine = fragments.subset((fragments.face >= lo) & (fragments.face < hi))
+                mine.face -= lo
+            if len(mine):
+                out.append(native_pixels(canvas, mine.xs, mine.ys, shader(mine)))
+        return out
+
+    drawn = 0
+    with ThreadPoolExecutor(_workers()) as pool:
+        for pieces in pool.map(lambda job: band(*job), _bands(tris.device[..., 1], rows, canvas.height)):
+            for pixels in pieces:
+                pixels.store(canvas)
+                drawn += len(pixels.index)
     return RenderStats(sum(len(it.front) for it in items), int(tris.offsets[-1]), len(tris.source),
-                       fragments=len(fragments.face))
+                       fragments=drawn)
 
 
 def scene_strokes(scene: Scene, pipeline: geo.ViewingPipeline, tolerance: float) -> tuple[list[DeviceShape],

@@ -1,7 +1,8 @@
 """Shading z-buffer fragments (flat, Gouraud, Phong; Hearn & Baker §14-5) and writing intensities to a canvas.
 
 :func:`shade` lights the fragments :class:`pixelpen.raster.zbuffer.Fragments` of a triangle mesh with the
-model of :mod:`pixelpen.raster.illumination`, in world coordinates:
+model of :mod:`pixelpen.raster.illumination`, in world coordinates (a :class:`Shader` does the per-mesh part
+once, for a renderer that shades many sets of fragments of one mesh):
 
 * ``"flat"``: one evaluation per face, at its centroid with its face normal;
 * ``"gouraud"``: one evaluation per vertex with its vertex normal, intensities interpolated across the face
@@ -17,13 +18,16 @@ truncation, :func:`pixelpen.raster.colour.rgb888_to_rgb565`; "L" by BT.601 :func
 except "1": ordered 4x4 Bayer dithering of that luma (:func:`pixelpen.raster.dither.ordered_mono`, frame-anchored) and
 "P" by ordered dithering to the palette: each channel is offset by g·((M + ½)/16 − ½), M the Bayer index of
 the pixel and g the largest gap between the distinct values the palette uses in that channel, before the
-nearest palette entry is taken. Each pixel should appear once per call (of repeated ones, which write wins
-is unspecified); the bounding box of the pixels written is recorded as damage.
+nearest palette entry is taken (:func:`native_pixels` converts without writing, and may run on threads for
+disjoint pixels; :meth:`NativePixels.store` writes). Each pixel should appear once per call (of repeated
+ones, which write wins is unspecified); the bounding box of the pixels written is recorded as damage.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -36,7 +40,7 @@ from pixelpen.raster.colour import luma, rgb888_to_rgb565
 from pixelpen.raster.dither import bayer_matrix, ordered_mono
 from pixelpen.raster.illumination import Light, Material, Viewer, as_colours, combine, illumination_terms
 from pixelpen.raster.palette import Palette
-from pixelpen.raster.zbuffer import Fragments
+from pixelpen.raster.zbuffer import Fragments, Interpolant
 
 SHADING_MODES: tuple[str, ...] = ("flat", "gouraud", "phong")
 """The modes :func:`shade` offers."""
@@ -81,69 +85,86 @@ def _polygon_groups(polygons: ArrayLike | None, count: int) -> np.ndarray:
 
 def _polygon_means(group: np.ndarray, size: int, weight: np.ndarray, centroids: np.ndarray,
                    normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per polygon (of ``size`` renumbered by ``group``'s slots): the weighted centroid and mean normal."""
-    slots = np.unique(group, return_inverse=True)[1].reshape(-1)
-    total = np.bincount(slots, weight, size)
-    centroid = np.stack([np.bincount(slots, weight * centroids[:, k], size) for k in range(3)], axis=1)
-    normal = np.stack([np.bincount(slots, weight * normals[:, k], size) for k in range(3)], axis=1)
+    """Per polygon (``group``: each face's polygon 0..size-1): the weighted centroid and mean normal."""
+    total = np.bincount(group, weight, size)
+    centroid = np.stack([np.bincount(group, weight * centroids[:, k], size) for k in range(3)], axis=1)
+    normal = np.stack([np.bincount(group, weight * normals[:, k], size) for k in range(3)], axis=1)
     return centroid / total[:, None], normal
 
 
-def shade(
-    fragments: Fragments,
-    vertices: ArrayLike,
-    faces: ArrayLike,
-    *,
-    mode: str = "flat",
-    material: Material,
-    lights: Light | Sequence[Light],
-    viewer: Viewer,
-    model: str = "phong",
-    face_normals: ArrayLike | None = None,
-    vertex_normals: ArrayLike | None = None,
-    face_colours: ArrayLike | None = None,
-    polygons: ArrayLike | None = None,
-) -> np.ndarray:
-    """Intensities (F, 3) in [0, 1] for the fragments of a mesh (world vertices (N, 3), faces (T, 3)); flat
-    shading lights each polygon once (``polygons``: (T,) the polygon id of each face, default one per face)."""
-    if not isinstance(fragments, Fragments):
-        raise InvalidArgumentType(f"fragments must be Fragments, got {type(fragments).__name__}")
-    if not isinstance(material, Material):
-        raise InvalidArgumentType(f"material must be a Material, got {type(material).__name__}")
-    mode = as_choice(mode, "shading mode", SHADING_MODES)
-    verts, _ = as_points3d(vertices, "vertices")
-    tris = _as_faces(faces, verts.shape[0])
-    count = tris.shape[0]
-    colours = None if face_colours is None else as_colours(face_colours, count, "face_colours")
-    base = np.array(material.colour)
-    face = np.asarray(fragments.face, dtype=np.int64)
-    if face.size and (face.min() < 0 or face.max() >= count):
-        raise InvalidArgument(f"fragments name faces outside 0..{count - 1}")
-    if mode == "flat":
-        normals = _normals(face_normals, count, "face_normals")
-        group = _polygon_groups(polygons, count)
-        used = np.flatnonzero(np.bincount(group[face], minlength=count))  # polygons that have fragments
-        mine = np.flatnonzero(np.isin(group, used))
-        sub = Mesh(verts, tris[mine])
-        weight = sub.face_areas() + 1e-300  # area-weighted over each polygon's faces (all count if all degenerate)
-        centroid, normal = _polygon_means(group[mine], len(used), weight, verts[tris[mine]].mean(axis=1),
-                                          sub.face_normals() if normals is None else normals[mine])
-        scale, specular = illumination_terms(centroid, normal, material, lights, viewer, model)
-        slot = np.zeros(count, np.int64)
-        slot[used] = np.arange(len(used))
-        at = slot[group[face]]
-        return combine(base if colours is None else colours[face], scale[at], specular[at])
-    given = _normals(vertex_normals, verts.shape[0], "vertex_normals")
-    normals = Mesh(verts, tris).vertex_normals() if given is None else given
-    if mode == "gouraud":
-        scale, specular = illumination_terms(verts, normals, material, lights, viewer, model)
-        if colours is None:
-            return fragments.interpolate(combine(base, scale, specular)[tris])
-        return fragments.interpolate(combine(colours[:, None, :], scale[tris], specular[tris]))
-    positions = fragments.interpolate(verts[tris])
-    interpolated = fragments.interpolate(normals[tris])
-    return combine(base if colours is None else colours[face], *illumination_terms(
-        positions, interpolated, material, lights, viewer, model))
+class Shader:
+    """One mesh's shading, prepared once (validation, lighting per polygon or vertex) for any number of fragment
+    sets: ``Shader(vertices, faces, ...)(fragments)`` -> intensities (F, 3) in [0, 1] (see :func:`shade`)."""
+
+    def __init__(
+        self,
+        vertices: ArrayLike,
+        faces: ArrayLike,
+        *,
+        mode: str = "flat",
+        material: Material,
+        lights: Light | Sequence[Light],
+        viewer: Viewer,
+        model: str = "phong",
+        face_normals: ArrayLike | None = None,
+        vertex_normals: ArrayLike | None = None,
+        face_colours: ArrayLike | None = None,
+        polygons: ArrayLike | None = None,
+    ) -> None:
+        if not isinstance(material, Material):
+            raise InvalidArgumentType(f"material must be a Material, got {type(material).__name__}")
+        self.mode = as_choice(mode, "shading mode", SHADING_MODES)
+        verts, _ = as_points3d(vertices, "vertices")
+        tris = _as_faces(faces, verts.shape[0])
+        self.faces = tris.shape[0]
+        colours = None if face_colours is None else as_colours(face_colours, self.faces, "face_colours")
+        base = np.array(material.colour)
+        self._colours = base if colours is None else colours
+        self._terms = (material, lights, viewer, model)
+        if self.mode == "flat":
+            normals = _normals(face_normals, self.faces, "face_normals")
+            group = _polygon_groups(polygons, self.faces)
+            size = int(group.max()) + 1 if group.size else 0
+            mesh = Mesh(verts, tris)
+            weight = mesh.face_areas() + 1e-300  # area-weighted over each polygon's faces (all count if degenerate)
+            centroid, normal = _polygon_means(group, size, weight, verts[tris].mean(axis=1),
+                                              mesh.face_normals() if normals is None else normals)
+            scale, specular = illumination_terms(centroid, normal, *self._terms)
+            self._flat = (scale[group], specular[group])
+            return
+        given = _normals(vertex_normals, verts.shape[0], "vertex_normals")
+        normals = Mesh(verts, tris).vertex_normals() if given is None else given
+        if self.mode == "gouraud":
+            scale, specular = illumination_terms(verts, normals, *self._terms)
+            lit = combine(base, scale, specular)[tris] if colours is None else combine(
+                colours[:, None, :], scale[tris], specular[tris])
+            self._values = [Interpolant(lit)]
+        else:
+            self._values = [Interpolant(verts[tris]), Interpolant(normals[tris])]
+
+    def __call__(self, fragments: Fragments) -> np.ndarray:
+        """Intensities (F, 3) in [0, 1] of the fragments of this mesh's faces."""
+        if not isinstance(fragments, Fragments):
+            raise InvalidArgumentType(f"fragments must be Fragments, got {type(fragments).__name__}")
+        face = np.asarray(fragments.face, dtype=np.int64)
+        if face.size and (face.min() < 0 or face.max() >= self.faces):
+            raise InvalidArgument(f"fragments name faces outside 0..{self.faces - 1}")
+        colours = self._colours if self._colours.ndim == 1 else self._colours[face]
+        if self.mode == "flat":
+            scale, specular = self._flat
+            return combine(colours, scale[face], specular[face])
+        if self.mode == "gouraud":
+            return self._values[0].at(fragments)
+        positions, normals = (values.at(fragments) for values in self._values)
+        return combine(colours, *illumination_terms(positions, normals, *self._terms))
+
+
+def shade(fragments: Fragments, vertices: ArrayLike, faces: ArrayLike, **options: Any) -> np.ndarray:
+    """Intensities (F, 3) in [0, 1] for the fragments of a mesh (world vertices (N, 3), faces (T, 3)): the
+    keyword options of :class:`Shader` (mode, material, lights, viewer, model, face_normals, vertex_normals,
+    face_colours, and polygons: (T,) the polygon id of each face, default one per face, which flat shading
+    lights once)."""
+    return Shader(vertices, faces, **options)(fragments)
 
 
 def _pixels(canvas: Canvas, xs: ArrayLike, ys: ArrayLike, rows: int) -> tuple[np.ndarray, np.ndarray]:
@@ -230,14 +251,33 @@ def _scatter(array: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
     np.put(array.reshape(-1).view(item), index, np.ascontiguousarray(values, dtype=array.dtype).reshape(-1).view(item))
 
 
-def write_colours(canvas: Canvas, xs: ArrayLike, ys: ArrayLike, rgb: ArrayLike) -> None:
-    """Write (F, 3) intensities in [0, 1] to pixels (xs[i], ys[i]) in the canvas's mode; marks the damage."""
+@dataclass(frozen=True)
+class NativePixels:
+    """Intensities converted to a canvas's native values (:func:`native_pixels`), ready to store."""
+
+    index: np.ndarray
+    """(F,) flat pixel index y·width + x."""
+    values: np.ndarray
+    """(F,) or (F, C) native values."""
+    box: tuple[int, int, int, int] | None
+    """Bounding box (x0, y0, x1, y1) of the pixels, half-open; None when there are none."""
+
+    def store(self, canvas: Canvas) -> None:
+        """Write the values into ``canvas`` (the one they were converted for) and mark the box as damage."""
+        if self.box is not None:
+            _scatter(canvas.array, self.index, self.values)
+            canvas.mark_damaged(*self.box)
+
+
+def native_pixels(canvas: Canvas, xs: ArrayLike, ys: ArrayLike, rgb: ArrayLike) -> NativePixels:
+    """(F, 3) intensities in [0, 1] at pixels (xs[i], ys[i]) as the canvas's native values (module docstring);
+    reads the canvas's mode and palette only, so conversions for disjoint pixels may run in parallel."""
     if not isinstance(canvas, Canvas):
         raise InvalidArgumentType(f"canvas must be a Canvas, got {type(canvas).__name__}")
     colours = _intensities(rgb)
     px, py = _pixels(canvas, xs, ys, colours.shape[0])
     if not px.size:
-        return
+        return NativePixels(px, np.zeros(0, canvas.array.dtype), None)
     scaled = colours * 255.0
     if canvas.mode == "P":
         values = _indexed(canvas, px, py, scaled)
@@ -245,5 +285,10 @@ def write_colours(canvas: Canvas, xs: ArrayLike, ys: ArrayLike, rgb: ArrayLike) 
         values = _mono(px, py, _rgb8(scaled))
     else:
         values = _native(canvas.mode, _rgb8(scaled))
-    _scatter(canvas.array, py * canvas.width + px, values)
-    canvas.mark_damaged(int(px.min()), int(py.min()), int(px.max()) + 1, int(py.max()) + 1)
+    box = (int(px.min()), int(py.min()), int(px.max()) + 1, int(py.max()) + 1)
+    return NativePixels(py * canvas.width + px, values, box)
+
+
+def write_colours(canvas: Canvas, xs: ArrayLike, ys: ArrayLike, rgb: ArrayLike) -> None:
+    """Write (F, 3) intensities in [0, 1] to pixels (xs[i], ys[i]) in the canvas's mode; marks the damage."""
+    native_pixels(canvas, xs, ys, rgb).store(canvas)

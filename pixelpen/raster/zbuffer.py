@@ -14,6 +14,9 @@ Conventions:
   triangle's vertices are perspective-corrected with ``inv_w`` (1/w of each vertex) when it is given.
 * Resolution: nearest depth wins; within one :meth:`ZBuffer.rasterize` call equal depths go to the lower
   triangle index; against earlier calls a fragment must be strictly nearer than the stored depth.
+* Bands: ``ZBuffer(width, rows, top=t)`` (or :meth:`ZBuffer.clear` with ``top``) covers the frame rows t ..
+  t + rows - 1 only; triangles and fragments stay in frame coordinates, and the pixels won are the whole
+  frame's in those rows (the snapped vertices are shifted by whole rows, exactly).
 * Output: one fragment per pixel won, in no particular order; ``xs``, ``ys``, ``face`` int64, ``depth``
   float64, ``bary`` an (F, 3) float64 view of a (3, F) array.  Depth is evaluated as a plane in the flat pixel
   index (absolute error about 1e-16·|dz/dx|·width·height); weights as planes in x along each row.
@@ -104,28 +107,11 @@ class Fragments:
             sel = _as_index(sel, "mask")
         return Fragments(self.xs[sel], self.ys[sel], self.face[sel], self.bary[sel], self.depth[sel])
 
-    def interpolate(self, values: ArrayLike) -> np.ndarray:
-        """Per-vertex values (T, 3, K) of the triangles interpolated at each fragment -> (F, K).
-
-        In the affine form v0 + b1·(v1 − v0) + b2·(v2 − v0): exact where a triangle's three values agree (a
-        face of one colour shows exactly that colour), and computed one component at a time from contiguous
-        (T,) rows, about twice as fast on large batches as gathering (F, 3, K) corners.
-        """
-        vals = np.asarray(values, dtype=np.float64)
-        if vals.ndim != 3 or vals.shape[1] != 3:
-            raise InvalidArgument(f"values must have shape (T, 3, K), got {vals.shape}")
-        if len(self) and int(self.face.max()) >= vals.shape[0]:
-            raise InvalidArgument(f"values has {vals.shape[0]} triangles but a fragment shows triangle "
-                                  f"{int(self.face.max())}")
-        first = np.ascontiguousarray(vals[:, 0].T)
-        steps = [np.ascontiguousarray((vals[:, i] - vals[:, 0]).T) for i in (1, 2)]
-        weights = [np.ascontiguousarray(self.bary[:, i]) for i in (1, 2)]
-        out = np.empty((vals.shape[2], len(self.face)))
-        for k, row in enumerate(out):  # a few components (3), each over all fragments
-            np.take(first[k], self.face, out=row)
-            for step, weight in zip(steps, weights, strict=True):
-                row += np.take(step[k], self.face) * weight
-        return out.T
+    def interpolate(self, values: ArrayLike | Interpolant) -> np.ndarray:
+        """Per-vertex values (T, 3, K) of the triangles (or an :class:`Interpolant` of them) at each fragment
+        -> (F, K)."""
+        table = values if isinstance(values, Interpolant) else Interpolant(values)
+        return table.at(self)
 
     def compose(self, source: ArrayLike, weights: ArrayLike) -> Fragments:
         """Re-express against source triangles: face = source[face], bary = bary @ weights[face].
@@ -142,6 +128,37 @@ class Fragments:
                                   f"{int(self.face.max())}")
         bary = np.einsum("fi,fij->fj", self.bary, wts[self.face])
         return Fragments(self.xs, self.ys, src[self.face], bary, self.depth)
+
+
+class Interpolant:
+    """Per-vertex values (T, 3, K) of triangles, prepared once to be interpolated at many sets of fragments.
+
+    In the affine form v0 + b1·(v1 − v0) + b2·(v2 − v0): exact where a triangle's three values agree (a face of
+    one colour shows exactly that colour), and computed one component at a time from contiguous (T,) rows,
+    about twice as fast on large batches as gathering (F, 3, K) corners.
+    """
+
+    def __init__(self, values: ArrayLike) -> None:
+        vals = np.asarray(values, dtype=np.float64)
+        if vals.ndim != 3 or vals.shape[1] != 3:
+            raise InvalidArgument(f"values must have shape (T, 3, K), got {vals.shape}")
+        self.triangles = vals.shape[0]
+        self._first = np.ascontiguousarray(vals[:, 0].T)
+        self._steps = [np.ascontiguousarray((vals[:, i] - vals[:, 0]).T) for i in (1, 2)]
+
+    def at(self, fragments: Fragments) -> np.ndarray:
+        """The values at each fragment (F, K)."""
+        face = fragments.face
+        if len(face) and int(face.max()) >= self.triangles:
+            raise InvalidArgument(f"values has {self.triangles} triangles but a fragment shows triangle "
+                                  f"{int(face.max())}")
+        weights = [np.ascontiguousarray(fragments.bary[:, i]) for i in (1, 2)]
+        out = np.empty((self._first.shape[0], len(face)))
+        for k, row in enumerate(out):  # a few components (3), each over all fragments
+            np.take(self._first[k], face, out=row)
+            for step, weight in zip(self._steps, weights, strict=True):
+                row += np.take(step[k], face) * weight
+        return out.T
 
 
 def _empty_fragments() -> Fragments:
@@ -204,13 +221,13 @@ def _edge(px: np.ndarray, py: np.ndarray, qx: np.ndarray, qy: np.ndarray,
     return n0, step, den
 
 
-def _setup(xy: np.ndarray, z: np.ndarray, inv_w: np.ndarray | None, width: int,
-           height: int) -> tuple[_Triangles, _Rows]:
-    """Snap, sort and bucket the triangles; the pixel runs of every row they cover."""
+def _setup(xy: np.ndarray, z: np.ndarray, inv_w: np.ndarray | None, width: int, height: int,
+           top: int) -> tuple[_Triangles, _Rows]:
+    """Snap, sort and bucket the triangles (frame rows from ``top`` on); the pixel runs of every row they cover."""
     sx = np.rint(xy[:, :, 0] * SUBPIXEL)
     sx -= SUBPIXEL // 2
     sy = np.rint(xy[:, :, 1] * SUBPIXEL)
-    sy -= SUBPIXEL // 2
+    sy -= SUBPIXEL // 2 + top * SUBPIXEL
     # screen-space plane of depth and barycentric gradients, in pixel units
     px, py = sx / SUBPIXEL, sy / SUBPIXEL
     e1x, e1y = px[:, 1] - px[:, 0], py[:, 1] - py[:, 0]
@@ -325,38 +342,53 @@ def _chunks(length: np.ndarray) -> list[tuple[int, int]]:
 def _expand(rows: _Rows, offset: np.ndarray, first: np.ndarray, lo: int, hi: int,
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pixels of rows lo..hi: (flat index, depth, owning row)."""
-    length = rows.length[lo:hi]
-    owner = np.repeat(np.arange(lo, hi), length)
+    owner = np.repeat(np.arange(lo, hi), rows.length[lo:hi])
     pix = np.arange(first[lo], first[hi], dtype=np.int64)
-    pix += offset[owner]
-    depth = rows.gz[owner]
+    pix += np.take(offset, owner)
+    depth = np.take(rows.gz, owner)
     depth *= pix
-    depth += rows.z0[owner]
+    depth += np.take(rows.z0, owner)
     return pix, depth, owner
 
 
-class ZBuffer:
-    """A width x height depth buffer (``.depth``, +inf where nothing is drawn) that rasterizes triangles."""
+def _side(name: str, value: int, low: int) -> int:
+    """A validated size or offset in pixels, low..MAX_SIDE."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise InvalidArgumentType(f"{name} must be an integer, got {type(value).__name__} {value!r}")
+    if not low <= value <= MAX_SIDE:
+        raise InvalidArgument(f"{name} must be {low}..{MAX_SIDE}, got {value}")
+    return int(value)
 
-    def __init__(self, width: int, height: int) -> None:
-        for name, v in (("width", width), ("height", height)):
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
-                raise InvalidArgumentType(f"{name} must be an integer, got {type(v).__name__} {v!r}")
-            if not 1 <= v <= MAX_SIDE:
-                raise InvalidArgument(f"{name} must be 1..{MAX_SIDE}, got {v}")
-        self.width = int(width)
-        self.height = int(height)
+
+class ZBuffer:
+    """A width x height depth buffer (``.depth``, +inf where nothing is drawn) that rasterizes triangles.
+
+    ``top`` places it over the frame rows ``top .. top + height - 1`` (a band of a larger frame): triangles are
+    given in frame coordinates and fragments come back in them, exactly as a whole-frame buffer would give the
+    band's pixels.
+    """
+
+    def __init__(self, width: int, height: int, *, top: int = 0) -> None:
+        self.width = _side("width", width, 1)
+        self.height = _side("height", height, 1)
+        self.top = _side("top", top, 0)
         self.depth: np.ndarray = np.full((self.height, self.width), np.inf)
         self._owner: np.ndarray | None = None
+        self._spare = np.zeros(0, dtype=np.int64)
 
-    def clear(self) -> None:
-        """Reset every depth to +inf."""
+    def clear(self, top: int | None = None) -> None:
+        """Reset every depth to +inf; with ``top``, move the buffer to the band of frame rows from ``top`` on."""
+        if top is not None:
+            self.top = _side("top", top, 0)
         self.depth.fill(np.inf)
 
-    def rasterize(self, xy: ArrayLike, depth: ArrayLike, inv_w: ArrayLike | None = None) -> Fragments:
+    def rasterize(self, xy: ArrayLike, depth: ArrayLike, inv_w: ArrayLike | None = None, *,
+                  reuse: bool = False) -> Fragments:
         """Draw triangles (device xy (T, 3, 2), NDC depth (T, 3), optional 1/w (T, 3)); return what they won.
 
-        One fragment per pixel won in this call (in no particular order); ``.depth`` is updated.
+        One fragment per pixel won in this call (in no particular order); ``.depth`` is updated. With
+        ``reuse``, the fragments' arrays are memory this buffer keeps and overwrites at its next ``reuse``
+        call: for a caller done with them by then, it saves the cost of fresh pages.
         """
         pts = _as_array(xy, "xy", (-1, 3, 2))
         count = pts.shape[0]
@@ -370,7 +402,7 @@ class ZBuffer:
             raise InvalidArgument(f"inv_w row {row} must be > 0 (clip before rasterizing): {q[row].tolist()}")
         if count == 0:
             return _empty_fragments()
-        tris, rows = _setup(pts, z, q, self.width, self.height)
+        tris, rows = _setup(pts, z, q, self.width, self.height, self.top)
         np.maximum(rows.length, 0, out=rows.length)
         length = rows.length.astype(np.int64)
         if not length.any():
@@ -397,26 +429,36 @@ class ZBuffer:
 
         lowered = int(np.count_nonzero(flat[lo:lo + before.size] < before))
         if lowered == first[-1]:  # every candidate is alone at its pixel and nearer: all of them win
-            out = _Columns(lowered)
+            out = _Columns(lowered, self._memory(lowered, reuse))
             for i, (a, _) in enumerate(chunks):
                 pix, zz, owner = again(i)
                 out.put(int(first[a]), pix, owner, zz, rows, tris, self.width)
-            return out.fragments()
+            return out.fragments(self.top)
         pieces = []
         for i in range(len(chunks)):
             pix, zz, owner = again(i)
             win = zz == flat[pix]
             win &= zz < before[pix - lo]
             pieces.append((pix[win], owner[win], zz[win]))
-        out = _Columns(sum(piece[0].size for piece in pieces))
+        won = sum(piece[0].size for piece in pieces)
+        out = _Columns(won, self._memory(won, reuse))
         pos = 0
         for piece in pieces:
             out.put(pos, *piece, rows, tris, self.width)
             pos += piece[0].size
-        fragments = out.fragments()
-        if lowered == len(fragments):
-            return fragments
-        return fragments.subset(self._lowest_face(fragments.ys * self.width + fragments.xs, fragments.face))
+        fragments = out.fragments(0)
+        if lowered != len(fragments):
+            fragments = fragments.subset(self._lowest_face(fragments.ys * self.width + fragments.xs, fragments.face))
+        fragments.ys += self.top
+        return fragments
+
+    def _memory(self, size: int, reuse: bool) -> np.ndarray:
+        """Room for ``size`` fragments: new, or (``reuse``) the memory this buffer keeps for its results."""
+        if not reuse:
+            return np.empty(7 * size, dtype=np.int64)
+        if self._spare.size < 7 * size:
+            self._spare = np.empty(7 * max(size, self._spare.size // 7 * 2), dtype=np.int64)
+        return self._spare[:7 * size]
 
     def _lowest_face(self, pix: np.ndarray, face: np.ndarray) -> np.ndarray:
         """Mask keeping, at each pixel won by several equally near triangles, the lowest face."""
@@ -434,12 +476,13 @@ class ZBuffer:
 class _Columns:
     """Output arrays of a known number of fragments, filled piece by piece."""
 
-    def __init__(self, size: int) -> None:
-        self.xs = np.empty(size, dtype=np.int64)
-        self.ys = np.empty(size, dtype=np.int64)
-        self.face = np.empty(size, dtype=np.int64)
-        self.depth = np.empty(size)
-        self.bary = np.empty((3, size))  # one row per vertex: contiguous writes; handed out transposed
+    def __init__(self, size: int, memory: np.ndarray) -> None:
+        """Seven columns of ``size`` in ``memory`` (int64, at least 7·size): xs, ys, face, depth, 3 weights."""
+        column = [memory[k * size:(k + 1) * size] for k in range(4)]
+        self.xs, self.ys, self.face = column[:3]
+        self.depth = column[3].view(np.float64)
+        # one row per vertex: contiguous writes; handed out transposed
+        self.bary = memory[4 * size:7 * size].view(np.float64).reshape(3, size)
 
     def put(self, pos: int, pix: np.ndarray, owner: np.ndarray, depth: np.ndarray, rows: _Rows,
             tris: _Triangles, width: int) -> None:
@@ -462,6 +505,7 @@ class _Columns:
         np.subtract(1.0, l1, out=l0)
         l0 -= l2
 
-    def fragments(self) -> Fragments:
-        """The filled arrays as Fragments."""
+    def fragments(self, top: int) -> Fragments:
+        """The filled arrays as Fragments, rows counted from frame row ``top``."""
+        self.ys += top
         return Fragments(self.xs, self.ys, self.face, self.bary.T, self.depth)

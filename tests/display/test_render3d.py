@@ -359,3 +359,42 @@ def test_an_empty_scene_or_one_beyond_the_far_plane_draws_nothing():
             vector.draw(scene)
         assert not pixels(raster).any() and len(vector.display_list) == 0
         scene.add_mesh(SQUARE + np.array([0, 0, -100.0]), SQUARE_FACES)  # far is −25
+
+
+def test_triangles_cut_by_the_window_keep_their_own_colours_beside_whole_ones():
+    # a huge square (two faces, red below its diagonal y = x, blue above) is clipped by the view volume's sides;
+    # a small green square in front of it passes whole: each pixel shows the face the textbook geometry puts there
+    huge = np.array([[-100, -100, 0], [100, -100, 0], [100, 100, 0], [-100, 100, 0]], float)
+    small = SQUARE * 0.2 + np.array([14, 1, 1.0])  # x 14..16, y 1..3, nearer than the huge square
+    scene = Scene(camera=FRONT)
+    scene.add_mesh(small, SQUARE_FACES, material={"colour": (0, 1, 0), "ka": 1.0})
+    scene.add_mesh(huge, SQUARE_FACES, face_colours=[(1, 0, 0), (0, 0, 1)], material={"ka": 1.0})
+    scene.add_light("ambient", (1, 1, 1))
+    with CanvasDisplay(size=(40, 20)) as display:
+        display.window(0, 0, 20, 10)  # 2 px a unit; pixel (i, j) centred on world ((i + ½)/2, 10 − (j + ½)/2)
+        display.draw(scene)
+    rgb = pixels(display)
+    j, i = np.mgrid[0:20, 0:40]
+    x, y = (i + 0.5) / 2, 10 - (j + 0.5) / 2
+    green = (x > 14) & (x < 16) & (y > 1) & (y < 3)
+    assert (rgb[green] == (0, 255, 0)).all()
+    assert (rgb[~green & (y < x)] == (255, 0, 0)).all()
+    assert (rgb[~green & (y > x)] == (0, 0, 255)).all()
+
+
+@pytest.mark.parametrize("band_pixels, workers", [(64 * 3, 4), (64 * 7, 1), (1 << 30, 2)])
+def test_drawing_in_bands_on_threads_gives_the_whole_frames_pixels(monkeypatch, band_pixels, workers):
+    from pixelpen.display import render3d
+
+    def draw():
+        with CanvasDisplay(size=(64, 64)) as display:
+            display.window(-1.2, -1.2, 1.2, 1.2)
+            display.draw(sphere_scene())
+        return pixels(display)
+
+    whole = draw()  # the default bands
+    monkeypatch.setattr(render3d, "BAND_PIXELS", band_pixels)  # bands of 3 or 7 rows, or one band
+    monkeypatch.setattr(render3d, "MAX_WORKERS", workers)
+    banded = draw()
+    assert (whole.max(axis=2) > 0).mean() > 0.3  # the sphere is there
+    assert np.array_equal(banded, whole)

@@ -10,7 +10,7 @@ import pytest
 from pixelpen.errors import InvalidArgument, InvalidArgumentType
 from pixelpen.raster.canvas import Canvas
 from pixelpen.raster.illumination import Light, Material, Viewer
-from pixelpen.raster.shading import shade, write_colours
+from pixelpen.raster.shading import Shader, native_pixels, shade, write_colours
 from pixelpen.raster.zbuffer import Fragments
 from tests.raster.test_illumination import reference_intensity
 
@@ -162,6 +162,21 @@ def test_ambient_only_shows_exactly_the_face_colours_in_every_mode():
         np.testing.assert_array_equal(out, colours[frags.face])
 
 
+@pytest.mark.parametrize("mode", ["flat", "gouraud", "phong"])
+def test_a_prepared_shader_gives_each_fragment_set_what_shade_gives_them_all(mode):
+    rng = np.random.default_rng(7)
+    face, bary = rng.integers(0, 2, 40), random_bary(rng, 40)
+    options = {"mode": mode, "material": Material(colour=(0.9, 0.5, 0.2), ks=0.5), "viewer": OVERHEAD,
+               "lights": [Light("ambient", (0.2, 0.2, 0.2)), Light("point", (1, 1, 1), position=(0.3, 0.2, 2.0))]}
+    whole = shade(fragments(face, bary), VERTICES, FACES, **options)
+    shader = Shader(VERTICES, FACES, **options)
+    parts = [shader(fragments(face[part], bary[part])) for part in (slice(0, 13), slice(13, None))]
+    assert np.array_equal(np.concatenate(parts), whole)
+    assert whole.std(axis=0).max() > 0.01  # the light varies across the fragments
+    with pytest.raises(InvalidArgument, match=r"outside 0\.\.1"):
+        shader(fragments([2], [[1, 0, 0]]))
+
+
 def test_no_fragments_gives_no_colours():
     empty = fragments(np.zeros(0, dtype=np.int64), np.zeros((0, 3)))
     for mode in ("flat", "gouraud", "phong"):
@@ -279,6 +294,18 @@ def test_damage_covers_the_written_pixels():
         covered[rect.slices] = True
     assert covered[ys, xs].all()
     assert not covered[:3].any() and not covered[:, :5].any() and not covered[21:].any() and not covered[:, 10:].any()
+
+
+def test_native_pixels_leave_the_canvas_alone_until_stored():
+    canvas = Canvas(6, 4, "RGB565")
+    canvas.clear_damage()
+    xs, ys, rgb = np.array([1, 5]), np.array([3, 0]), np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    pixels = native_pixels(canvas, xs, ys, rgb)
+    assert not canvas.array.any() and canvas.damage() == []
+    assert pixels.values.tolist() == [0xF800, 0x001F]  # RGB565 red and blue (datasheet bit layout)
+    assert pixels.index.tolist() == [3 * 6 + 1, 5] and pixels.box == (1, 0, 6, 4)
+    pixels.store(canvas)
+    assert canvas.array[3, 1] == 0xF800 and canvas.array[0, 5] == 0x001F and canvas.damage() != []
 
 
 def test_empty_write_changes_nothing():

@@ -113,6 +113,22 @@ def test_matches_brute_force_reference(scene, perspective):
 
 
 @settings(max_examples=30, deadline=None)
+@given(st.lists(st.tuples(tri_xy, depth3, st.lists(st.floats(0.1, 4.0), min_size=3, max_size=3)),
+                min_size=1, max_size=6), st.integers(0, 10), st.integers(1, 6))
+def test_a_band_buffer_wins_the_reference_pixels_of_its_rows(scene, top, rows):
+    xy = np.array([s[0] for s in scene], dtype=float)
+    depth = np.array([s[1] for s in scene], dtype=float)
+    inv_w = np.array([s[2] for s in scene], dtype=float)
+    rows = min(rows, 11 - top)
+    want = {k: v for k, v in reference(xy, depth, 13, 11, inv_w).items() if top <= k[1] < top + rows}
+    band = ZBuffer(13, 6)
+    band.clear(top)  # moved over the frame's rows from top on: only its first `rows` rows are compared
+    got = {k: v for k, v in as_dict(band.rasterize(xy, depth, inv_w)).items() if k[1] < top + rows}
+    assert_matches(got, want, xy, depth)
+    assert all(top <= y < top + 6 for _, y in as_dict(band.rasterize(xy, depth, inv_w)))
+
+
+@settings(max_examples=30, deadline=None)
 @given(st.lists(st.tuples(tri_xy, depth3), min_size=1, max_size=4),
        st.lists(st.tuples(tri_xy, depth3), min_size=1, max_size=4))
 def test_second_call_must_be_strictly_nearer(first, second):
@@ -346,6 +362,27 @@ def test_compose_with_hand_clipped_triangles():
 def test_bad_arguments(args, match):
     with pytest.raises(InvalidArgument, match=match):
         ZBuffer(4, 4).rasterize(*args)
+
+
+def test_reused_result_memory_gives_the_same_fragments_until_the_next_reuse():
+    xy = np.array([[[0.5, 0.5], [9.5, 0.5], [0.5, 7.5]], [[2.0, 1.0], [12.0, 9.0], [1.0, 10.0]]])
+    depth = np.array([[0.2, 0.4, 0.6], [0.5, 0.1, 0.3]])
+    fresh = as_dict(ZBuffer(13, 11).rasterize(xy, depth))
+    buffer = ZBuffer(13, 11)
+    first = buffer.rasterize(xy, depth, reuse=True)
+    assert as_dict(first) == fresh
+    buffer.clear()
+    second = buffer.rasterize(xy[:1], depth[:1], reuse=True)  # fewer fragments, in the same memory
+    assert as_dict(second) == as_dict(ZBuffer(13, 11).rasterize(xy[:1], depth[:1]))
+    assert np.shares_memory(first.xs, second.xs)
+
+
+def test_a_band_validates_its_top_row():
+    with pytest.raises(InvalidArgument, match="top must be 0"):
+        ZBuffer(4, 4, top=-1)
+    with pytest.raises(InvalidArgumentType, match="top must be an integer"):
+        ZBuffer(4, 4).clear(1.5)
+    assert ZBuffer(4, 4, top=7).top == 7
 
 
 def test_bad_sizes_and_types():
