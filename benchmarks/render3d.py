@@ -206,7 +206,8 @@ def pixelpen_shaded_scene(vertices: np.ndarray, faces: np.ndarray, normals: np.n
     return scene
 
 
-RASTER_STAGES = ["clear", "mesh", "cull", "transform", "clip", "rasterize", "compose", "normals", "shade", "write"]
+RASTER_STAGES = ["clear", "mesh", "cull", "transform", "clip", "bands", "rasterize", "compose", "normals", "shade",
+                 "write"]
 VECTOR_STAGES = ["mesh", "cull", "transform", "clip", "edges", "hidden", "join"]
 
 
@@ -224,8 +225,9 @@ def stage_targets() -> list[tuple[object, str, str]]:
         (render3d, "front_faces", "cull"),
         (scene3d.Camera, "clip_coordinates", "transform"), (render3d, "perspective_divide", "transform"),
         (render3d, "_to_device", "transform"),
-        (render3d, "clip_triangles_homogeneous", "clip"), (render3d, "clip_segments_homogeneous", "clip"),
-        (ZBuffer, "rasterize", "rasterize"),
+        (render3d, "clip_points_homogeneous", "clip"), (render3d, "clip_triangles_homogeneous", "clip"),
+        (render3d, "clip_segments_homogeneous", "clip"),
+        (render3d, "_bands", "bands"), (ZBuffer, "rasterize", "rasterize"),
         (Fragments, "compose", "compose"), (Fragments, "subset", "compose"),
         (Mesh, "vertex_normals", "normals"),
         (render3d.Shader, "__init__", "shade"), (render3d.Shader, "__call__", "shade"),
@@ -268,9 +270,17 @@ def pixelpen_shaded(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray
             return render3d.render_raster(scene, pipeline, display.canvas, tolerance)
 
         seconds, stats = median_time(run, runs)
-        stages = stage_breakdown(run, RASTER_STAGES, runs)
         image = display.canvas.array.copy()
-    note = f"{stats.front:,} front, {stats.clipped:,} after clipping, {stats.fragments:,} px"  # type: ignore[attr-defined]
+        workers = render3d._workers()
+        render3d.MAX_WORKERS, saved = 1, render3d.MAX_WORKERS  # stages add up on one thread
+        try:
+            serial, _ = median_time(run, runs)
+            stages = stage_breakdown(run, RASTER_STAGES, runs)
+        finally:
+            render3d.MAX_WORKERS = saved
+    stages.insert(1, "  (timed with the bands drawn on one thread)")
+    note = (f"{stats.front:,} front, {stats.clipped:,} after clipping, {stats.fragments:,} px; "  # type: ignore[attr-defined]
+            f"{workers} thread(s); on 1 thread {serial:.4f} s")
     return Measured("pixelpen", seconds, len(faces), image, note), stages
 
 

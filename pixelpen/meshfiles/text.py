@@ -18,7 +18,7 @@ import numpy.typing as npt
 
 from pixelpen.errors import ParseError
 
-__all__ = ["NUMBER", "SPACE", "TextTable", "keyword_code", "parse_float", "plain_numbers", "ranges"]
+__all__ = ["NUMBER", "SPACE", "TextTable", "decimals", "keyword_code", "parse_float", "plain_numbers", "ranges"]
 
 NUMBER = re.compile(rb"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
 """A decimal number as the readers accept it (no ``nan``, ``inf``, hex or ``_``); linear, never backtracking."""
@@ -37,7 +37,9 @@ _PLAIN[[32, 10]] = 1
 _PLAIN[ord("-")] = 2
 _PLAIN[ord(".")] = 3
 PLAIN_DIGITS = 15
-"""Most significant digits of a plain number: below 2**53, so m / 10**k is one correctly rounded division."""
+"""Most digits of a number read by one division: m < 2**53 and 10**k exact, so m / 10**k is correctly rounded."""
+EXTENDED = np.finfo(np.longdouble).nmant >= 63
+"""Whether numpy's longdouble holds any 18-digit mantissa exactly (x86 extended or quad precision)."""
 
 IntArray = npt.NDArray[np.int64]
 FloatArray = npt.NDArray[np.float64]
@@ -68,14 +70,11 @@ def ranges(starts: IntArray, stops: IntArray) -> IntArray:
 
 def plain_numbers(text: npt.NDArray[np.uint8], integer: bool,
                   ) -> tuple[FloatArray | IntArray, IntArray, IntArray] | None:
-    """The space- or LF-separated tokens of ``text`` as numbers when all are plain ``-?d+`` (or ``-?d+.d*``).
+    """The space- or LF-separated tokens of ``text`` as numbers when all are plain ``-?d+`` (or ``-?d*.d*``).
 
     Returns (values, token starts, positions of the LFs), or None when a token is of another form (an
-    exponent, ``+``, a leading ``.``, an integer of more than 18 digits) or a byte is not of these forms.  A
-    plain decimal m / 10**k with m < 2**53 is exact as one IEEE division, so the values are bit for bit what
-    :func:`parse_float` (correctly rounded) gives.  Tokens are gathered in buckets of one length and point
-    position, each read digit column by digit column; tokens of more than PLAIN_DIGITS digits (the repr of
-    a double has up to 17) are parsed by ``numpy.fromstring`` instead.
+    exponent, ``+``, an integer of more than 18 digits) or a byte is not of these forms.  The values are
+    :func:`decimals` of the tokens, bit for bit what :func:`parse_float` gives.
     """
     classes = _PLAIN[text]
     count = [np.count_nonzero(classes == k) for k in range(6)]  # (bincount widens the bytes: 10x slower)
@@ -86,42 +85,85 @@ def plain_numbers(text: npt.NDArray[np.uint8], integer: bool,
     edges = np.flatnonzero(np.diff(separator, prepend=np.int8(1), append=np.int8(1)))
     del separator
     starts, ends = edges[0::2], edges[1::2]
-    negative = text[starts] == ord("-")
-    if int(negative.sum()) != count[2]:  # a minus inside a token
+    if int(np.count_nonzero(text[starts] == ord("-"))) != count[2]:  # a minus inside a token
         return None
-    first = starts + negative
-    point = np.full(len(starts), -1, dtype=np.int64)
-    if count[3]:
-        dots = np.flatnonzero(text == ord("."))
-        owner = np.searchsorted(starts, dots, "right") - 1
-        if (np.diff(owner) == 0).any():  # two points in one token
-            return None
-        point[owner] = dots - first[owner]
+    values, ok = decimals(text, starts, ends, integer)
+    if not ok.all():
+        return None
+    return values, starts.astype(np.int64, copy=False), np.flatnonzero(text == 10).astype(np.int64, copy=False)
+
+
+def decimals(text: npt.NDArray[np.uint8], starts: IntArray, ends: IntArray, integer: bool = False,
+             ) -> tuple[FloatArray | IntArray, BoolArray]:
+    """The tokens ``text[starts[i]:ends[i]]`` as numbers, and whether each is of the plain form read here.
+
+    A plain token is ``[+-]`` then digits with at most one point (``5``, ``-0.25``, ``5.``, ``.5``; no point
+    when ``integer``) and at most 18 digits; its value is bit for bit :func:`parse_float`'s (``int`` when
+    ``integer``).  Tokens of other forms (an exponent, 19 digits, a letter) have ``ok`` False and value 0
+    for the caller to read otherwise.  Tokens are gathered in buckets of one length and read digit column
+    by digit column.  A decimal m / 10**k of at most PLAIN_DIGITS digits is one correctly rounded division;
+    a longer one (the repr of a double has up to 17 digits) is divided in 64-bit extended precision and
+    rounded to a double, which is correct unless the extended quotient lies exactly half-way between two
+    doubles: those few (and all longer ones where numpy has no extended type) are not ok.
+    """
+    lead = text[starts]
+    first = starts + ((lead == ord("-")) | (lead == ord("+")))
     length = ends - first
-    digits = length - (point >= 0)
-    if not (digits >= 1).all() or (point == 0).any() or (integer and (digits > 18).any()):
-        return None
-    long = np.flatnonzero(digits > PLAIN_DIGITS)
-    length[long] = 0  # a bucket of its own, read by numpy.fromstring (correctly rounded) below
     values: FloatArray | IntArray = (np.zeros(len(starts), dtype=np.int64) if integer
                                      else np.zeros(len(starts), dtype=np.float64))
-    bucket = length * 64 + point + 1
-    for key in np.unique(bucket[length > 0]).tolist():
-        chosen = np.flatnonzero(bucket == key)
-        width, at = divmod(key, 64)
-        begin = first[chosen]
-        mantissa = np.zeros(len(chosen), dtype=np.int64)
-        for column in range(width):  # a loop over the digits of one bucket's tokens, not over tokens
-            if column != at - 1:
-                mantissa = mantissa * 10 + (text[begin + column] - ord("0"))
-        values[chosen] = mantissa if at == 0 or integer else mantissa / 10.0 ** (width - at)
+    ok = np.zeros(len(starts), dtype=bool)
+    for width in np.unique(length[(length >= 1) & (length <= 19)]).tolist():
+        chosen = np.flatnonzero(length == width)
+        mantissa, scale, digits, good = _digit_columns(text, first[chosen], width, integer)
+        if integer:
+            values[chosen] = mantissa
+        else:
+            values[chosen] = mantissa / 10.0 ** scale  # m < 2**53 and 10**k exact: one rounding
+            long = np.flatnonzero(digits > PLAIN_DIGITS)
+            if len(long) and EXTENDED:
+                values[chosen[long]], exact = _extended_quotient(mantissa[long], scale[long])
+                good[long] &= exact
+            else:
+                good[long] = False
+        ok[chosen] = good
+    negative = lead == ord("-")
     values[negative] = -values[negative]
-    if len(long):  # a repr of a double may have 17 digits: only these tokens are left in the text parsed
-        marks = np.zeros(len(text) + 1, dtype=np.int8)
-        marks[starts[long]], marks[ends[long]] = 1, -1
-        kept = np.where(np.cumsum(marks[:-1], dtype=np.int8).view(np.bool_), text, np.uint8(32))
-        values[long] = np.fromstring(kept.tobytes(), sep=" ")
-    return values, starts.astype(np.int64, copy=False), np.flatnonzero(text == 10).astype(np.int64, copy=False)
+    return values, ok
+
+
+def _digit_columns(text: npt.NDArray[np.uint8], first: IntArray, width: int, integer: bool,
+                   ) -> tuple[IntArray, IntArray, IntArray, BoolArray]:
+    """(mantissa, digits after the point, digits, plain) of the ``width``-byte tokens starting at ``first``."""
+    mantissa = np.zeros(len(first), dtype=np.int64)
+    point = np.full(len(first), -1, dtype=np.int64)
+    bad = np.zeros(len(first), dtype=bool)
+    for column in range(width):  # a loop over the bytes of one bucket's tokens, not over tokens
+        byte = text[first + column]
+        digit = byte - np.uint8(48)  # wraps: every non-digit is above 9
+        is_point = byte == ord(".")
+        if is_point.any():
+            bad |= (point >= 0) & is_point  # a second point
+            point[is_point] = column
+            bad |= (digit > 9) & ~is_point
+            mantissa = np.where(is_point, mantissa, mantissa * 10 + digit)
+        else:
+            bad |= digit > 9
+            mantissa = mantissa * 10 + digit
+    scale = np.where(point >= 0, width - 1 - point, 0)
+    digits = width - (point >= 0)
+    good = ~bad & (digits >= 1) & (digits <= 18)
+    if integer:
+        good &= point < 0
+    return mantissa, scale, digits, good
+
+
+def _extended_quotient(mantissa: IntArray, scale: IntArray) -> tuple[FloatArray, BoolArray]:
+    """m / 10**k rounded to doubles through the extended type, and which are surely correctly rounded."""
+    quotient = mantissa.astype(np.longdouble) / np.longdouble(10) ** scale.astype(np.longdouble)
+    values = quotient.astype(np.float64)
+    rest = np.abs(quotient - values.astype(np.longdouble))
+    half = np.spacing(np.abs(values)).astype(np.longdouble) / 2
+    return values, (rest != half) & (rest != half / 2)  # not exactly half-way (above or below a power of 2)
 
 
 class TextTable:

@@ -330,12 +330,11 @@ def _no_rows() -> _Rows:
     return _Rows(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros((3, 0)))
 
 
-def _chunks(length: np.ndarray) -> list[tuple[int, int]]:
-    """Consecutive row ranges of about CHUNK pixels each (a row is never split)."""
-    cum = np.cumsum(length)
-    total = int(cum[-1]) if cum.size else 0
-    cuts = np.searchsorted(cum, np.arange(CHUNK, total, CHUNK), side="left") + 1
-    bounds = np.unique(np.concatenate(([0], cuts, [length.size]))).tolist()
+def _chunks(first: np.ndarray) -> list[tuple[int, int]]:
+    """Consecutive row ranges of about CHUNK pixels each (a row is never split); ``first`` (R + 1,) is the
+    index of each row's first pixel in the expansion, then the total."""
+    cuts = np.searchsorted(first[1:], np.arange(CHUNK, int(first[-1]), CHUNK), side="left") + 1
+    bounds = np.unique(np.concatenate(([0], cuts, [first.size - 1]))).tolist()
     return list(itertools.pairwise(bounds))
 
 
@@ -414,7 +413,7 @@ class ZBuffer:
         flat = self.depth.reshape(-1)
         lo = int(rows.start.min())
         before = flat[lo:int((rows.start + length).max())].copy()
-        chunks = _chunks(length)
+        chunks = _chunks(first)
         keep = first[-1] <= KEEP_PIXELS
         expanded = []
         for a, b in chunks:
@@ -494,11 +493,13 @@ class _Columns:
         self.depth[sl] = depth
         l0, l1, l2 = self.bary[0, sl], self.bary[1, sl], self.bary[2, sl]
         for k, out in ((0, l1), (1, l2)):
-            np.multiply(tris.slope[k][face], xs, out=out)
-            out += rows.weight0[k][owner]
+            np.take(tris.slope[k], face, out=out)  # np.take, unlike fancy indexing, lets other threads run
+            out *= xs
+            out += np.take(rows.weight0[k], owner)
         if tris.slope.shape[0] == 3:
-            total = tris.slope[2][face] * xs
-            total += rows.weight0[2][owner]
+            total = np.take(tris.slope[2], face)
+            total *= xs
+            total += np.take(rows.weight0[2], owner)
             np.divide(1.0, total, out=total)
             l1 *= total
             l2 *= total
