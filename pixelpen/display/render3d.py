@@ -231,12 +231,12 @@ def _triangles(items: list[_Item], matrix: np.ndarray) -> _Triangles:
 def _bands(y: np.ndarray, rows: int, height: int) -> list[tuple[int, np.ndarray]]:
     """Horizontal bands of ``rows`` rows (the last may be shorter): (top row, indices of the triangles whose
     device ``y`` (K, 3) reach it)."""
-    centre = y + 0.5  # the z-buffer's device y of the canvas pixel centres
-    first = np.floor(centre.min(axis=1) / rows)
-    last = np.floor(centre.max(axis=1) / rows)
+    y0, y1, y2 = (y[:, k] + 0.5 for k in range(3))  # the z-buffer's device y of the canvas pixel centres
+    first = np.floor(np.minimum(np.minimum(y0, y1), y2) / rows)
+    last = np.floor(np.maximum(np.maximum(y0, y1), y2) / rows)
     bands = []
     for band, top in enumerate(range(0, height, rows)):
-        index = np.flatnonzero((first <= band) & (last >= band))
+        index = np.flatnonzero((first <= band) & (last >= band)) if band else np.flatnonzero(first <= 0)
         if index.size:
             bands.append((top, index))
     return bands

@@ -35,6 +35,10 @@ PLANES.flags.writeable = False
 # all) blurred by rounding: the edge ran from P to about −kP, which no segment between world points does.
 _APEX_TOL = 1e-12
 
+# A polygon vertex within this fraction of the polygon's largest coordinate outside a plane counts as on it
+# (inside): a face lying in a boundary plane (a backdrop on the far plane) is kept whole, not cut by rounding.
+_ON_TOL = 1e-12
+
 # For each plane: the coordinate a point cut by it has, as (index, factor): coordinate = factor · w.
 _ON_PLANE = ((0, -1.0), (0, 1.0), (1, -1.0), (1, 1.0), (2, 0.0), (2, 1.0))
 
@@ -69,7 +73,9 @@ def _at_apex(cut: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def clip_points_homogeneous(h: ArrayLike) -> np.ndarray:
     """Inside mask (N,) bool of (N, 4) homogeneous points: −w ≤ x ≤ w, −w ≤ y ≤ w, 0 ≤ z ≤ w, w > 0."""
     rows = as_homogeneous(h, "h")
-    inside: np.ndarray = (_distances(rows) >= 0.0).all(axis=1) & (rows[:, 3] > 0.0)
+    inside: np.ndarray = rows[:, 3] > 0.0
+    for plane in range(len(PLANES)):  # plane by plane: no (N, 6) table
+        inside &= _distance(rows, plane) >= 0.0
     return inside
 
 
@@ -111,9 +117,11 @@ def _compact(candidates: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.n
 def _clip_polygons(polygons: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Sutherland–Hodgman on padded polygons (T, K, 4 + A) with vertex counts (T,); attributes interpolate along.
 
-    Every edge i -> i+1 (cyclic) emits its start vertex if inside, then its crossing point if it crosses the
-    plane; the crossing is computed from the inside end. Returns the clipped padded polygons and counts.
+    A vertex within _ON_TOL·(the polygon's largest coordinate) outside a plane counts as inside. Every edge i -> i+1
+    (cyclic) emits its start vertex if inside, then its crossing point if it crosses the plane; the crossing is
+    computed from the inside end. Returns the clipped padded polygons and counts.
     """
+    tol = _ON_TOL * np.abs(polygons[:, :, :4]).max(axis=(1, 2), initial=0.0)
     for plane in range(len(PLANES)):
         width = polygons.shape[1]
         if width == 0:
@@ -124,13 +132,14 @@ def _clip_polygons(polygons: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray
         nxt = np.take_along_axis(polygons, following[:, :, None], axis=1)
         d = _distance(polygons, plane)
         d_next = np.take_along_axis(d, following, axis=1)
-        inside, inside_next = d >= 0.0, d_next >= 0.0
+        inside = d >= -tol[:, None]
+        inside_next = np.take_along_axis(inside, following, axis=1)
         crosses = valid & (inside != inside_next)
         a = np.where(inside[:, :, None], polygons, nxt)  # the inside end of each edge
         b = np.where(inside[:, :, None], nxt, polygons)
         da, db = np.where(inside, d, d_next), np.where(inside, d_next, d)
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.where(crosses, da / (da - db), 0.0)
+            t = np.where(crosses, np.clip(da / (da - db), 0.0, 1.0), 0.0)
         cut = (1.0 - t[:, :, None]) * a + t[:, :, None] * b  # exact at both ends, whatever their scales
         apex = _at_apex(cut, a, b)
         _snap(cut, plane)
@@ -191,8 +200,9 @@ def perspective_divide(h: ArrayLike) -> np.ndarray:
         raise InvalidArgument(f"h must be an (..., 4) array of homogeneous points: {exc}") from None
     if arr.ndim == 0 or arr.shape[-1] != 4:
         raise InvalidArgument(f"h must be an (..., 4) array of homogeneous points, got shape {arr.shape}")
-    bad = ~np.isfinite(arr).all(axis=-1) | ~(arr[..., 3] > 0.0)
-    if bad.any():
+    finite = np.isfinite(arr)
+    if not (finite.all() and (arr[..., 3] > 0.0).all()):  # the point is found only when something is wrong
+        bad = ~finite.all(axis=-1) | ~(arr[..., 3] > 0.0)
         index = tuple(int(i) for i in np.argwhere(bad)[0])
         raise InvalidArgument(
             f"h has a point with w ≤ 0 or a non-finite value at index {index}: {arr[index].tolist()} "

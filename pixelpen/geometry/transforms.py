@@ -49,9 +49,9 @@ def as_batch(value: ArrayLike, name: str, shape: tuple[int, ...], what: str) -> 
         return np.zeros((0, *shape))
     if arr.ndim != 1 + len(shape) or arr.shape[1:] != shape:
         raise InvalidArgument(f"{name} must be an {dims} array of {what}, got shape {arr.shape}")
-    bad = ~np.isfinite(arr.reshape(len(arr), -1)).all(axis=1)
-    if bad.any():
-        row = int(np.flatnonzero(bad)[0])
+    finite = np.isfinite(arr)
+    if not finite.all():  # one pass over the data; the row is found only when something is wrong
+        row = int(np.flatnonzero(~finite.reshape(len(arr), -1).all(axis=1))[0])
         raise InvalidArgument(f"{name} contains a non-finite value (NaN or inf) at row {row}: {arr[row].tolist()}")
     return arr
 

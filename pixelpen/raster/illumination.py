@@ -46,6 +46,9 @@ LIGHT_KINDS: tuple[str, ...] = ("ambient", "point", "directional", "spot")
 MODELS: tuple[str, ...] = ("phong", "blinn")
 """The specular models :func:`illuminate` offers."""
 
+HALFWAY_MIN = 1e-9
+"""Blinn: below this length of L + V (unit vectors) the halfway vector is undefined and gives no highlight."""
+
 Triple = tuple[float, float, float]
 
 
@@ -281,7 +284,8 @@ def illumination_terms(
         else:  # N·H with H = (L + V)/|L + V|
             length = np.sqrt(_dot(to_light, to_light) + v_dot_v + 2.0 * l_dot_v)
             total = n_dot_l + n_dot_v
-            cosine = np.divide(total, length, out=np.zeros_like(total), where=length > 0.0)
+            # L = −V (a light straight behind what the viewer sees) leaves H undefined: no highlight there
+            cosine = np.divide(total, length, out=np.zeros_like(total), where=length > HALFWAY_MIN)
         highlight = np.where(n_dot_l > 0.0, np.maximum(cosine, 0.0) ** material.n, 0.0)
         specular += (ks_s * il) * (factor * highlight)
     return scale.T, specular.T
