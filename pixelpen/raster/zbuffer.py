@@ -154,10 +154,13 @@ class Interpolant:
                                   f"{int(face.max())}")
         weights = [np.ascontiguousarray(fragments.bary[:, i]) for i in (1, 2)]
         out = np.empty((self._first.shape[0], len(face)))
+        term = np.empty(len(face))
         for k, row in enumerate(out):  # a few components (3), each over all fragments
             np.take(self._first[k], face, out=row)
             for step, weight in zip(self._steps, weights, strict=True):
-                row += np.take(step[k], face) * weight
+                np.take(step[k], face, out=term)
+                term *= weight
+                row += term
         return out.T
 
 
