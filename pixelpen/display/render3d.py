@@ -202,7 +202,7 @@ def _triangles(items: list[_Item], matrix: np.ndarray) -> _Triangles:
     counts = [int(it.front.sum()) for it in items]
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     device, inv_w, whole, cut = [], [], [], []
-    for it, offset in zip(items, offsets.tolist(), strict=False):
+    for it, offset in zip(items, offsets[:-1].tolist(), strict=True):
         faces = it.mesh.faces[it.front]
         inside = clip_points_homogeneous(it.clip)
         vertices = np.zeros((len(inside), 3))
@@ -236,7 +236,7 @@ def _bands(y: np.ndarray, rows: int, height: int) -> list[tuple[int, np.ndarray]
     last = np.floor(np.maximum(np.maximum(y0, y1), y2) / rows)
     bands = []
     for band, top in enumerate(range(0, height, rows)):
-        index = np.flatnonzero((first <= band) & (last >= band)) if band else np.flatnonzero(first <= 0)
+        index = np.flatnonzero((first <= band) & (last >= band))
         if index.size:
             bands.append((top, index))
     return bands
