@@ -1,12 +1,14 @@
 """PanelDisplay: a raster display on a panel controller behind a bus: init, partial refresh, pacing, safe close.
 
 A frame is the canvas's damage trimmed to the pixels that differ from what the panel last received (a
-shadow copy of the sent frame, compared by ``trim.trim_damage``), planned into controller windows
-(``windows.plan_windows``: the controller's alignment, several windows or fewer merged ones by bytes plus
-window commands), each sent as the controller's window commands and its pixels packed natively with
-``raster.formats.pack``.  The next frame is full after open, ``reset()``, a rotation change, a bus fault
-or an interruption (Ctrl-C) in the middle of a frame.  ``fps=`` (or ``refresh(target_fps)``) paces frames
-with a FramePacer: drawing between due frames only accumulates damage, so frames coalesce, never queue.
+shadow copy of the sent frame in the wire's units — RGB565 values on an RGB565 panel, converted only inside
+the damage — compared by ``trim.trim_damage``), whose cut is sent as it is (at most ``trim.MAX_WINDOWS``
+windows, or their bounding window when that costs fewer bytes; more are planned by
+``windows.plan_windows``), each window as the controller's window commands (MIPI: CASET or RASET left out
+when the window before it in the frame set the same columns or rows) and its pixels packed natively.  The
+next frame is full after open, ``reset()``, a rotation change, a bus fault or an interruption (Ctrl-C) in
+the middle of a frame.  ``fps=`` (or ``refresh(target_fps)``) paces frames with a FramePacer: drawing
+between due frames only accumulates damage, so frames coalesce, never queue.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import numpy as np
 
 from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
 from pixelpen.devices.panels.frames import FrameStats, PanelStats
-from pixelpen.devices.panels.trim import trim_damage
+from pixelpen.devices.panels.trim import MAX_WINDOWS, trim_damage
 from pixelpen.devices.panels.windows import WindowCost, window_cost
 from pixelpen.devices.panels.wiring import Interface, Pins, Wiring, open_wiring, parse_target, sim_wiring
 from pixelpen.display.base import Deferral
@@ -34,6 +36,7 @@ from pixelpen.errors import ConfigError, InvalidArgument, LinkError, URLError
 from pixelpen.options import OptionSpec, OptionValues, boolean, choice, integer, pixels, positive, text
 from pixelpen.profiles.panel import InitStep, PanelProfile, load_panel_profile, panel_profile_for
 from pixelpen.raster.canvas import Canvas
+from pixelpen.raster.colour import rgb888_to_rgb565
 from pixelpen.raster.damage import Rect, bounding
 from pixelpen.sim.base import BusDevice, create_simulator
 from pixelpen.sim.base import simulator_options as simulator_specs
@@ -121,6 +124,8 @@ class PanelDisplay(RasterDisplay):
         self._wiring: Wiring | None = wiring if isinstance(wiring, Wiring) else None
         self._simulator = simulator if simulator is not None or not isinstance(wiring, Wiring) else wiring.simulator
         self._shadow: np.ndarray | None = None
+        self._units: np.ndarray | None = None
+        """The frame in the shadow's units (``_to_units``), kept between frames when it is a conversion."""
         self._full = True
         self._pacer: FramePacer | None = None
         self._force = False
@@ -244,8 +249,9 @@ class PanelDisplay(RasterDisplay):
         """Send the settings of the options after the init table: scan direction, inversion, colour depth..."""
 
     @abstractmethod
-    def _write_window(self, window: Rect, pixels: bytes) -> None:
-        """Send one window: the controller's window commands, then ``pixels`` (already packed)."""
+    def _write_window(self, window: Rect, pixels: bytes, previous: Rect | None) -> None:
+        """Send one window: the controller's window commands, then ``pixels`` (already packed); ``previous`` is
+        the window sent before it in this frame (None for the first), whose settings the controller still holds."""
 
     @abstractmethod
     def _power(self, on: bool) -> None:
@@ -493,26 +499,34 @@ class PanelDisplay(RasterDisplay):
         native = self._native(canvas.array)
         height, width = native.shape[:2]
         shadow = self._shadow
-        if frame.full or shadow is None or shadow.shape != native.shape:
+        if frame.full or shadow is None or shadow.shape[:2] != (height, width):
             rects = [Rect(0, 0, width, height)]
             frame.full = True
-            shadow = self._shadow = np.empty_like(native)
+            units = self._units = self._to_units(native)
+            shadow = self._shadow = np.empty_like(units)
         else:
-            rects = trim_damage([self._native_rect(r, canvas.width, canvas.height) for r in canvas.damage()],
-                                native, shadow, self.cost)
+            damage = [self._native_rect(r, canvas.width, canvas.height) for r in canvas.damage()]
+            units = self._update_units(native, damage)
+            rects = trim_damage(damage, units, shadow, self.cost)
         if not rects:
             return
-        windows = rects if len(rects) == 1 and not frame.full else self.cost.plan(rects, width=width, height=height)
+        if frame.full:
+            windows = rects
+        elif len(rects) <= MAX_WINDOWS:  # trim's cut is already planned by the cost model
+            windows = self.cost.cut_or_bounding(rects)
+        else:
+            windows = self.cost.plan(rects, width=width, height=height)
         self._full = True  # until the last window is out
-        packed = self._pack(native, windows)
-        for window in windows:
-            rows, cols = window.slices
-            shadow[rows, cols] = native[rows, cols]
+        packed = self._pack(units, windows)
+        for x0, y0, x1, y1 in windows:
+            shadow[y0:y1, x0:x1] = units[y0:y1, x0:x1]
         frame.host_seconds = time.perf_counter() - started
         self._wait_te()
         on_bus = self.clock.now()
+        previous = None
         for window, data in zip(windows, packed, strict=True):
-            self._write_window(window, data)
+            self._write_window(window, data, previous)
+            previous = window
         frame.bus_seconds = self.clock.now() - on_bus
         self._full = False
         if self._pacer is not None:
@@ -520,14 +534,31 @@ class PanelDisplay(RasterDisplay):
         frame.windows = len(windows)
         self.stats.add(frame)
 
-    def _pack(self, native: np.ndarray, windows: list[Rect]) -> list[bytes]:
-        """Each window's pixels in the wire format: one vectorised conversion of the view of their bounding
-        box when that is at most twice their area or :data:`PACK_ONCE` pixels (else one per window), then a
-        slice per window."""
+    def _to_units(self, native: np.ndarray) -> np.ndarray:
+        """The frame as compared with the shadow and packed: HxW uint16 RGB565 values on an rgb565be wire
+        (pixels the wire cannot tell apart are no change), else the native view itself."""
+        return rgb888_to_rgb565(native) if self.pixel_format == "rgb565be" else native
+
+    def _update_units(self, native: np.ndarray, damage: list[Rect]) -> np.ndarray:
+        """:meth:`_to_units` of the frame, converted again only inside ``damage`` (outside it the last frame's
+        units equal the shadow, as every changed unit was sent)."""
+        units = self._units
+        if units is None or self.pixel_format != "rgb565be":
+            return self._to_units(native)
+        for r in damage:
+            rows, cols = r.slices
+            units[rows, cols] = rgb888_to_rgb565(native[rows, cols])
+        return units
+
+    def _pack(self, units: np.ndarray, windows: list[Rect]) -> list[bytes]:
+        """Each window's pixels in the wire format: RGB565 values byte-swapped per window; otherwise one
+        vectorised conversion of the view of their bounding box when that is at most twice their area or
+        :data:`PACK_ONCE` pixels (else one per window), then a slice per window."""
         from pixelpen.raster.formats import pack
 
-        if self.canvas_mode == "1":
-            native = native.view(np.bool_)
+        if units.dtype == np.uint16:
+            return [units[y0:y1, x0:x1].astype(">u2").tobytes() for x0, y0, x1, y1 in windows]
+        native = units.view(np.bool_) if self.canvas_mode == "1" else units
         box = bounding(windows)
         if len(windows) == 1 or box.area > max(2 * sum(w.area for w in windows), PACK_ONCE):
             return [pack(native[w.slices], self.pixel_format) for w in windows]

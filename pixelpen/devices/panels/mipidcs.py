@@ -4,8 +4,9 @@ Rotation is MADCTL (MY/MX/MV) with the module's CASET/RASET offsets for that rot
 ``rotation.N``); colour order (BGR) and inversion (INVON) come from the profile unless the URL says
 ``bgr=``/``invert=``.  Pixels are RGB565 big-endian (COLMOD 0x55) by default, RGB666 in three bytes
 (COLMOD 0x66) with ``colour=rgb666``.  A window is ``2A xs xe``, ``2B ys ye``, ``2C`` + pixels: 11
-command and parameter bytes.  With a ``te`` line wired TEON (35h 00h) is sent and every frame starts at
-the V-blank pulse.
+command and parameter bytes, 6 when the window before it in the frame had the same rows or columns (the
+controller keeps CASET/RASET; RAMWR starts at the window's first pixel).  With a ``te`` line wired TEON
+(35h 00h) is sent and every frame starts at the V-blank pulse.
 """
 
 from __future__ import annotations
@@ -91,14 +92,23 @@ class MipiDcsDisplay(PanelDisplay):
             self._command(TEON)
             self._data(b"\x00")
 
-    def _write_window(self, window: Rect, pixels: bytes) -> None:
+    def _write_window(self, window: Rect, pixels: bytes, previous: Rect | None) -> None:
+        """CASET and RASET (each left out when ``previous`` set the same columns or rows: the controller keeps
+        them, and RAMWR starts again at the window's first pixel), RAMWR and the pixels."""
         x, y = self._offsets
-        self._command(CASET)
-        self._data(struct.pack(">HH", window.x0 + x, window.x1 - 1 + x))
-        self._command(RASET)
-        self._data(struct.pack(">HH", window.y0 + y, window.y1 - 1 + y))
-        self._command(RAMWR)
-        self._data(pixels)
+        bus = self.wiring.bus
+        sent = 1 + len(pixels)
+        if previous is None or (previous.x0, previous.x1) != (window.x0, window.x1):
+            bus.command(CASET)
+            bus.data(struct.pack(">HH", window.x0 + x, window.x1 - 1 + x))
+            sent += 5
+        if previous is None or (previous.y0, previous.y1) != (window.y0, window.y1):
+            bus.command(RASET)
+            bus.data(struct.pack(">HH", window.y0 + y, window.y1 - 1 + y))
+            sent += 5
+        bus.command(RAMWR)
+        bus.data(pixels)
+        self._frame.bytes += sent
 
     def _power(self, on: bool) -> None:
         self._command(DISPON if on else DISPOFF)

@@ -111,7 +111,7 @@ class SSD1306Display(PanelDisplay):
             return p.column_offset
         return p.ram_size[0] - p.size[0] - p.column_offset
 
-    def _write_window(self, window: Rect, pixels: bytes) -> None:
+    def _write_window(self, window: Rect, pixels: bytes, previous: Rect | None) -> None:
         x = self.column_start
         self._command(COLUMN_ADDRESS, window.x0 + x, window.x1 - 1 + x, PAGE_ADDRESS, window.y0 // 8,
                       (window.y1 - 1) // 8)
@@ -149,7 +149,7 @@ class SH1106Display(SSD1306Display):
 
     controller: ClassVar[str] = "sh1106"
 
-    def _write_window(self, window: Rect, pixels: bytes) -> None:
+    def _write_window(self, window: Rect, pixels: bytes, previous: Rect | None) -> None:
         column = window.x0 + self.column_start
         width = window.width
         for i, page in enumerate(range(window.y0 // 8, -(-window.y1 // 8))):

@@ -10,6 +10,9 @@ outward to the controller's alignment (SSD1306: pages of 8 rows), clips it to th
 cost with :func:`pixelpen.raster.damage.merge_rects`: two windows become their bounding window when that
 costs no more; more than ``max_windows`` are merged cheapest-first until they fit.
 
+A display sends ``trim.trim_damage``'s cut (already made by this cost model) through
+:meth:`WindowCost.cut_or_bounding` when it has at most ``trim.MAX_WINDOWS`` windows, and plans more.
+
 Guarantees: every damaged pixel is in a window; every window is aligned (up to the panel's edge) and
 inside the panel; at most ``max_windows``; the plan costs no more than one bounding window and, when the
 aligned rectangles already fit ``max_windows``, no more than sending them unmerged.  Windows may overlap
@@ -157,6 +160,14 @@ class WindowCost:
         """What sending all ``windows`` costs."""
         costs = [self.window(w) for w in windows]
         return PlanCost(sum(c.bytes for c in costs), sum(c.transfers for c in costs))
+
+    def cut_or_bounding(self, rects: list[Rect]) -> list[Rect]:
+        """``rects`` as they are, or their bounding window when that costs fewer bytes under the merge model."""
+        box, overhead = bounding(rects), self.window_bytes + self.data_framing
+        if box.area * self.bytes_per_pixel + overhead < sum(r.area for r in rects) * self.bytes_per_pixel + len(
+                rects) * overhead:
+            return [box]
+        return rects
 
     def plan(self, rects: Sequence[Rect], *, width: int, height: int, max_windows: int = 32) -> list[Rect]:
         """:func:`plan_windows` with this controller's alignment, bands and per-window overhead."""

@@ -53,13 +53,15 @@ class StubBus:
 
 
 def windows(log: list[tuple[str, bytes]]) -> list[tuple[int, int, int, int, int]]:
-    """(xs, xe, ys, ye, pixel bytes) of each CASET/RASET/RAMWR window in a MIPI log (datasheet: 16-bit BE)."""
-    out = []
+    """(xs, xe, ys, ye, pixel bytes) of each RAMWR window in a MIPI log (datasheet: 16-bit BE), with the columns
+    and rows of the last CASET and RASET (a window repeating one leaves it out)."""
+    out, kept = [], {0x2A: (0, 0), 0x2B: (0, 0)}
     for i, (kind, payload) in enumerate(log):
+        if kind == "C" and payload in (b"\x2a", b"\x2b"):
+            p = log[i + 1][1]
+            kept[payload[0]] = (p[0] << 8 | p[1], p[2] << 8 | p[3])
         if kind == "C" and payload == b"\x2c":
-            caset, raset, pixels = log[i - 3][1], log[i - 1][1], log[i + 1][1]
-            out.append((caset[0] << 8 | caset[1], caset[2] << 8 | caset[3], raset[0] << 8 | raset[1],
-                        raset[2] << 8 | raset[3], len(pixels)))
+            out.append((*kept[0x2A], *kept[0x2B], len(log[i + 1][1])))
     return out
 
 

@@ -127,9 +127,20 @@ def test_te_line_turns_teon_on() -> None:
     display = ST7789Display(Wiring(bus, te=te), profile=load_panel_profile("st7789_240x240"), clock=SimulatedClock())
     display.open()
     assert after(bus.take(), 0x35) == [b"\x00"] and te.waits == 1  # TEON V-blank only; the first frame waited
-    display.canvas.lines([[0, 0, 1, 1]], (1, 2, 3))
+    display.canvas.lines([[0, 0, 1, 1]], (9, 9, 9))  # RGB565 (8, 8, 8): a change on the wire
     display.flush()
     assert te.waits == 2
+
+
+def test_a_change_below_the_wires_resolution_sends_nothing() -> None:
+    bus = StubBus()
+    display = ST7789Display(Wiring(bus), profile=load_panel_profile("st7789_240x240"), clock=SimulatedClock())
+    display.open()
+    bus.take()
+    frames = display.stats.frames
+    display.canvas.lines([[0, 0, 5, 5]], (7, 3, 7))  # RGB565 truncates to black: the panel already shows it
+    display.flush()
+    assert display.stats.frames == frames and after(bus.take(), 0x2C) == []
 
 
 def test_partial_windows_are_inside_the_module() -> None:
@@ -152,3 +163,28 @@ def test_a_diagonal_across_the_screen_is_not_sent_as_its_bounding_box() -> None:
     for xs, xe, ys, ye, _ in sent:
         covered[ys - 80:ye - 80 + 1, xs:xe + 1] = True  # rotation 0: rows +80
     assert covered[np.arange(240), np.arange(240)].all()  # every pixel of the line is in a window
+
+
+def test_windows_in_the_same_rows_leave_out_raset_and_the_glass_is_still_right() -> None:
+    """Two marks far apart in the same rows: two windows, the second without RASET (the controller keeps the
+    rows, RAMWR starts at the window's first pixel); on the simulated ST7789 the glass shows both marks."""
+    bus = StubBus()
+    display = ST7789Display(Wiring(bus), profile=load_panel_profile("st7789_240x240"), clock=SimulatedClock())
+    display.open()
+    bus.take()
+    display.canvas.blit(np.full((4, 3, 3), 255, np.uint8), 10, 20)
+    display.canvas.blit(np.full((4, 3, 3), 255, np.uint8), 200, 20)
+    display.flush()
+    log = bus.take()
+    assert [p for k, p in log if k == "C"] == [b"\x2a", b"\x2b", b"\x2c", b"\x2a", b"\x2c"]
+    assert windows(log) == [(10, 12, 100, 103, 24), (200, 202, 100, 103, 24)]  # rows + the module's 80-row offset
+    assert display.stats.last.bytes == 11 + 24 + 6 + 24
+
+    import pixelpen
+
+    with pixelpen.open("sim:st7789?size=240x240") as sim:
+        sim.canvas.blit(np.full((4, 3, 3), 255, np.uint8), 10, 20)
+        sim.canvas.blit(np.full((4, 3, 3), 255, np.uint8), 200, 20)
+        sim.flush()
+        glass = np.asarray(sim.simulator.glass().convert("RGB"))
+        assert (glass == sim.canvas.array).all() and sim.stats.last.windows == 2

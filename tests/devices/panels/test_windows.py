@@ -174,3 +174,12 @@ def test_the_window_overhead_is_what_the_controller_sends(url, changed, window):
         per_window = display.cost.window_bytes - display.cost.data_framing * 0  # commands (+ I2C control byte)
         expected = {"st7": 11, "ili": 11, "ssd": 6, "sh1": 3}[url[4:7]] + (display.bus.kind == "i2c")
         assert per_window == expected
+
+
+def test_a_cut_is_kept_unless_its_bounding_window_costs_fewer_bytes():
+    cost = window_cost("st7789")  # 2 bytes a pixel, 11 a window
+    apart = [Rect(0, 0, 4, 1), Rect(100, 0, 104, 1)]  # 2 x (8 + 11) = 38 bytes < 104 x 2 + 11
+    near = [Rect(0, 0, 4, 1), Rect(6, 0, 10, 1)]  # 38 bytes > 10 x 2 + 11 = 31
+    assert cost.cut_or_bounding(apart) == apart
+    assert cost.cut_or_bounding(near) == [Rect(0, 0, 10, 1)]
+    assert cost.cut_or_bounding([Rect(3, 4, 5, 6)]) == [Rect(3, 4, 5, 6)]
