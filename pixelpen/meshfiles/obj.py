@@ -12,9 +12,10 @@ token starting with ``#`` is a comment.
 
 Speed: a plain file (only ``v`` lines, ``f`` lines of plain indices and ``#`` lines) is read by
 :func:`_plain_obj`, whole blocks of numbers at once; any other file by the general reader: lines of the common
-forms (a keyword, then plain decimal numbers or ``a/b/c`` indices) are parsed together by
-:class:`~pixelpen.meshfiles.text.TextTable`; any other line (a ``+1``, an inline comment, an unknown keyword)
-goes through the per-line reader, which also finds and names the first bad field.
+forms (a keyword, then numbers, or ``a``, ``a/b``, ``a//c``, ``a/b/c`` corners) are parsed together by
+:func:`~pixelpen.meshfiles.text.decimals` over a :class:`~pixelpen.meshfiles.text.TextTable`; any other line
+(an inline comment, an unknown keyword, a malformed field) goes through the per-line reader, which also finds
+and names the first bad field.
 """
 
 from __future__ import annotations
@@ -29,14 +30,15 @@ from pixelpen.errors import ParseError
 from pixelpen.geometry.mesh import Mesh
 from pixelpen.meshfiles.limits import LIMITS, Limits
 from pixelpen.meshfiles.text import (
-    SPACE,
     BoolArray,
     FloatArray,
     IntArray,
     TextTable,
+    decimals,
     keyword_code,
     parse_float,
     plain_numbers,
+    ranges,
 )
 
 __all__ = ["read_obj"]
@@ -51,9 +53,9 @@ VERTEX_NUMBERS = (3, 4, 6, 7)
 """Numbers a ``v`` line may hold: x y z, with w, with r g b, with both."""
 CORNER = re.compile(rb"([+-]?\d{1,18})(?:/([+-]?\d{1,18})|/([+-]?\d{1,18})?/([+-]?\d{1,18}))?")
 """One ``f`` corner: v, v/vt, v//vn or v/vt/vn."""
+LONG_INDEX = re.compile(rb"[+-]?\d{19,}")
+"""An index of more than 18 digits: read as the largest int64 (so out of range), as numpy reads it."""
 
-_FACE_CHARS = SPACE.copy()
-_FACE_CHARS[list(b"0123456789-/")] = True
 
 
 class _Corners:
@@ -88,8 +90,8 @@ def _plain_obj(data: bytes, limits: Limits) -> Mesh | None:
     decimals and ``f`` lines at least 3 plain integer indices, all in range and within ``limits``.  Anything
     else (and every error) is left to the general reader, which reads the same files to the same mesh.
     """
-    if b"\r" in data or b"\\\n" in data or not data:
-        return None
+    if b"\r" in data or b"\\\n" in data or not data or data.find(b"/", max(data.find(b"\nv "), 0)) >= 0:
+        return None  # (a "/" after the first vertex: a/b corners, left at once; one in a first comment is not)
     if not data.endswith(b"\n"):
         data += b"\n"
     work = np.frombuffer(data, dtype=np.uint8).copy()
@@ -162,7 +164,8 @@ def _general_obj(data: bytes, source: str, limits: Limits) -> Mesh:
         slow.append(rest)
         bad = np.flatnonzero(~np.isfinite(values))
         if len(bad):
-            raise table.error("a coordinate out of range", int(tokens[bad[0]]))
+            token = int(tokens[bad[0]])  # the per-line reader's words
+            raise table.error(f"field {token - int(table.first_token[table.token_line[token]])} is out of range", token)
         if out is not None and rows is not None:
             first = np.cumsum(count[read] - 1) - (count[read] - 1)
             out[rows[read]] = values[first[:, None] + np.arange(3)]
@@ -184,39 +187,52 @@ def _check_count(table: TextTable, lines: BoolArray, limits: Limits, name: str, 
 
 
 def _fast_faces(table: TextTable, lines: IntArray, found: _Corners) -> IntArray:
-    """Read the ``f`` lines of plain ``a``, ``a/b``, ``a//c``, ``a/b/c`` corners at once; return the others."""
-    kept, tokens, text, dropped = table.token_text(lines, 1, _FACE_CHARS)
-    dropped = np.union1d(dropped, lines[table.tokens_per_line[lines] < 4])
-    lines = kept[table.tokens_per_line[kept] >= 4]
-    if len(lines) < len(kept):  # a face of fewer than three corners: its text is read again, without it
-        lines, tokens, text, _ = table.token_text(lines, 1, _FACE_CHARS)
-    is_slash = text == ord("/")
-    slash = np.flatnonzero(is_slash)
-    double = slash[is_slash[np.minimum(slash + 1, len(text) - 1)] & (slash + 1 < len(text))]
-    minus = np.flatnonzero(text == ord("-"))
-    size = len(table.token_start)
-    owner = np.searchsorted(table.token_start, np.r_[slash, double], "right") - 1
-    slashes = np.bincount(owner[:len(slash)], minlength=size)[tokens]
-    doubles = np.bincount(owner[len(slash):], minlength=size)[tokens]
-    before = text[np.maximum(minus - 1, 0)]
-    after = text[np.minimum(minus + 1, len(text) - 1)]
-    odd = (slashes > 2) | (doubles > 1) | ((doubles == 1) & (slashes != 2))
-    wrong_minus = ~(SPACE[before] | (before == ord("/"))) | (after < ord("0")) | (after > ord("9"))
-    if odd.any() or wrong_minus.any():  # "1-2" would read as two numbers: such lines go one by one
-        return np.union1d(lines, dropped)
-    per = 1 + slashes - doubles
-    flat = text
-    flat[is_slash] = ord(" ")
-    try:  # a field past int64 saturates, so it is out of range below like any too large index
-        ints = np.fromstring(flat.tobytes(), dtype=np.int64, sep=" ") if len(tokens) else np.zeros(0, np.int64)
-    except ValueError:
-        return np.union1d(lines, dropped)
-    if len(ints) != int(per.sum()):  # an empty field: "1/" or "1/2/"
-        return np.union1d(lines, dropped)
-    first = np.cumsum(per) - per
-    vt = np.where((slashes >= 1) & (doubles == 0), ints[np.minimum(first + 1, len(ints) - 1)], 0)
-    vn = np.where(slashes == 2, ints[np.minimum(first + 2 - doubles, len(ints) - 1)], 0)
-    found.add(table.token_line[tokens], tokens, ints[first], vt, vn)
+    """Read the ``f`` lines of plain ``a``, ``a/b``, ``a//c``, ``a/b/c`` corners at once; return the others.
+
+    Each corner's fields are found from its slashes (the file's slashes are found once) and all fields are
+    read together by :func:`~pixelpen.meshfiles.text.decimals` as integers of the CORNER form; a line with a
+    corner of another form (``1/``, ``1-2``, a comment) is left to the per-line reader, which names it.
+    """
+    dropped = lines[table.tokens_per_line[lines] < 4]
+    lines = lines[table.tokens_per_line[lines] >= 4]
+    first = table.first_token[lines]
+    tokens = ranges(first + 1, first + table.tokens_per_line[lines])
+    starts, ends = table.token_start[tokens], table.token_end[tokens]
+    if len(tokens) == 0:
+        return dropped
+    base = int(tokens[0])  # the corners' slashes, from the first corner to the last
+    slash = np.flatnonzero(table.bytes[starts[0]:ends[-1]] == ord("/")) + starts[0]
+    owner = np.searchsorted(table.token_start[base:tokens[-1] + 1], slash, "right") - 1
+    slashes = np.bincount(owner, minlength=int(tokens[-1]) + 1 - base)[tokens - base]
+    at = np.searchsorted(owner, tokens - base)  # each corner's first slash (when it has one)
+    one = slash[np.minimum(at, len(slash) - 1)] if len(slash) else np.zeros(len(tokens), dtype=np.int64)
+    two = slash[np.minimum(at + 1, len(slash) - 1)] if len(slash) else one
+    v_end = np.where(slashes > 0, one, ends)
+    vt_end = np.where(slashes == 2, two, ends)
+    with_vt = np.flatnonzero((slashes >= 1) & (vt_end > one + 1))
+    with_vn = np.flatnonzero(slashes == 2)
+    field_start = np.concatenate([starts, one[with_vt] + 1, two[with_vn] + 1])
+    field_end = np.concatenate([v_end, vt_end[with_vt], ends[with_vn]])
+    values, ok = decimals(table.bytes, field_start, field_end, integer=True)
+    long = np.zeros(0, dtype=np.int64) if ok.all() else np.flatnonzero(~ok & (field_end - field_start > 18))
+    for k in long.tolist():  # saturated: out of range below
+        field = table.data[field_start[k]:field_end[k]]
+        if LONG_INDEX.fullmatch(field):
+            values[k], ok[k] = (-(2**63) if field[:1] == b"-" else 2**63 - 1), True
+    count = len(tokens)
+    v, good = cast(IntArray, values[:count]), ok[:count] & (slashes <= 2)
+    vt, vn = np.zeros(count, dtype=np.int64), np.zeros(count, dtype=np.int64)
+    for rows, out, offset in ((with_vt, vt, count), (with_vn, vn, count + len(with_vt))):
+        out[rows] = values[offset:offset + len(rows)]
+        good[rows] &= ok[offset:offset + len(rows)]
+    good[(slashes == 1) & (vt_end <= one + 1)] = False  # "1/": an empty texture vertex
+    line = table.token_line[tokens]
+    if not good.all():
+        bad = np.unique(line[~good])
+        dropped = np.union1d(dropped, bad)
+        keep = ~np.isin(line, bad)
+        line, tokens, v, vt, vn = line[keep], tokens[keep], v[keep], vt[keep], vn[keep]
+    found.add(line, tokens, v, vt, vn)
     return dropped
 
 
@@ -322,12 +338,14 @@ def _normals(positions: FloatArray, normals: FloatArray, vi: IntArray, ni: IntAr
     """Unit vertex normals from the corners' ``vn``, or None unless every vertex has exactly one non-zero one."""
     if len(vi) == 0 or not present.all():
         return None
-    pairs = np.unique(np.stack([vi, ni], axis=1), axis=0)
-    if len(pairs) != len(positions) or not np.array_equal(pairs[:, 0], np.arange(len(positions))):
+    normal_of = np.full(len(positions), -1, dtype=np.int64)
+    normal_of[vi] = ni  # one of each vertex's normals: all of them when they agree
+    if (normal_of < 0).any() or not np.array_equal(normal_of[vi], ni):
         return None
-    chosen = normals[pairs[:, 1]]
-    length = np.linalg.norm(chosen, axis=1)
-    if not (length > 0).all():
+    chosen = normals[normal_of]
+    largest = np.abs(chosen).max(axis=1)
+    if not (largest > 0).all():
         return None
-    out: FloatArray = chosen / length[:, None]
+    chosen = chosen / largest[:, None]  # first to at most 1: the length of 1e154-long normals would overflow
+    out: FloatArray = chosen / np.linalg.norm(chosen, axis=1)[:, None]
     return out

@@ -100,7 +100,9 @@ def _ascii(data: bytes, source: str, limits: Limits) -> FloatArray:
         if len(rest) == 0:
             bad = np.flatnonzero(~np.isfinite(values))
             if len(bad):
-                raise table.error("a coordinate out of range", int(tokens[bad[0]]))
+                token = int(tokens[bad[0]])  # the per-line reader's words
+                raise table.error(f"vertex {'xyz'[(token - int(table.first_token[table.token_line[token]])) - 1]} is "
+                                  "out of range", token)
             return values.reshape(-1, 3)
     return _walk(table, lines)
 
