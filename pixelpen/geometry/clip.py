@@ -6,7 +6,7 @@ BOTTOM = 4 (y < ymin), TOP = 8 (y > ymax). Window edges are inside: a point on t
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Literal, overload
 
 import numpy as np
@@ -272,6 +272,52 @@ class _ConvexWindow:
         s = self.starts[k] + along
         return np.where(s >= self.perimeter - self.tol, 0.0, s)
 
+    def border_travel(self, ring: np.ndarray, on: np.ndarray, border: np.ndarray) -> float:
+        """Signed distance the ring's border edges run counter-clockwise along the window border, in total."""
+        i = np.flatnonzero(border)
+        k = np.argmax(on[i] & on[(i + 1) % len(ring)], axis=1)  # the window edge each border edge lies along
+        return float(((ring[(i + 1) % len(ring)] - ring[i]) * self.units[k]).sum())
+
+    def link_chains(
+        self, s_begin: np.ndarray, s_end: np.ndarray, travel: Callable[[], float]
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Each chain's successor and the counter-clockwise border gap from its exit to that chain's entry.
+
+        Exits (the border ahead is covered) and entries (covered behind) alternate along the border; where
+        some coincide (zero-width spikes, corners), the order within the group keeps that alternation, so
+        every entry follows exactly one exit. When every group holds as many exits as entries (a chain
+        ending where it began), that cannot tell a zero gap from a full loop; the geometry can:
+        Sutherland–Hodgman keeps the winding number inside the window, so the rings must run along the
+        border as far in total as the S-H ring's own border edges do (``travel()``: all of it or nothing).
+        """
+        m, perimeter = len(s_begin), self.perimeter
+        s = np.concatenate([s_end, s_begin])  # events 0..m-1 exits, m..2m-1 entries
+        order = np.argsort(s, kind="stable")
+        apart = np.diff(s[order], append=s[order[0]] + perimeter) > self.tol  # a real gap after each event
+        if apart.any():  # start just after a real gap, so no group of coincident events wraps past the start
+            j = (int(np.flatnonzero(apart)[-1]) + 1) % (2 * m)
+            order, apart = np.roll(order, -j), np.roll(apart, -j)
+        group = np.concatenate([[0], np.cumsum(apart[:-1])])
+        exits = order < m
+        sign = np.where(exits, 1, -1)
+        before = np.cumsum(sign) - sign  # covered depth before each event, less the depth at the start
+        first = np.flatnonzero(np.concatenate([[True], apart[:-1]]))
+        arrive = before[first]
+        start = -int(arrive.min()) if arrive.min() < arrive.max() else int(travel() > 0.5 * perimeter)
+        exit_first = start + arrive[group] <= 0
+        ranks = np.cumsum(exits) - exits, np.cumsum(~exits) - ~exits  # events of each kind before each event
+        nth = np.where(exits, ranks[0] - ranks[0][first][group], ranks[1] - ranks[1][first][group])  # in its group
+        seq = np.lexsort((2 * nth + (exits != exit_first), group))
+        entry_pos = np.flatnonzero(~exits[seq])
+        exit_pos = np.flatnonzero(exits[seq])
+        follow = entry_pos[np.searchsorted(entry_pos, exit_pos) % m]
+        chain, nxt = order[seq[exit_pos]], order[seq[follow]] - m
+        same = group[seq[exit_pos]] == group[seq[follow]]
+        gap = np.where(same, np.where(follow > exit_pos, 0.0, perimeter), (s_begin[nxt] - s_end[chain]) % perimeter)
+        successor, gaps = np.empty(m, dtype=np.intp), np.empty(m)
+        successor[chain], gaps[chain] = nxt, gap
+        return successor, gaps
+
     def split_rings(self, ring: np.ndarray) -> list[np.ndarray]:
         """Cut a Sutherland–Hodgman ring (counter-clockwise input) at its border edges and re-join the pieces.
 
@@ -298,9 +344,7 @@ class _ConvexWindow:
         chains = [ring[b:e + 1] for b, e in zip(begins, ends, strict=False)]
         s_begin = self.perimeter_coordinate(ring[begins], on[begins])
         s_end = self.perimeter_coordinate(ring[ends], on[ends])
-        order = np.argsort(s_begin, kind="stable")
-        nxt = order[np.searchsorted(s_begin[order], s_end - self.tol, side="left") % len(chains)]
-        gap = (s_begin[nxt] - s_end) % self.perimeter
+        nxt, gap = self.link_chains(s_begin, s_end, lambda: self.border_travel(ring, on, border))
         ahead = (self.starts[None, :] - s_end[:, None]) % self.perimeter  # distance to each corner
         passed = (ahead > self.tol) & (ahead < gap[:, None] - self.tol)
         used = np.zeros(len(chains), dtype=bool)

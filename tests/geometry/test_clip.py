@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import example, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from pixelpen.geometry.clip import (
@@ -125,6 +125,7 @@ def check_polygon_clip(polygon, window_ring, rings, grid=120):
     for ring in rings:
         a, b = ring, np.roll(ring, -1, axis=0)
         along = (distance_to_edges(a, window_ring) < 1e-9 * size) & (distance_to_edges(b, window_ring) < 1e-9 * size)
+        along &= np.hypot(*(b - a).T) > 1e-9 * size  # a rounding-length edge (a spike's two border points) spans no gap
         for f in (0.1234, 0.4321, 0.8765):  # sample points along each border edge, pushed inward
             p = a + f * (b - a)
             inward = p + (centre - p) * 1e-6
@@ -553,3 +554,145 @@ def test_liang_barsky_parameters_match_the_textbook_exactly():
         assert bool(keep[i]) == (want is not None), i
         if want is not None:
             assert (t0[i], t1[i]) == want, i
+
+
+# ---------------------------------------------------------------------------------------------
+# Zero-width spikes across the border: an exit meeting the next entry is no gap or a full loop
+
+SQUARE = (-1.0, -1.0, 1.0, 1.0)
+
+
+def quarter_turns(points, k):
+    """Points turned k quarter turns counter-clockwise about the origin (exact)."""
+    p = np.array(points, float)
+    for _ in range(k):
+        p = np.stack([-p[:, 1], p[:, 0]], axis=1)
+    return p
+
+
+def turned(points, angle):
+    """Points rotated by ``angle`` about the origin."""
+    c, s = math.cos(angle), math.sin(angle)
+    return np.asarray(points, float) @ np.array([[c, s], [-s, c]])
+
+
+def total_area(rings):
+    """Summed absolute shoelace area of rings."""
+    return sum(abs(signed_area(r)) for r in rings)
+
+
+def test_zero_area_spike_across_the_border_gives_nothing():
+    assert clip_polygon(np.array([[0.0, 0.5], [0.0, 0.5], [1.33984375, 1.921875]]), SQUARE) == []
+
+
+def test_window_covered_but_for_a_zero_width_spike_gives_the_window():
+    rings = clip_polygon([(-2, -2), (2, -2), (2, 2), (0.3, 2), (0.3, 0), (0.3, 2), (-2, 2)], SQUARE)
+    assert len(rings) == 1 and abs(signed_area(rings[0])) == pytest.approx(4)
+
+
+def test_notch_of_real_width_is_cut_out():
+    # the notch (0.3, 0), (0.31, 2), (0.3, 2) is x = 0.3 .. 0.3 + 0.005 y: inside y <= 1 a triangle 0.005 x 1 / 2
+    rings = clip_polygon([(-2, -2), (2, -2), (2, 2), (0.31, 2), (0.3, 0), (0.3, 2), (-2, 2)], SQUARE)
+    assert len(rings) == 1 and abs(signed_area(rings[0])) == pytest.approx(4 - 0.0025)
+
+
+def spike_polygon(family, b, tip):
+    """A square with a zero-width spike from (x, b) on its right side to ``tip`` and back, and the clipped area.
+
+    inner: [-0.5, 0.5]^2 inside the window, spiking out through x = 1 (area 1);
+    outer: [-2, 2]^2 around the window, spiking in through x = 1 (area 4);
+    away: [1.5, 3] x [-0.5, 0.5] right of the window, spiking in through x = 1 (area 0).
+    """
+    lo, hi, x, area = {"inner": (-0.5, 0.5, 0.5, 1.0), "outer": (-2, 2, 2, 4.0), "away": (-0.5, 0.5, 3, 0.0)}[family]
+    left = 1.5 if family == "away" else lo
+    return [(left, lo), (x, lo), (x, b), tip, (x, b), (x, hi), (left, hi)], area
+
+
+SPIKES = [
+    (family, b, tip)
+    for family, tips in (
+        ("inner", [(1.33984375, 0.921875), (1.7, 0.3), (1.3, -0.77), (2.1, 0.123)]),
+        ("outer", [(0.3, 0.0), (0.1, 0.7), (-0.3, 0.2), (0.77, -0.41), (-0.9, -0.9)]),
+        ("away", [(0.3, 0.0), (0.1, 0.7), (-0.3, 0.2), (0.123, 0.456)]),
+    )
+    for tip in tips
+    for b in (0.0, 0.1, 0.37)
+]
+CORNER_SPIKES = [  # spikes along the diagonal through the window corner (1, 1)
+    ([(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (1.5, 1.5), (0.5, 0.5), (-0.5, 0.5)], 1.0),
+    ([(-2, -2), (2, -2), (2, 2), (0.3, 0.3), (2, 2), (-2, 2)], 4.0),
+    ([(1.5, 1.5), (3, 1.5), (3, 3), (1.5, 3), (1.5, 1.5), (0.2, 0.2)], 0.0),
+    ([(-0.5, -0.5), (0.5, -0.5), (0.5, 0.3), (1.7, 1.2), (0.5, 0.3), (-0.5, 0.5)], 0.9),  # near the corner
+]
+
+
+@pytest.mark.parametrize("side", range(4))
+@pytest.mark.parametrize("family, b, tip", SPIKES)
+def test_spike_through_each_side(family, b, tip, side):
+    polygon, area = spike_polygon(family, b, tip)
+    polygon = quarter_turns(polygon, side)  # right, top, left, bottom side of the window
+    for poly in (polygon, polygon[::-1]):
+        rings = clip_polygon(poly, SQUARE)
+        assert total_area(rings) == pytest.approx(area, abs=1e-12)
+        assert len(rings) == (1 if area else 0)
+
+
+@pytest.mark.parametrize("corner", range(4))
+@pytest.mark.parametrize("polygon, area", CORNER_SPIKES)
+def test_spike_through_a_corner(polygon, area, corner):
+    polygon = quarter_turns(polygon, corner)
+    for poly in (polygon, polygon[::-1]):
+        rings = clip_polygon(poly, SQUARE)
+        assert total_area(rings) == pytest.approx(area, abs=1e-12)
+        assert len(rings) == (1 if area else 0)
+
+
+@pytest.mark.parametrize("angle", [0.3, 1.0, 2.5, -0.7])
+@pytest.mark.parametrize("polygon, area", [spike_polygon(*s) for s in SPIKES] + CORNER_SPIKES)
+def test_spikes_on_a_rotated_convex_window(polygon, area, angle):
+    window = turned(rect_ring(SQUARE), angle)
+    for poly in (turned(polygon, angle), turned(polygon, angle)[::-1]):
+        rings = clip_polygon_convex(poly, window)
+        assert total_area(rings) == pytest.approx(area, abs=1e-9)
+        assert len(rings) == (1 if area else 0)
+
+
+def cross(u, v):
+    """z component of the cross product of 2-D vectors (broadcasting)."""
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+
+@st.composite
+def spiked_polygons(draw):
+    """(base, spiked): a star polygon, and the same with a zero-width spike from a point of one edge to a tip."""
+    base = draw(star_polygons())
+    i = draw(st.integers(0, len(base) - 1))
+    f = draw(st.sampled_from([0.0, 0.5]) | st.floats(0, 1))
+    root = base[i] + f * (base[(i + 1) % len(base)] - base[i])
+    tip = np.array([draw(st.floats(-8, 18)), draw(st.floats(-8, 18))])
+    a, b = base, np.roll(base, -1, axis=0)
+    side = np.sign(cross(tip - root, a - root)) * np.sign(cross(tip - root, b - root))
+    across = np.sign(cross(b - a, root - a)) * np.sign(cross(b - a, tip - a))
+    assume(not ((side < 0) & (across < 0)).any())  # a spike crossing an edge makes the polygon not simple
+    spiked = np.vstack([base[:i + 1], [root, tip, root], base[i + 1:]])
+    return base, spiked
+
+
+try:
+    import shapely
+except ImportError:  # optional oracle: the grid reference below always runs
+    shapely = None
+
+
+@settings(max_examples=60, deadline=None)
+@given(polys=spiked_polygons(), win=st.none() | convex_windows())
+@example(polys=(np.array([(-2, -2), (2, -2), (2, 2), (-2, 2)], float) + 5,
+                np.array([(-2, -2), (2, -2), (2, 2), (0.3, 2), (0.3, 0), (0.3, 2), (-2, 2)]) + 5), win=None)
+def test_a_zero_width_spike_changes_no_area(polys, win):
+    base, spiked = polys
+    window = rect_ring(WINDOW) if win is None else (win if signed_area(win) > 0 else win[::-1])
+    rings = clip_polygon(spiked, WINDOW) if win is None else clip_polygon_convex(spiked, win)
+    check_polygon_clip(spiked, window, rings)  # the grid reference skips points near the spike's edges
+    if shapely is not None:
+        want = shapely.Polygon(base).intersection(shapely.Polygon(window)).area
+        assert total_area(rings) == pytest.approx(want, abs=1e-9 * 100)
