@@ -1,6 +1,7 @@
 """HID benchmark: hid-tools against pixelpen on the same descriptors and reports, in one process.
 
-Run: ``python3 benchmarks/hid.py [--reports N] [--batch N] [--repeat N] [--latency N]`` (``--tiny`` for a smoke run).
+Run: ``python3 benchmarks/hid.py [--reports N] [--batch N] [--repeat N] [--latency N]`` (``--tiny`` for a smoke run,
+``--parse-only`` for the parse columns alone).
 
 Descriptors: the simulators' (``pixelpen.sim.hid.descriptors``, 49–200 bytes) and a composite one of about
 2.3 KB composed here (a ten-finger touch screen, a pen, a mouse, a keyboard, consumer keys and a vendor page
@@ -11,7 +12,8 @@ composite seeded random bytes behind each input report ID.
 Measured (hid-tools is GPL-2.0 and only an oracle here; pixelpen never imports it):
 
 * parse: ``hidtools.hid.ReportDescriptor.from_bytes`` against ``parse_descriptor`` (and with every input
-  decoder compiled as well); the best of ``--repeat`` runs;
+  decoder compiled as well); the best of ``--repeat`` runs.  ``parse_descriptor`` checks every item but makes
+  the Field objects on the first use of ``layouts`` or a report space: ``--parse-only`` times that too;
 * per report: hid-tools ``rdesc.get(id, len)`` and ``get_values`` of each field, against pixelpen's
   ``descriptor.decode(report)`` (ID dispatch included) and a report's own compiled ``decoder(...).decode``;
 * batch: ``decode_batch`` of an (N, length) uint8 array per report ID;
@@ -378,6 +380,23 @@ def summary(rows: list[Row], lat: list[Latency]) -> list[str]:
     return lines
 
 
+def parse_only(repeat: int) -> int:
+    """Print hid-tools' and pixelpen's parse times per descriptor and their ratio (the worst first)."""
+    from hidtools.hid import ReportDescriptor as HidtoolsDescriptor
+
+    rows = []
+    for w in workloads(1):
+        as_list, data = list(w.data), w.data
+        ht = best(lambda: HidtoolsDescriptor.from_bytes(as_list), repeat)  # noqa: B023 (run here, in the loop)
+        px = best(lambda: parse_descriptor(data), repeat)  # noqa: B023
+        fields = best(lambda: parse_descriptor(data).layouts, repeat)  # noqa: B023
+        rows.append((ht / px, w.name, len(data), ht, px, fields))
+    for ratio, name, size, ht, px, fields in sorted(rows):
+        print(f"{name:<20}{size:>6} hid-tools {ht * 1e3:8.3f} ms  pixelpen {px * 1e3:7.4f} ms  {ratio:5.1f}x"
+              f"  | with its Field objects {fields * 1e3:7.4f} ms  {ht / fields:5.1f}x")
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run every measurement and print the tables."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -386,9 +405,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, default=20, help="runs of each measurement (the best is kept)")
     parser.add_argument("--latency", type=int, default=5_000, help="reports replayed per model at 1 kHz")
     parser.add_argument("--tiny", action="store_true", help="a smoke run: a few of everything")
+    parser.add_argument("--parse-only", action="store_true", help="only the parse times (no decoding, no latency)")
     args = parser.parse_args(argv)
     if args.tiny:
         args.reports, args.batch, args.repeat, args.latency = 50, 500, 2, 30
+    if args.parse_only:
+        return parse_only(args.repeat)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # short reports of random data are padded as the kernel does; fine here
         rows = [measure(w, args.repeat, args.batch) for w in workloads(args.reports)]

@@ -387,7 +387,8 @@ class ReportDecoder:
         last = (e.bit_offset + size - 1) // 8
         signed = e.signed and not raw
         if size > 64:
-            return _bytes_of_bits(arr[:, first:last + 1], shift, size)
+            bits = np.unpackbits(arr[:, first:last + 1], axis=1, bitorder="little")[:, shift:shift + size]
+            return np.packbits(bits, axis=1, bitorder="little")  # wider than 64 bits: little-endian bytes
         if last - first + 1 > 8:  # 58..64 bits not byte-aligned: two words
             low, high = self._element_batch(arr, _part(e, 0, 64 - shift), raw=True), arr[:, last]
             value = low.astype(np.uint64) | (high.astype(np.uint64) << np.uint64(64 - shift))
@@ -413,10 +414,12 @@ class ReportDecoder:
         usage some row reports.  Row ``i`` agrees with ``decode(reports[i])``; see :meth:`array_usages_batch`
         for the arrays' usages element by element."""
         arr = self.batch_array(reports)
+        bitmap = self._bitmap_batch(arr)
         columns: dict[Key, list[np.ndarray]] = {}
         for e in self.elements:
-            if e.key is not None:
-                columns.setdefault(e.key, []).append(self._element_batch(arr, e))
+            if e.key is not None:  # (elements start at distinct bits: a bitmap bit's offset is its alone)
+                column = bitmap.get(e.bit_offset)
+                columns.setdefault(e.key, []).append(self._element_batch(arr, e) if column is None else column)
         out: dict[Key, np.ndarray] = {}
         for key, cols in columns.items():
             if len(cols) > 1 and len({(c.ndim, c.dtype) for c in cols}) > 1:
@@ -426,6 +429,16 @@ class ReportDecoder:
             out[key] = cols[0] if len(cols) == 1 else np.stack(cols, axis=1)
         out.update(self._array_presence(arr))
         return out
+
+    def _bitmap_batch(self, arr: np.ndarray) -> dict[int, np.ndarray]:
+        """:meth:`_bitmap`'s bits over a batch by bit offset, int64 as :meth:`_element_batch` gives them, from one
+        unpacking of their bytes when they fill a quarter of them (an NKRO bitmap: a few passes, not 4 per key)."""
+        offsets = [e.bit_offset for e in self._bitmap()]
+        first, last = min(offsets, default=0) // 8, max(offsets, default=0) // 8
+        if not offsets or 8 * (last - first + 1) > 4 * len(offsets):
+            return {}
+        bits = np.unpackbits(np.ascontiguousarray(arr[:, first:last + 1].T), axis=0, bitorder="little")
+        return dict(zip(offsets, bits[[o - 8 * first for o in offsets]].astype(np.int64), strict=True))
 
     def _array_indices(self, arr: np.ndarray) -> tuple[list[Key], list[np.ndarray]]:
         """Every usage the arrays can report, and per array element an (N,) array of indices into it (-1: none)."""
@@ -497,12 +510,6 @@ def _sign_extend(value: np.ndarray, size: int) -> np.ndarray:
         half = np.uint64(1 << (size - 1))
         value = (value ^ half) - half
     return value.view(np.int64)
-
-
-def _bytes_of_bits(window: np.ndarray, shift: int, size: int) -> np.ndarray:
-    """Elements wider than 64 bits over a batch: their bits shifted down, as little-endian bytes."""
-    bits = np.unpackbits(window, axis=1, bitorder="little")[:, shift:shift + size]
-    return np.packbits(bits, axis=1, bitorder="little")
 
 
 class ReportEncoder:

@@ -28,10 +28,12 @@ Every error is a :class:`~pixelpen.errors.ParseError` whose ``offset`` is the by
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass
+from functools import partial
+from itertools import starmap
 
 from pixelpen.devices.hid.fields import Collection, Field, ReportDescriptor, ReportKind, ReportLayout
-from pixelpen.devices.hid.items import exponent_value, s32, scan, signed_value
+from pixelpen.devices.hid.items import exponent_value, scan
 from pixelpen.devices.hid.quirks import fixup
 from pixelpen.errors import ParseError
 
@@ -59,158 +61,177 @@ _LOCAL_EXTRAS = {0x38: "designator_index", 0x48: "designator_minimum", 0x58: "de
 """Local items kept for the dump, by prefix without its size bits."""
 _REPORT_BITS = (MAX_BUFFER_SIZE - 1) * 8
 """Bits a report may hold after its ID byte (``hid_add_field``'s check)."""
+_SIGN = tuple((0, 0x100, 0x10000, 0x100000000)[prefix & 3] for prefix in range(256))
+"""Per prefix byte, what ``value - ((value << 1) & _SIGN[prefix])`` subtracts to read its data signed."""
+_PAD = bytes(4)
+
+# What the item loop does per prefix byte, numbered by how often descriptors use them (the branches are tried in
+# this order); the Main items are numbered last so that one comparison sends them all to one branch.
+(_USAGE, _COUNT, _SIZE, _LMAX, _LMIN, _PAGE, _PMAX, _PMIN, _UNIT, _USAGE_MIN, _USAGE_MAX, _REPORT_ID, _EXPONENT,
+ _EXT_USAGE, _PUSH, _POP, _DELIMITER, _EXTRA, _IGNORED, _BAD_GLOBAL, _RESERVED, _LONG,
+ _FIELD, _COLLECTION, _END, _BAD_MAIN) = range(26)
+_GLOBAL_OPS = {0x04: _PAGE, 0x14: _LMIN, 0x24: _LMAX, 0x34: _PMIN, 0x44: _PMAX, 0x54: _EXPONENT, 0x64: _UNIT,
+               0x74: _SIZE, 0x84: _REPORT_ID, 0x94: _COUNT, 0xA4: _PUSH, 0xB4: _POP}
+_LOCAL_OPS = {0x08: _USAGE, 0x18: _USAGE_MIN, 0x28: _USAGE_MAX, 0xA8: _DELIMITER} | dict.fromkeys(_LOCAL_EXTRAS, _EXTRA)
+_MAIN_OPS = {0x80: _FIELD, 0x90: _FIELD, 0xB0: _FIELD, 0xA0: _COLLECTION, 0xC0: _END}
+
+
+def _op(prefix: int) -> int:
+    """The item loop's branch for one prefix byte."""
+    t, kind = prefix & 0xFC, prefix & 0x0C
+    if prefix >= 0xF0:
+        return _LONG
+    if kind == 4:
+        return _GLOBAL_OPS.get(t, _BAD_GLOBAL)
+    if kind == 8:
+        return _EXT_USAGE if prefix == 0x0B else _LOCAL_OPS.get(t, _IGNORED)
+    return _MAIN_OPS.get(t, _BAD_MAIN) if kind == 0 else _RESERVED
+
+
+_OPS = tuple(_op(prefix) for prefix in range(256))
+
+
+_RawField = tuple  # a Field's arguments, as the item loop collects them
+
+
+def _error(data: bytes, source: str | None, message: str, offset: int, token: object = None) -> ParseError:
+    """The error of the item at ``offset``, unless an item cut short by the end comes first (raised then)."""
+    scan(data, source=source)
+    return ParseError(message, source=source, offset=offset, token=token)
+
+
+# The per-usage work is done in these small functions, not in the item loop: an int allocated from a frame costs
+# a walk of that frame's line table under tracemalloc (Python 3.11 caches the line of an instruction only while a
+# tracer runs), and the item loop's table is long, so 12288 usages allocated from it took a second.
+def _add_usages(usages: list[int], first: int, count: int, page16: int | None) -> None:
+    """Append the usages ``first .. first + count - 1``: as 16-bit IDs under ``page16``, or whole when it is None."""
+    if page16 is None:
+        usages.extend(range(first, first + count))
+    elif first + count <= 0x10000:
+        usages.extend(range(page16 | first, page16 | (first + count)))
+    else:
+        usages.extend([page16 | (u & 0xFFFF) for u in range(first, first + count)])
+
+
+def _concatenate_last_usage_page(usages: list[int], extended: list[tuple[int, int]], usage_page: int,
+                                 page16: int) -> None:
+    """``hid_concatenate_last_usage_page``: from the last usage back, give the current page to the 1–2-byte
+    usages until one already has it, stepping over the runs of 4-byte usages (the page is compared whole, as
+    the kernel does)."""
+    k, run = len(usages) - 1, len(extended) - 1
+    while k >= 0:
+        if run >= 0 and k < extended[run][1]:  # runs are in index order, k walks down over them
+            k = min(k, extended[run][0] - 1)
+            run -= 1
+        elif usages[k] >> 16 == usage_page:
+            break
+        else:
+            usages[k] = page16 | (usages[k] & 0xFFFF)
+            k -= 1
 
 
 @dataclass(slots=True)
 class _Report:
-    """A report being built: its fields and its length in bits (without the ID byte, as the kernel counts)."""
+    """A report being built: its fields (as :data:`_RawField` tuples) and its length in bits (without the ID
+    byte, as the kernel counts)."""
 
     kind: ReportKind
     report_id: int | None
-    fields: list[Field] = field(default_factory=list)
+    fields: list[_RawField]
     bits: int = 0
     with_usages: int = 0
 
 
-def _parse(items: list[tuple[int, int, int]], data: bytes, source: str | None, reject_long_items: bool,
-           warnings: list[str]) -> tuple[dict[tuple[int, int], _Report], list[Collection]]:
-    """The kernel's ``hid_open_report`` over :func:`scan`'s items: the reports by (Main tag, report ID) and the
-    collections.  One loop with the parser state in local variables: ``hid_parser_global``,
-    ``hid_parser_local`` and ``hid_parser_main`` are its three branches (the state as attributes and a
-    method per item cost more than the parsing itself)."""
+def _parse(data: bytes, source: str | None, reject_long_items: bool,
+           warnings: list[str]) -> tuple[dict[int, _Report], list[Collection]]:
+    """The kernel's ``hid_open_report`` over the bytes: the reports by Main tag << 8 | report ID, and the collections.
 
-    def error(message: str, offset: int, token: object = None) -> ParseError:
-        return ParseError(message, source=source, offset=offset, token=token)
+    One loop cuts the items (as :func:`~pixelpen.devices.hid.items.scan` does) and parses each at once, with
+    the parser state in local variables and a branch per prefix byte from :data:`_OPS`:
+    ``hid_parser_global``, ``hid_parser_local`` and ``hid_parser_main`` are its branches (an item tuple, the
+    state as attributes or a method per item cost more than the parsing itself).  The bytes are read with
+    four zero bytes after them, so the last item reads its data without a bounds check; an item cut short by
+    the end is then found by :func:`scan`, which is run before any error is raised, so that a truncation is
+    reported first wherever it is, as when the items are cut before they are parsed."""
 
-    # globals (struct hid_global), pushed and popped as one tuple
-    usage_page = lmin = lmax = pmin = pmax = exponent = unit = report_size = rid = report_count = 0
+    # globals (struct hid_global), pushed and popped as one tuple; page16 is the Usage Page as a usage's top half
+    usage_page = lmin = lmax = pmin = pmax = exponent = unit = report_size = rid = report_count = page16 = 0
     stack: list[tuple[int, ...]] = []
     # locals (struct hid_local), reset after every Main item
     usages: list[int] = []
-    extended: set[int] = set()  # indices of 4-byte usages, which keep their own page
+    extended: list[tuple[int, int]] = []  # index runs [start, stop) of 4-byte usages, which keep their own page
     usage_min = delimiter_depth = delimiter_branch = 0
     extra: dict[str, object] = {}
     open_: list[Collection] = []
     collections: list[Collection] = []
-    reports: dict[tuple[int, int], _Report] = {}
-    last = len(items)
-    while last and items[last - 1][1] == 0:  # trailing zero bytes
-        last -= 1
-    for offset, prefix, value in items if last == len(items) else items[:last]:
-        if prefix >= 0xF0:  # tag nibble 15: a long item
-            what = f"long item (tag 0x{data[offset + 2]:02X}, {value} data bytes)"
-            if reject_long_items:
-                raise error(f"{what}: the kernel rejects descriptors with long items", offset)
-            warnings.append(f"{what} at offset {offset} skipped")
-            continue
-        t = prefix & 0xFC
-        kind = t & 0x0C
-        if kind == 4:  # -- hid_parser_global ----------------------------------------------------------------
-            if t == 0x74:
-                if value > MAX_REPORT_SIZE:
-                    raise error(f"Report Size {value} bits is over the kernel's {MAX_REPORT_SIZE}", offset)
-                report_size = value
-            elif t == 0x94:
-                if value > MAX_USAGES:
-                    raise error(f"Report Count {value} is over the kernel's {MAX_USAGES}", offset)
-                report_count = value
-            elif t == 0x14:
-                lmin = signed_value(prefix, value)
-            elif t == 0x24:  # signed only when the minimum before it is negative
-                lmax = signed_value(prefix, value) if lmin < 0 else value
-            elif t == 0x04:
-                usage_page = value
-            elif t == 0x84:
-                if value == 0 or value >= MAX_IDS:
-                    raise error(f"Report ID {value} is invalid (1..{MAX_IDS - 1})", offset)
-                rid = value
-            elif t == 0x34:
-                pmin = signed_value(prefix, value)
-            elif t == 0x44:
-                pmax = signed_value(prefix, value) if pmin < 0 else value
-            elif t == 0x54:
-                exponent = exponent_value(prefix, value)
-            elif t == 0x64:
-                unit = value
-            elif t == 0xA4:
-                if len(stack) == GLOBAL_STACK_SIZE:
-                    raise error(f"Push: the global stack is full ({GLOBAL_STACK_SIZE} deep)", offset)
-                stack.append((usage_page, lmin, lmax, pmin, pmax, exponent, unit, report_size, rid, report_count))
-            elif t == 0xB4:
-                if not stack:
-                    raise error("Pop without a Push (global stack underflow)", offset)
-                usage_page, lmin, lmax, pmin, pmax, exponent, unit, report_size, rid, report_count = stack.pop()
-            else:
-                raise error(f"unknown global item tag {prefix >> 4}", offset, f"0x{prefix:02X}")
-        elif kind == 8:  # -- hid_parser_local -----------------------------------------------------------------
-            if t == 0x08 or t == 0x28:  # Usage, Usage Maximum
-                if delimiter_branch > 1:  # an alternative usage set: ignored
-                    continue
-                if t == 0x08:
-                    first, count = value, 1
-                else:
-                    top = value
-                    if ((top - usage_min) + len(usages)) & _M32 >= MAX_USAGES:
-                        warnings.append(f"Usage Maximum at offset {offset}: range cut at {MAX_USAGES} usages")
-                        top = (MAX_USAGES - len(usages) + usage_min - 1) & _M32
-                        if top == 0:
-                            raise error("no more usages available", offset)
-                    if usage_min > top:
-                        continue
-                    first, count = usage_min, top - usage_min + 1
-                if len(usages) + count > MAX_USAGES:
-                    raise error(f"more than {MAX_USAGES} usages before one Main item", offset)
-                if prefix & 3 == 3:  # 4 bytes: an extended usage carries its page
-                    extended.update(range(len(usages), len(usages) + count))
-                    usages.extend(range(first, first + count))
-                elif count == 1:
-                    usages.append((usage_page & 0xFFFF) << 16 | first)
-                else:
-                    page = (usage_page & 0xFFFF) << 16
-                    usages.extend(range(page | first, page | (first + count)) if first + count <= 0x10000
-                                  else (page | (u & 0xFFFF) for u in range(first, first + count)))
-            elif t == 0x18:
-                if delimiter_branch <= 1:
-                    usage_min = value
-            elif t == 0xA8:
-                if value:
-                    if delimiter_depth:
-                        raise error("nested delimiters", offset)
-                    delimiter_depth += 1
-                    delimiter_branch += 1
-                else:
-                    if delimiter_depth < 1:
-                        raise error("close delimiter without an open one", offset)
-                    delimiter_depth -= 1
-            elif t in _LOCAL_EXTRAS:
-                extra[_LOCAL_EXTRAS[t]] = value
-        elif kind == 0:  # -- hid_parser_main ------------------------------------------------------------------
-            if usages:  # hid_concatenate_last_usage_page; the page is compared whole, as the kernel does
-                prefix16 = (usage_page & 0xFFFF) << 16
-                for i in range(len(usages) - 1, -1, -1):
-                    if i in extended:
-                        continue
-                    if usages[i] >> 16 == usage_page:
-                        break
-                    usages[i] = prefix16 | (usages[i] & 0xFFFF)
-            if t == 0x80 or t == 0x90 or t == 0xB0:  # hid_add_field
-                tag = prefix >> 4
-                report = reports.get((tag, rid))
+    reports: dict[int, _Report] = {}
+    n = len(data)
+    zeros = len(data.rstrip(b"\0"))  # a 0x00 item from here on starts the trailing zero bytes
+    buf = data + _PAD
+    ops = _OPS
+    sign = _SIGN
+    i = offset = 0
+    while i < n:
+        offset = i
+        prefix = buf[i]
+        if prefix & 3 == 1:
+            value = buf[i + 1]
+            i += 2
+        elif not prefix & 3:
+            value = 0
+            i += 1
+        elif prefix & 3 == 2:
+            value = buf[i + 1] | buf[i + 2] << 8
+            i += 3
+        else:
+            value = buf[i + 1] | buf[i + 2] << 8 | buf[i + 3] << 16 | buf[i + 4] << 24
+            i += 5
+        op = ops[prefix]
+        if op == _USAGE:  # -- hid_parser_local -----------------------------------------------------------------
+            if delimiter_branch > 1:  # an alternative usage set: ignored
+                continue
+            if len(usages) >= MAX_USAGES:
+                raise _error(data, source, f"more than {MAX_USAGES} usages before one Main item", offset)
+            usages.append(page16 | value)
+        elif op == _COUNT:  # -- hid_parser_global ----------------------------------------------------------
+            if value > MAX_USAGES:
+                raise _error(data, source, f"Report Count {value} is over the kernel's {MAX_USAGES}", offset)
+            report_count = value
+        elif op == _SIZE:
+            if value > MAX_REPORT_SIZE:
+                raise _error(data, source, f"Report Size {value} bits is over the kernel's {MAX_REPORT_SIZE}", offset)
+            report_size = value
+        elif op == _LMAX:  # signed only when the minimum before it is negative
+            lmax = value - ((value << 1) & sign[prefix]) if lmin < 0 else value
+        elif op == _LMIN:
+            lmin = value - ((value << 1) & sign[prefix])
+        elif op == _PAGE:
+            usage_page = value
+            page16 = (value & 0xFFFF) << 16
+        elif op >= _FIELD:  # -- hid_parser_main ----------------------------------------------------------------
+            if op == _BAD_MAIN and prefix == 0 and offset >= zeros:
+                # the kernel reads trailing zeros as unknown Main items, which reset the local state
+                delimiter_depth = 0
+                break
+            if usages and (extended or usages[-1] >> 16 != usage_page):
+                _concatenate_last_usage_page(usages, extended, usage_page, page16)
+            if op == _FIELD:  # hid_add_field
+                report = reports.get(prefix >> 4 << 8 | rid)
                 if report is None:
-                    report = reports[tag, rid] = _Report(_KINDS[tag], rid or None)
+                    report = reports[prefix >> 4 << 8 | rid] = _Report(_KINDS[prefix >> 4], rid or None, [])
                 lo, hi = lmin, lmax
                 if lo < 0:
-                    hi = s32(hi)
+                    hi = ((hi & _M32) ^ 0x80000000) - 0x80000000  # s32
                     if hi < lo:
-                        raise error(f"Logical Maximum {hi} is below Logical Minimum {lo}", offset)
-                elif hi & _M32 < lo:
-                    raise error(f"Logical Maximum {hi & _M32} is below Logical Minimum {lo}", offset)
+                        raise _error(data, source, f"Logical Maximum {hi} is below Logical Minimum {lo}", offset)
                 else:
                     hi &= _M32
+                    if hi < lo:
+                        raise _error(data, source, f"Logical Maximum {hi} is below Logical Minimum {lo}", offset)
                 start = report.bits
                 report.bits = start + report_size * report_count
                 if report.bits > _REPORT_BITS:
-                    raise error(f"{report.kind.value} report {report.report_id} is longer than "
+                    raise _error(data, source, f"{report.kind.value} report {report.report_id} is longer than "
                                 f"{MAX_BUFFER_SIZE - 1} bytes ({report.bits} bits)", offset)
                 if usages and report.with_usages == MAX_FIELDS:
                     warnings.append(f"{report.kind.value} report {report.report_id}: field at offset {offset} "
@@ -218,64 +239,148 @@ def _parse(items: list[tuple[int, int, int]], data: bytes, source: str | None, r
                 else:
                     if usages:
                         report.with_usages += 1
-                        listed = usages if report_count <= len(usages) else \
-                            usages + [usages[-1]] * (report_count - len(usages))  # the last usage repeats
-                        # a variable has one usage per element; an array the usages an index lo..hi can name
-                        kept = tuple(listed[:report_count] if value & 2 else listed[:hi - lo + 1])
+                        if report_count == len(usages) and value & 2:  # one usage per element
+                            kept = tuple(usages)
+                        else:
+                            listed = usages if report_count <= len(usages) else \
+                                usages + [usages[-1]] * (report_count - len(usages))  # the last usage repeats
+                            # a variable has one usage per element; an array the usages an index lo..hi can name
+                            kept = tuple(listed[:report_count] if value & 2 else listed[:hi - lo + 1])
                         page = kept[0] >> 16 if kept else usage_page & 0xFFFF
                     else:  # padding: kept, with no usages (the kernel registers no field for it)
                         kept = ()
                         page = usage_page & 0xFFFF
-                    report.fields.append(Field(
+                    report.fields.append((
                         report.kind, report.report_id, page, kept, start + 8 if rid else start, report_size,
-                        report_count, lo, hi, pmin, s32(pmax) if pmin < 0 else pmax & _M32, unit, exponent,
+                        report_count, lo, hi, pmin,
+                        ((pmax & _M32) ^ 0x80000000) - 0x80000000 if pmin < 0 else pmax & _M32, unit, exponent,
                         value, open_[-1] if open_ else None, offset, dict(extra) if extra else {}))
-            elif t == 0xA0:
+            elif op == _COLLECTION:
                 if len(open_) == MAX_COLLECTION_DEPTH:
-                    raise error(f"collections nested over {MAX_COLLECTION_DEPTH} deep", offset)
+                    raise _error(data, source, f"collections nested over {MAX_COLLECTION_DEPTH} deep", offset)
                 c = Collection(value & 0xFF, usages[0] if usages else 0, offset, open_[-1] if open_ else None)
                 open_.append(c)
                 collections.append(c)
-            elif t == 0xC0:
+            elif op == _END:
                 if not open_:
-                    raise error("End Collection without a Collection", offset)
+                    raise _error(data, source, "End Collection without a Collection", offset)
                 open_.pop()
             else:
                 warnings.append(f"unknown main item 0x{prefix:02X} at offset {offset} ignored")
             if usages or usage_min or delimiter_branch or extra:
                 usages = []
-                extended = set()
+                if extended:
+                    extended = []
                 usage_min = delimiter_depth = delimiter_branch = 0
-                extra = {}
-        else:
+                if extra:
+                    extra = {}
+        elif op == _PMAX:
+            pmax = value - ((value << 1) & sign[prefix]) if pmin < 0 else value
+        elif op == _PMIN:
+            pmin = value - ((value << 1) & sign[prefix])
+        elif op == _UNIT:
+            unit = value
+        elif op == _USAGE_MIN:
+            if delimiter_branch <= 1:
+                usage_min = value
+        elif op in (_USAGE_MAX, _EXT_USAGE):
+            if delimiter_branch > 1:
+                continue
+            if op == _EXT_USAGE:
+                first = value
+                count = 1
+            else:
+                top = value
+                if ((top - usage_min) + len(usages)) & _M32 >= MAX_USAGES:
+                    warnings.append(f"Usage Maximum at offset {offset}: range cut at {MAX_USAGES} usages")
+                    top = (MAX_USAGES - len(usages) + usage_min - 1) & _M32
+                    if top == 0:
+                        raise _error(data, source, "no more usages available", offset)
+                if usage_min > top:
+                    continue
+                first, count = usage_min, top - usage_min + 1
+            if len(usages) + count > MAX_USAGES:
+                raise _error(data, source, f"more than {MAX_USAGES} usages before one Main item", offset)
+            if prefix & 3 == 3:  # 4 bytes: an extended usage carries its page
+                extended.append((len(usages), len(usages) + count))
+                _add_usages(usages, first, count, None)
+            else:
+                _add_usages(usages, first, count, page16)
+        elif op == _REPORT_ID:
+            if value == 0 or value >= MAX_IDS:
+                raise _error(data, source, f"Report ID {value} is invalid (1..{MAX_IDS - 1})", offset)
+            rid = value
+        elif op == _EXPONENT:
+            exponent = exponent_value(prefix, value)
+        elif op == _PUSH:
+            if len(stack) == GLOBAL_STACK_SIZE:
+                raise _error(data, source, f"Push: the global stack is full ({GLOBAL_STACK_SIZE} deep)", offset)
+            stack.append((usage_page, lmin, lmax, pmin, pmax, exponent, unit, report_size, rid, report_count))
+        elif op == _POP:
+            if not stack:
+                raise _error(data, source, "Pop without a Push (global stack underflow)", offset)
+            usage_page, lmin, lmax, pmin, pmax, exponent, unit, report_size, rid, report_count = stack.pop()
+            page16 = (usage_page & 0xFFFF) << 16
+        elif op == _DELIMITER:
+            if value:
+                if delimiter_depth:
+                    raise _error(data, source, "nested delimiters", offset)
+                delimiter_depth += 1
+                delimiter_branch += 1
+            else:
+                if delimiter_depth < 1:
+                    raise _error(data, source, "close delimiter without an open one", offset)
+                delimiter_depth -= 1
+        elif op == _EXTRA:
+            extra[_LOCAL_EXTRAS[prefix & 0xFC]] = value
+        elif op == _LONG:
+            value = buf[offset + 1]
+            i = offset + 3 + value
+            what = f"long item (tag 0x{buf[offset + 2]:02X}, {value} data bytes)"
+            if reject_long_items:
+                raise _error(data, source, f"{what}: the kernel rejects descriptors with long items", offset)
+            warnings.append(f"{what} at offset {offset} skipped")
+        elif op == _BAD_GLOBAL:
+            raise _error(data, source, f"unknown global item tag {prefix >> 4}", offset, f"0x{prefix:02X}")
+        elif op == _RESERVED:
             warnings.append(f"reserved item 0x{prefix:02X} at offset {offset} ignored")
-    if last < len(items):  # the kernel reads the zeros as unknown Main items, which reset the local state
-        delimiter_depth = 0
+    if i > n:  # the last item is cut short
+        scan(data, source=source)
     if open_:
         raise ParseError(f"unbalanced collection: {len(open_)} still open at the end of the descriptor "
                          f"(the innermost opened here)", source=source, offset=open_[-1].offset)
-    if delimiter_depth:
-        raise ParseError("unbalanced delimiter at the end of the descriptor", source=source,
-                         offset=items[last - 1][0] if last else 0)
+    if delimiter_depth:  # (trailing zeros reset it: offset is the last item's)
+        raise ParseError("unbalanced delimiter at the end of the descriptor", source=source, offset=offset)
     return reports, collections
 
 
-def _descriptor(data: bytes, reports: dict[tuple[int, int], _Report], collections: list[Collection],
-                warnings: list[str]) -> ReportDescriptor:
-    """The parsed descriptor from the reports built."""
-    numbered = {_KINDS[tag] for tag, rid in reports if rid}
+def _layouts(reports: list[_Report]) -> list[ReportLayout]:
+    """The reports built, as layouts of :class:`Field` objects (run on the descriptor's first use of them)."""
     layouts = []
-    for r in reports.values():
-        fields = tuple(r.fields)
-        if r.report_id is None and r.kind in numbered:
-            # the kernel reads every report of a numbered kind with an ID byte, 0 for this one
-            warnings.append(f"{r.kind.value} items with no Report ID in effect make {r.kind.value} "
-                            "report 0, read with an ID byte 0 like the numbered ones")
-            r.report_id = 0
-            fields = tuple(replace(f, report_id=0, bit_offset=f.bit_offset + 8) for f in fields)
-        layouts.append(ReportLayout(r.kind, r.report_id, fields,
-                                    (r.bits + 7) // 8 + (1 if r.report_id is not None else 0)))
-    return ReportDescriptor(data, layouts, tuple(collections), tuple(warnings))
+    for r in reports:
+        kind, rid = r.kind, r.report_id
+        if rid == 0:  # report 0 of a numbered space: read with an ID byte 0
+            fields = tuple(Field(kind, 0, page, usages, bit_offset + 8, *rest)
+                           for _, _, page, usages, bit_offset, *rest in r.fields)
+        else:
+            fields = tuple(starmap(Field, r.fields))
+        layouts.append(ReportLayout(kind, rid, fields, (r.bits + 7) // 8 + (0 if rid is None else 1)))
+    return layouts
+
+
+def _descriptor(data: bytes, reports: dict[int, _Report], collections: list[Collection],
+                warnings: list[str]) -> ReportDescriptor:
+    """The parsed descriptor from the reports built; its Field objects are made when first used."""
+    numbered = frozenset([r.kind for r in reports.values() if r.report_id])
+    if numbered:
+        for r in reports.values():
+            if r.report_id is None and r.kind in numbered:
+                # the kernel reads every report of a numbered kind with an ID byte, 0 for this one
+                warnings.append(f"{r.kind.value} items with no Report ID in effect make {r.kind.value} "
+                                "report 0, read with an ID byte 0 like the numbered ones")
+                r.report_id = 0
+    return ReportDescriptor(data, partial(_layouts, list(reports.values())), tuple(collections), tuple(warnings),
+                            numbered_kinds=numbered)
 
 
 def parse_descriptor(data: bytes, *, reject_long_items: bool = False, vendor_id: int | None = None,
@@ -290,5 +395,5 @@ def parse_descriptor(data: bytes, *, reject_long_items: bool = False, vendor_id:
         data, notes = fixup(data, vendor_id, product_id)
     if not data:
         raise ParseError("empty report descriptor", source=source, offset=0)
-    reports, collections = _parse(scan(data, source=source), data, source, reject_long_items, notes)
+    reports, collections = _parse(data, source, reject_long_items, notes)
     return _descriptor(data, reports, collections, notes)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import enum
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from pixelpen.errors import InvalidArgumentType, ParseError
 
@@ -39,6 +39,11 @@ class ReportKind(enum.Enum):
     OUTPUT = "output"
     FEATURE = "feature"
 
+    __hash__ = object.__hash__  # members are singletons: Enum's hash of the name is a Python call per dict lookup
+
+
+_INPUT, _OUTPUT, _FEATURE = ReportKind
+
 
 class CollectionKind(enum.IntEnum):
     """The Collection item's type byte (HID 1.11 §6.2.2.6); 0x80..0xFF are vendor-defined."""
@@ -53,7 +58,7 @@ class CollectionKind(enum.IntEnum):
 
 
 # Collection and Field are read-only by contract but not frozen: a frozen dataclass's __init__ costs ~4x more,
-# and they are built once per main item while parsing (half of a small descriptor's parse time).
+# and one is built per main item (the parser defers the Fields to the first use of a descriptor's layouts).
 @dataclass(slots=True, eq=True, unsafe_hash=True)
 class Collection:
     """A Collection ... End Collection: its type byte, its usage, where it starts, and its parent (read-only)."""
@@ -151,31 +156,86 @@ Values = dict[tuple[int, int], "int | list[int]"]
 """A decoded report: ``(usage_page, usage_id)`` -> logical value (a list where a usage repeats)."""
 
 
+_T = TypeVar("_T")
+
+
+class _Once(Generic[_T]):
+    """A method run on the first read of its attribute, its result then stored as the attribute itself
+    (``functools.cached_property`` without the lock that Python 3.11 takes on every first read)."""
+
+    def __init__(self, function: Callable[[Any], _T]) -> None:
+        self.function = function
+        self.name = function.__name__
+        self.__doc__ = function.__doc__
+
+    def __get__(self, instance: object, owner: type | None = None) -> _T:
+        if instance is None:
+            return self  # type: ignore[return-value]  # the class's attribute: this descriptor, for help()
+        value = instance.__dict__[self.name] = self.function(instance)
+        return value
+
+
 class ReportDescriptor:
     """A parsed report descriptor: the input, output and feature reports and their fields."""
 
     def __init__(
         self,
         data: bytes,
-        layouts: list[ReportLayout],
+        layouts: Sequence[ReportLayout] | Callable[[], Sequence[ReportLayout]],
         collections: tuple[Collection, ...],
         warnings: tuple[str, ...] = (),
+        *,
+        numbered_kinds: frozenset[ReportKind] = frozenset(),
     ) -> None:
+        """``layouts`` may be a function giving them on first use (the parser's: making the Field objects is
+        most of a small descriptor's parse); ``numbered_kinds`` must then say which spaces they number."""
         self.data = bytes(data)
         self.collections = collections
         self.warnings = warnings
-        self.layouts: dict[tuple[ReportKind, int | None], ReportLayout] = {(r.kind, r.report_id): r for r in layouts}
-        self.numbered = any(r.report_id is not None for r in layouts)
+        if callable(layouts):
+            self._pending = layouts
+        else:
+            self.layouts = {(r.kind, r.report_id): r for r in layouts}
+            numbered_kinds = frozenset(r.kind for r in layouts if r.report_id is not None)
+        self.numbered = bool(numbered_kinds)
         """Whether any report starts with a report-ID byte (the descriptor has a Report ID item)."""
-        self.numbered_kinds = frozenset(r.kind for r in layouts if r.report_id is not None)
+        self.numbered_kinds = numbered_kinds
         """The report spaces whose reports start with an ID byte (the kernel numbers each space on its own)."""
-        self.input_reports = self._space(ReportKind.INPUT)
-        self.output_reports = self._space(ReportKind.OUTPUT)
-        self.feature_reports = self._space(ReportKind.FEATURE)
-        self._decoders: dict[tuple[ReportKind, int | None], ReportDecoder] = {}
-        self._decode_functions: dict[ReportKind, dict[int | None, Callable[[bytes], Values]]] = {
-            k: {} for k in ReportKind}
-        self._encoders: dict[tuple[ReportKind, int | None], ReportEncoder] = {}
+
+    # the codec's caches, made on first use (most descriptors parsed are decoded in one space, if at all)
+    @_Once
+    def _decoders(self) -> dict[tuple[ReportKind, int | None], ReportDecoder]:
+        return {}
+
+    @_Once
+    def _encoders(self) -> dict[tuple[ReportKind, int | None], ReportEncoder]:
+        return {}
+
+    @_Once
+    def _decode_functions(self) -> dict[ReportKind, dict[int | None, Callable[[bytes], Values]]]:
+        return {_INPUT: {}, _OUTPUT: {}, _FEATURE: {}}
+
+    @_Once
+    def layouts(self) -> dict[tuple[ReportKind, int | None], ReportLayout]:
+        """Every report's layout by (kind, report ID)."""
+        layouts = {(r.kind, r.report_id): r for r in self._pending()}
+        del self._pending
+        return layouts
+
+    @_Once
+    def input_reports(self) -> dict[int | None, list[Field]]:
+        """The input reports' fields by report ID (None when the space does not number its reports)."""
+        return self._space(ReportKind.INPUT)
+
+    @_Once
+    def output_reports(self) -> dict[int | None, list[Field]]:
+        """The output reports' fields by report ID."""
+        return self._space(ReportKind.OUTPUT)
+
+    @_Once
+    def feature_reports(self) -> dict[int | None, list[Field]]:
+        """The feature reports' fields by report ID."""
+        return self._space(ReportKind.FEATURE)
 
     def _space(self, kind: ReportKind) -> dict[int | None, list[Field]]:
         return {rid: list(r.fields) for (k, rid), r in self.layouts.items() if k is kind}

@@ -4,8 +4,9 @@ A short item's prefix is ``bTag(4) bType(2) bSize(2)`` (HID 1.11 §6.2.2.2); siz
 bytes, little-endian.  A long item is ``prefix, bDataSize, bLongItemTag, data`` (§6.2.2.3): the spec's prefix
 is 0xFE, and like the kernel's ``fetch_item`` (drivers/hid/hid-core.c) every prefix whose tag nibble is 15
 (0xF0..0xFF) is read as one.  :func:`tokenize` cuts the bytes into :class:`Item` tuples (for the dump), :func:`scan`
-into plain ``(offset, prefix, value)`` tuples (for the parser: a named tuple per item costs more than the
-parsing); a truncated item is a ParseError naming its offset.
+into plain ``(offset, prefix, value)`` tuples; a truncated item is a ParseError naming its offset.  The parser
+cuts the items in its own loop (a tuple per item costs more than the parsing) and calls :func:`scan` for the
+error of a truncated item.
 """
 
 from __future__ import annotations

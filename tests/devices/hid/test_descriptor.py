@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 
 from pixelpen.devices.hid import parse_descriptor
 from pixelpen.devices.hid.descriptor import MAX_COLLECTION_DEPTH, MAX_USAGES
-from pixelpen.devices.hid.fields import ReportKind
+from pixelpen.devices.hid.fields import ReportDescriptor, ReportKind
+from pixelpen.devices.hid.items import scan
 from pixelpen.errors import ParseError
 from pixelpen.sim.hid.descriptors import DESCRIPTORS
 
@@ -322,6 +323,16 @@ def test_usage_range_over_the_kernel_limit_is_cut_with_a_warning():
     assert any("Usage Maximum" in w for w in d.warnings)
 
 
+def test_a_cut_range_from_a_4_byte_minimum_wraps_its_ids_under_the_current_page():
+    # Usage Minimum 0x00020000 (4 bytes), Usage Maximum 5 (1 byte): the range wraps, is cut at MAX_USAGES, and
+    # each 1-byte-maximum usage keeps only its low 16 bits under the Usage Page (hid_add_usage with size 1)
+    d = parse(APP, [0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x96, 0x00, 0x30, 0x05, 0x0C,
+                    0x1B, 0x00, 0x00, 0x02, 0x00, 0x29, 0x05, 0x81, 0x02], END)
+    (f,) = d.input_reports[None]
+    assert f.usages == tuple(0x000C0000 | (u & 0xFFFF) for u in range(0x20000, 0x20000 + MAX_USAGES))
+    assert any("range cut" in w for w in d.warnings)
+
+
 def test_delimiters_keep_only_the_first_alternative_set():
     f = one_field([0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x03,
                    0x09, 0x30,                          # before any delimiter: kept
@@ -399,6 +410,70 @@ def test_trailing_zeros_reserved_items_and_size_limits():
 def test_errors_name_the_source():
     err = error_of([0x05], source="dev.bin")
     assert str(err).startswith("dev.bin, byte offset 0:")
+
+
+# -- the item loop and the deferred Field objects ---------------------------------------------------------------
+def test_an_item_cut_short_at_the_end_is_reported_before_an_earlier_error():
+    data = bytes([0x85, 0x00, 0x26, 0xFF])       # Report ID 0 (an error), then a Logical Maximum cut short
+    assert (error_of(list(data)).offset, error_of(list(data[:2])).offset) == (2, 0)
+    assert "cut short" in error_of(list(data)).message and "Report ID 0" in error_of(list(data[:2])).message
+    long_cut = bytes(APP) + bytes([0xFE, 0x05, 0x10, 0xAA])   # a long item announcing 5 data bytes, 1 there
+    for reject in (False, True):
+        with pytest.raises(ParseError) as err:
+            parse_descriptor(long_cut, reject_long_items=reject)
+        assert err.value.offset == 6 and "cut short" in err.value.message
+
+
+def test_items_after_a_long_item_are_read_from_its_end():
+    d = parse(APP, [0xFE, 0x02, 0x33, 0xAA, 0xBB, 0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x01, 0x09, 0x30,
+                    0x81, 0x02], END)
+    (f,) = d.input_reports[None]
+    assert f.offset == len(APP) + 5 + 10 and f.usages == (X,) and d.layout(ReportKind.INPUT, None).length == 1
+
+
+@st.composite
+def mutants(draw):
+    """A simulator's descriptor, cut, with a few bytes overwritten: items cut short, unknown and long items."""
+    data = bytearray(draw(st.sampled_from(sorted(DESCRIPTORS.values()))))
+    for _ in range(draw(st.integers(0, 3))):
+        data[draw(st.integers(0, len(data) - 1))] = draw(st.integers(0, 255))
+    return bytes(data[:draw(st.integers(0, len(data)))])
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.one_of(mutants(), st.binary(max_size=48)))
+def test_the_parser_cuts_items_where_scan_does(data):
+    """A truncation error exactly when scan finds one (the same error); otherwise every field and collection
+    starts at an item scan found, of its Main tag (an independent tokenizer checks the parser's own loop)."""
+    try:
+        items, expected = scan(data), None
+    except ParseError as exc:
+        items, expected = [], (exc.message, exc.offset)
+    try:
+        d = parse_descriptor(data)
+    except ParseError as exc:
+        assert expected is None or (exc.message, exc.offset) == expected
+        return
+    assert expected is None
+    tags = {offset: prefix & 0xFC for offset, prefix, _ in items}
+    main = {ReportKind.INPUT: 0x80, ReportKind.OUTPUT: 0x90, ReportKind.FEATURE: 0xB0}
+    assert all(tags[f.offset] == main[f.kind] for r in d.layouts.values() for f in r.fields)
+    assert all(tags[c.offset] == 0xA0 for c in d.collections)
+
+
+REPORT_0 = bytes([*APP, 0x15, 0x00, 0x25, 0x7F, 0x75, 0x08, 0x95, 0x01, 0x09, 0x30, 0x81, 0x02,  # no Report ID yet
+                  0x85, 0x01, 0x09, 0x31, 0x81, 0x02, *END])
+
+
+@pytest.mark.parametrize("data", [*DESCRIPTORS.values(), MS_WHEEL_MOUSE, REPORT_0])
+def test_fields_made_on_first_use_equal_an_eager_descriptor(data):
+    lazy = parse_descriptor(data)
+    spaces = (lazy.feature_reports, lazy.output_reports, lazy.input_reports)   # a space before the layouts
+    eager = ReportDescriptor(data, list(parse_descriptor(data).layouts.values()), lazy.collections, lazy.warnings)
+    assert (eager.feature_reports, eager.output_reports, eager.input_reports) == spaces
+    assert eager.layouts == lazy.layouts and list(eager.layouts) == list(lazy.layouts)
+    assert (eager.numbered, eager.numbered_kinds) == (lazy.numbered, lazy.numbered_kinds)
+    assert all(f.report_id == rid and f.kind is kind for (kind, rid), r in lazy.layouts.items() for f in r.fields)
 
 
 # -- hid-tools as an oracle -----------------------------------------------------------------------------------
