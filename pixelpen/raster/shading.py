@@ -149,12 +149,12 @@ class Shader:
         face = np.asarray(fragments.face, dtype=np.int64)
         if face.size and (face.min() < 0 or face.max() >= self.faces):
             raise InvalidArgument(f"fragments name faces outside 0..{self.faces - 1}")
+        if self.mode == "gouraud":  # the colours are in the interpolated values
+            return self._values[0].at(fragments)
         colours = self._colours if self._colours.ndim == 1 else self._colours[face]
         if self.mode == "flat":
             scale, specular = self._flat
             return combine(colours, scale[face], specular[face])
-        if self.mode == "gouraud":
-            return self._values[0].at(fragments)
         positions, normals = (values.at(fragments) for values in self._values)
         return combine(colours, *illumination_terms(positions, normals, *self._terms))
 

@@ -96,19 +96,14 @@ class MipiDcsDisplay(PanelDisplay):
         """CASET and RASET (each left out when ``previous`` set the same columns or rows: the controller keeps
         them, and RAMWR starts again at the window's first pixel), RAMWR and the pixels."""
         x, y = self._offsets
-        bus = self.wiring.bus
-        sent = 1 + len(pixels)
         if previous is None or (previous.x0, previous.x1) != (window.x0, window.x1):
-            bus.command(CASET)
-            bus.data(struct.pack(">HH", window.x0 + x, window.x1 - 1 + x))
-            sent += 5
+            self._command(CASET)
+            self._data(struct.pack(">HH", window.x0 + x, window.x1 - 1 + x))
         if previous is None or (previous.y0, previous.y1) != (window.y0, window.y1):
-            bus.command(RASET)
-            bus.data(struct.pack(">HH", window.y0 + y, window.y1 - 1 + y))
-            sent += 5
-        bus.command(RAMWR)
-        bus.data(pixels)
-        self._frame.bytes += sent
+            self._command(RASET)
+            self._data(struct.pack(">HH", window.y0 + y, window.y1 - 1 + y))
+        self._command(RAMWR)
+        self._data(pixels)
 
     def _power(self, on: bool) -> None:
         self._command(DISPON if on else DISPOFF)
