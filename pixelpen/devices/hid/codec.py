@@ -50,9 +50,6 @@ MAX_COMPILED_ELEMENTS = 1024
 """Reports with more elements are decoded by a loop over a plan, not compiled source (bounded build time and memory)."""
 BITMAP_MIN_BITS = 16
 """A report with at least this many one-bit variables decodes them by their set bits (a keyboard's NKRO bitmap)."""
-BATCH_MATRIX_BYTES = 64 * 2**20
-"""decode_batch marks array usages in an (N, usages) boolean matrix up to this size, else usage by usage."""
-
 Key = tuple[int, int]
 
 
@@ -381,8 +378,9 @@ class ReportDecoder:
         return arr[:, start:start + width].view(f"<u{width}")[:, 0], first - start
 
     def _element_batch(self, arr: np.ndarray, e: Element, raw: bool = False) -> np.ndarray:
-        """One element's values over a batch: int64 (uint64 for 64-bit unsigned), bytes beyond 64 bits; with
-        ``raw`` its bits unsigned in any integer dtype (an array's table index)."""
+        """One element's values over a batch: bool for one unsigned bit (a button, a key), int64 (uint64 for 64-bit
+        unsigned), bytes beyond 64 bits; with ``raw`` its bits unsigned in any integer dtype (an array's table
+        index)."""
         first, shift, size = e.bit_offset // 8, e.bit_offset % 8, e.bit_size
         last = (e.bit_offset + size - 1) // 8
         signed = e.signed and not raw
@@ -404,6 +402,8 @@ class ReportDecoder:
             value = value & ((1 << size) - 1)
         if raw:
             return value
+        if size == 1 and not signed:
+            return value.astype(bool)
         if signed:
             return _sign_extend(value.astype(np.uint64), size)
         return value.astype(np.int64) if size < 64 else value
@@ -422,7 +422,7 @@ class ReportDecoder:
                 columns.setdefault(e.key, []).append(self._element_batch(arr, e) if column is None else column)
         out: dict[Key, np.ndarray] = {}
         for key, cols in columns.items():
-            if len(cols) > 1 and len({(c.ndim, c.dtype) for c in cols}) > 1:
+            if len(cols) > 1 and len({(c.ndim, c.dtype) for c in cols if c.dtype != bool}) > 1:
                 raise InvalidArgument(f"report {self.report_id}: usage {_name(key)} repeats in elements of different "
                                       "widths (one over 64 bits, or 64-bit unsigned beside narrower): decode these "
                                       "reports one by one")
@@ -431,17 +431,23 @@ class ReportDecoder:
         return out
 
     def _bitmap_batch(self, arr: np.ndarray) -> dict[int, np.ndarray]:
-        """:meth:`_bitmap`'s bits over a batch by bit offset, int64 as :meth:`_element_batch` gives them, from one
-        unpacking of their bytes when they fill a quarter of them (an NKRO bitmap: a few passes, not 4 per key)."""
+        """:meth:`_bitmap`'s bits over a batch by bit offset, bool as :meth:`_element_batch` gives them, from eight
+        passes over their bytes when they fill a quarter of them (an NKRO bitmap: not a pass per key).  Bit ``k``
+        of every byte is one shift over the bytes transposed, so each column is a contiguous row of the result
+        (``np.unpackbits`` along the rows is 4x slower, across them the columns would be strided)."""
         offsets = [e.bit_offset for e in self._bitmap()]
         first, last = min(offsets, default=0) // 8, max(offsets, default=0) // 8
         if not offsets or 8 * (last - first + 1) > 4 * len(offsets):
             return {}
-        bits = np.unpackbits(np.ascontiguousarray(arr[:, first:last + 1].T), axis=0, bitorder="little")
-        return dict(zip(offsets, bits[[o - 8 * first for o in offsets]].astype(np.int64), strict=True))
+        octets = np.ascontiguousarray(arr[:, first:last + 1].T)
+        planes = np.empty((8, *octets.shape), np.uint8)
+        for k, plane in enumerate(planes):
+            np.bitwise_and(np.right_shift(octets, k, out=plane), 1, out=plane)
+        bits = planes.view(bool)
+        return {o: bits[o % 8, o // 8 - first] for o in offsets}
 
     def _array_indices(self, arr: np.ndarray) -> tuple[list[Key], list[np.ndarray]]:
-        """Every usage the arrays can report, and per array element an (N,) array of indices into it (-1: none)."""
+        """Every usage the arrays can report, and per array element an (N,) array of 1 + its index in them (0: none)."""
         index: dict[Key, int] = {}
         luts: dict[Field, np.ndarray] = {}
         cols = []
@@ -454,12 +460,12 @@ class ReportDecoder:
                                       f"{f.bit_size} bits; batches decode arrays of up to 64 (decode one by one)")
             if f.bit_size <= ARRAY_TABLE_BITS:  # a table over every raw value of the element's bits, one per field
                 if f not in luts:
-                    luts[f] = np.array([-1 if k is None else index.setdefault(k, len(index))
+                    luts[f] = np.array([0 if k is None else 1 + index.setdefault(k, len(index))
                                         for k in array_table(f, self.variable_keys)], np.int32)
                 cols.append(luts[f][self._element_batch(arr, e, raw=True)])
                 continue
             possible = [array_usage(f, f.logical_min + i, self.variable_keys) for i in range(len(f.usages))]
-            lut = np.array([-1 if k is None else index.setdefault(k, len(index)) for k in possible] + [-1], np.int32)
+            lut = np.array([0 if k is None else 1 + index.setdefault(k, len(index)) for k in possible] + [0], np.int32)
             value = self._element_batch(arr, e)
             pos = value - f.logical_min
             valid = (value >= f.logical_min) & (value <= f.logical_max) & (pos < len(possible))
@@ -467,33 +473,31 @@ class ReportDecoder:
         return list(index), cols
 
     def _array_presence(self, arr: np.ndarray) -> dict[Key, np.ndarray]:
+        """An (N,) bool "reported in this row" per usage some row's arrays report: the rows of one (usages + 1, N)
+        matrix, each element marking its usage's row at its column in one scatter (row 0 takes "none"), so the
+        cost follows the elements and the memory the usages reported, not the usages the arrays could report."""
         keys, cols = self._array_indices(arr)
         if not cols:
             return {}
         n = arr.shape[0]
         seen = np.zeros(len(keys) + 1, bool)
         for col in cols:
-            seen[col + 1] = True
-        present = np.flatnonzero(seen[1:]).tolist()
-        if len(present) > 2 * len(cols) and n * (len(keys) + 1) <= BATCH_MATRIX_BYTES:
-            matrix = np.zeros((n, len(keys) + 1), bool)
-            rows = np.arange(n)
-            for col in cols:
-                matrix[rows, col + 1] = True
-            return {keys[i]: matrix[:, i + 1] for i in present}
-        out = {}
-        for i in present:
-            hit = cols[0] == i
-            for col in cols[1:]:
-                hit |= col == i
-            out[keys[i]] = hit
-        return out
+            seen |= np.bincount(col, minlength=len(keys) + 1).astype(bool)
+        present = np.flatnonzero(seen[1:])
+        row_start = np.zeros(len(keys) + 1, np.intp)
+        row_start[present + 1] = np.arange(1, len(present) + 1) * n
+        matrix = np.zeros((len(present) + 1, n), bool)
+        cells, rows, where = matrix.reshape(-1), np.arange(n), np.empty(n, np.intp)
+        for col in cols:
+            np.add(row_start[col], rows, out=where)
+            cells[where] = True
+        return {keys[i]: matrix[j] for j, i in enumerate(present.tolist(), 1)}
 
     def array_usages_batch(self, reports: np.ndarray | bytes | bytearray | memoryview) -> np.ndarray:
         """An (N, array elements) int64 matrix of the 32-bit usage each array element reports (0: none)."""
         arr = self.batch_array(reports)
         keys, cols = self._array_indices(arr)
-        usages = np.array([p << 16 | u for p, u in keys] + [0], np.int64)
+        usages = np.array([0] + [p << 16 | u for p, u in keys], np.int64)
         return usages[np.stack(cols, axis=1)] if cols else np.zeros((arr.shape[0], 0), np.int64)
 
 

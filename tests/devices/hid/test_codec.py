@@ -412,8 +412,8 @@ def test_batches_refuse_what_they_cannot_hold_exactly(hexdesc):
 @pytest.mark.parametrize("gap", [0, 3, 200])
 def test_a_batch_of_bitmap_reports_unpacks_their_bits_as_the_elements_decode_one_by_one(gap):
     """An NKRO-style bitmap (8 modifiers, 3 padding bits, 40 keys, then a byte): the batch's one unpacking of the
-    bitmap bytes (gap 0, 3) and the per-element path (gap 200: too sparse to unpack) both give int64 columns equal
-    to each element's own extraction and to decode row by row."""
+    bitmap bytes (gap 0, 3) and the per-element path (gap 200: too sparse to unpack) both give bool columns (int64
+    for the byte) equal to the bit read by hand, to each element's own extraction and to decode row by row."""
     lay = layout(field(0, 1, 8, range(0x700E0, 0x700E8), 0, 1), pad(8, 3 + gap),
                  field(11 + gap, 1, 40, range(0x70004, 0x7002C), 0, 1), field(51 + gap, 8, 1, [0x10030], -127, 127))
     dec = ReportDecoder(lay)
@@ -423,6 +423,8 @@ def test_a_batch_of_bitmap_reports_unpacks_their_bits_as_the_elements_decode_one
     single = [dec.decode(bytes(r)) for r in rows]
     for e in dec.elements:
         column = batch[e.key]
-        assert column.dtype == np.int64 and column.tolist() == dec._element_batch(rows, e).tolist()
-        assert column.tolist() == [s[e.key] for s in single]
+        assert column.dtype == (bool if e.bit_size == 1 else np.int64)
+        assert column.tolist() == dec._element_batch(rows, e).tolist() == [s[e.key] for s in single]
+        if e.bit_size == 1:
+            assert column.tolist() == ((rows[:, e.bit_offset // 8] >> (e.bit_offset % 8)) & 1).tolist()
     assert all(column.shape == (0,) for column in dec.decode_batch(b"").values())
