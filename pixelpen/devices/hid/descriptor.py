@@ -21,7 +21,9 @@ usage repeats when Report Count exceeds the usages).  Differences from the kerne
 * in a report space that has numbered reports, items with no Report ID in effect (before the first one, or
   after a Pop back to none) make report 0, keyed ``0`` and read with an ID byte 0, as the kernel reads it.
 * limits beyond the kernel's: descriptors over 4096 bytes (``HID_MAX_DESCRIPTOR_SIZE``, which usbhid,
-  uhid and hidraw enforce) and collections nested over :data:`MAX_COLLECTION_DEPTH` deep are refused.
+  uhid and hidraw enforce), collections nested over :data:`MAX_COLLECTION_DEPTH` deep, and fields holding
+  over :data:`MAX_TOTAL_USAGES` usages in all are refused (the kernel's limits let 4 KB name 4.9 million
+  usages: 200 MB and half a second here).
 
 Every error is a :class:`~pixelpen.errors.ParseError` whose ``offset`` is the byte offset of the item at fault.
 """
@@ -53,6 +55,8 @@ MAX_FIELDS = 256
 """Fields with usages per report (``HID_MAX_FIELDS``; the kernel drops the rest)."""
 MAX_COLLECTION_DEPTH = 256
 """Collections open at once (the kernel has no bound; no real device nests more than a few)."""
+MAX_TOTAL_USAGES = 131072
+"""Usages the fields of one descriptor may hold in all (ours: ten full Report Count ranges; about 5 MB)."""
 
 _M32 = 0xFFFFFFFF
 _KINDS = {8: ReportKind.INPUT, 9: ReportKind.OUTPUT, 11: ReportKind.FEATURE}
@@ -165,6 +169,7 @@ def _parse(data: bytes, source: str | None, reject_long_items: bool,
     open_: list[Collection] = []
     collections: list[Collection] = []
     reports: dict[int, _Report] = {}
+    total_usages = 0
     n = len(data)
     zeros = len(data.rstrip(b"\0"))  # a 0x00 item from here on starts the trailing zero bytes
     buf = data + _PAD
@@ -247,6 +252,10 @@ def _parse(data: bytes, source: str | None, reject_long_items: bool,
                             # a variable has one usage per element; an array the usages an index lo..hi can name
                             kept = tuple(listed[:report_count] if value & 2 else listed[:hi - lo + 1])
                         page = kept[0] >> 16 if kept else usage_page & 0xFFFF
+                        total_usages += len(kept)
+                        if total_usages > MAX_TOTAL_USAGES:
+                            raise _error(data, source, f"the fields hold over {MAX_TOTAL_USAGES} usages in all "
+                                         "(pixelpen's limit; the kernel's per item)", offset)
                     else:  # padding: kept, with no usages (the kernel registers no field for it)
                         kept = ()
                         page = usage_page & 0xFFFF

@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pixelpen.devices.hid import parse_descriptor
-from pixelpen.devices.hid.descriptor import MAX_COLLECTION_DEPTH, MAX_USAGES
+from pixelpen.devices.hid.descriptor import MAX_COLLECTION_DEPTH, MAX_TOTAL_USAGES, MAX_USAGES
 from pixelpen.devices.hid.fields import ReportDescriptor, ReportKind
 from pixelpen.devices.hid.items import scan
 from pixelpen.errors import ParseError
@@ -388,6 +388,26 @@ def test_collection_errors():
     parse([0xA1, 0x00] * depth, [0xC0] * depth)                               # at the limit: fine
     err = error_of([0xA1, 0x00] * (depth + 1), [0xC0] * (depth + 1))
     assert err.offset == 2 * depth
+
+
+def test_the_usages_of_all_fields_are_bounded():
+    """Each report 1..k holds ten arrays of Usage Minimum 0 .. Maximum 0x2FFF (12,288 usages, the kernel's limit
+    per item): the fields of 4 KB could name 4.9 million usages; the first field past MAX_TOTAL_USAGES in all is
+    an error at its own offset, and a descriptor at the limit parses."""
+    head = [0x05, 0x07, 0x15, 0x00, 0x27, 0xFF, 0xFF, 0xFF, 0x7F, 0x75, 0x01]  # LMax 2**31 - 1, 1-bit elements
+    field = [0x19, 0x00, 0x2A, 0xFF, 0x2F, 0x96, 0x00, 0x30, 0x81, 0x00]      # Usage 0..0x2FFF, Count 12288, Input
+    full = MAX_TOTAL_USAGES // MAX_USAGES                                     # whole fields under the limit
+    body = [b for rid in (1, 2) for b in [0x85, rid] + field * (full // 2 + 1)]
+    err = error_of(APP, head, body, END)
+    first_over = full + 1                                                     # its position, counted by hand
+    per_report = 2 + len(field) * (full // 2 + 1)
+    rid, k = divmod(first_over - 1, full // 2 + 1)
+    assert err.offset == len(APP) + len(head) + rid * per_report + 2 + k * len(field) + 8  # at its Input item
+    assert "usages in all" in err.message
+    rest = MAX_TOTAL_USAGES - full * MAX_USAGES                               # fill to exactly the limit
+    last = [0x19, 0x00, 0x2A, *(rest - 1).to_bytes(2, "little"), 0x96, *rest.to_bytes(2, "little"), 0x81, 0x00]
+    d = parse(APP, head, [0x85, 1], field * (full // 2), [0x85, 2], field * (full - full // 2), last, END)
+    assert sum(len(f.usages) for fields in d.input_reports.values() for f in fields) == MAX_TOTAL_USAGES
 
 
 def test_fields_past_256_per_report_are_dropped_as_the_kernel_drops_them():
