@@ -249,7 +249,6 @@ def illumination_terms(
         away = n_dot_v < 0.0
         n_unit = np.where(away, -n_unit, n_unit)
         n_dot_v = np.abs(n_dot_v)
-    v_dot_v = _dot(v, v)
     scale = np.zeros_like(p)
     specular = np.zeros_like(p)
     ks_s = material.ks * _column(material.specular_colour)
@@ -278,12 +277,12 @@ def illumination_terms(
         scale += (material.kd * il) * (factor * np.maximum(n_dot_l, 0.0))
         if material.ks == 0.0:
             continue
-        l_dot_v = _dot(to_light, v)
         if model == "phong":  # R·V with R = 2(N·L)N − L
-            cosine = 2.0 * n_dot_l * n_dot_v - l_dot_v
-        else:  # N·H with H = (L + V)/|L + V|
-            length = np.sqrt(_dot(to_light, to_light) + v_dot_v + 2.0 * l_dot_v)
-            total = n_dot_l + n_dot_v
+            cosine = 2.0 * n_dot_l * n_dot_v - _dot(to_light, v)
+        else:  # N·H with H = (L + V)/|L + V|, from L + V itself: N·L + N·V and L·V cancel as L nears −V
+            halfway = to_light + v
+            length = np.sqrt(_dot(halfway, halfway))
+            total = _dot(n_unit, halfway)
             # L = −V (a light straight behind what the viewer sees) leaves H undefined: no highlight there
             cosine = np.divide(total, length, out=np.zeros_like(total), where=length > HALFWAY_MIN)
         highlight = np.where(n_dot_l > 0.0, np.maximum(cosine, 0.0) ** material.n, 0.0)

@@ -204,6 +204,9 @@ def scenes(draw):
 @example((Material((0.0, 0.0, 0.0), 0.0, 0.0, 1.0, 1.0, (0.0, 0.0, 1.0), False),  # Blinn with L = −V exactly
           [Light("directional", (0.0, 0.0, 1.0), direction=(1.3125, 3.0, 2.0))],
           Viewer(direction=(1.3125, 3.0, 2.0)), "blinn"), 0)
+@example((Material((0.0, 0.0, 0.0), 0.0, 0.0, 1.0, 1.0, (1.0, 0.0, 0.0), False),  # Blinn with L 6e-8 from −V:
+          [Light("directional", (1.0, 0.0, 0.0), direction=(0.0, 1.192092896e-07, -2.0))],  # N·L + N·V cancelled
+          Viewer(direction=(0.0, 0.0, -1.0)), "blinn"), 0)
 def test_matches_scalar_reference(scene, seed):
     material, lights, viewer, model = scene
     rng = np.random.default_rng(seed)
