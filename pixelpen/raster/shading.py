@@ -54,9 +54,9 @@ def _as_faces(faces: ArrayLike, vertex_count: int) -> np.ndarray:
     arr = np.asarray(faces)
     if arr.ndim != 2 or arr.shape[1] != 3 or (arr.size and arr.dtype.kind not in "iu"):
         raise InvalidArgument(f"faces must be a (T, 3) integer array, got shape {arr.shape} {arr.dtype}")
-    arr = arr.astype(np.int64)
-    bad = ((arr < 0) | (arr >= vertex_count)).any(axis=1)
-    if bad.any():
+    arr = arr.astype(np.int64, copy=False)
+    if arr.size and (arr.min() < 0 or arr.max() >= vertex_count):
+        bad = ((arr < 0) | (arr >= vertex_count)).any(axis=1)
         row = int(np.flatnonzero(bad)[0])
         raise InvalidArgument(f"faces row {row} {arr[row].tolist()} indexes outside 0..{vertex_count - 1}")
     return arr
@@ -136,11 +136,10 @@ class Shader:
         normals = Mesh(verts, tris).vertex_normals() if given is None else given
         if self.mode == "gouraud":
             scale, specular = illumination_terms(verts, normals, *self._terms)
-            lit = combine(base, scale, specular)[tris] if colours is None else combine(
-                colours[:, None, :], scale[tris], specular[tris])
-            self._values = [Interpolant(lit)]
+            self._values = [Interpolant(combine(base, scale, specular), tris) if colours is None else Interpolant(
+                combine(colours[:, None, :], scale[tris], specular[tris]))]
         else:
-            self._values = [Interpolant(verts[tris]), Interpolant(normals[tris])]
+            self._values = [Interpolant(verts, tris), Interpolant(normals, tris)]
 
     def __call__(self, fragments: Fragments) -> np.ndarray:
         """Intensities (F, 3) in [0, 1] of the fragments of this mesh's faces."""
@@ -192,17 +191,22 @@ def _intensities(rgb: ArrayLike) -> np.ndarray:
         raise InvalidArgument(f"rgb must be an (F, 3) array of numbers: {exc}") from None
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise InvalidArgument(f"rgb must be an (F, 3) array of intensities, got shape {arr.shape}")
-    if not np.isfinite(arr).all():
+    if arr.size and not (np.isfinite(arr.min()) and np.isfinite(arr.max())):  # NaN propagates: no mask pass
         row = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
         raise InvalidArgument(f"rgb row {row} is not finite: {arr[row].tolist()}")
     return arr
 
 
-def _rgb8(scaled: np.ndarray) -> np.ndarray:
-    """Values already multiplied by 255 to uint8: rounded to nearest (ties to even), clamped to 0..255."""
-    np.rint(scaled, out=scaled)
-    np.clip(scaled, 0.0, 255.0, out=scaled)
-    return scaled.astype(np.uint8)
+def _rgb8(values: np.ndarray, factor: float = 1.0) -> np.ndarray:
+    """factor·values (F, C) to uint8: rounded to nearest (ties to even), clamped to 0..255; C-contiguous,
+    computed one channel at a time in one reused buffer (no (F, C) float temporaries)."""
+    out = np.empty(values.shape, dtype=np.uint8)
+    scaled = np.empty(values.shape[0])
+    for c in range(values.shape[1]):
+        np.multiply(values[:, c], factor, out=scaled)
+        np.rint(scaled, out=scaled)
+        np.clip(scaled, 0.0, 255.0, out=out[:, c], casting="unsafe")  # integral already: the cast is exact
+    return out
 
 
 def _mono(xs: np.ndarray, ys: np.ndarray, rgb8: np.ndarray) -> np.ndarray:
@@ -278,13 +282,12 @@ def native_pixels(canvas: Canvas, xs: ArrayLike, ys: ArrayLike, rgb: ArrayLike) 
     px, py = _pixels(canvas, xs, ys, colours.shape[0])
     if not px.size:
         return NativePixels(px, np.zeros(0, canvas.array.dtype), None)
-    scaled = colours * 255.0
     if canvas.mode == "P":
-        values = _indexed(canvas, px, py, scaled)
+        values = _indexed(canvas, px, py, colours * 255.0)
     elif canvas.mode == "1":
-        values = _mono(px, py, _rgb8(scaled))
+        values = _mono(px, py, _rgb8(colours, 255.0))
     else:
-        values = _native(canvas.mode, _rgb8(scaled))
+        values = _native(canvas.mode, _rgb8(colours, 255.0))
     box = (int(px.min()), int(py.min()), int(px.max()) + 1, int(py.max()) + 1)
     return NativePixels(py * canvas.width + px, values, box)
 

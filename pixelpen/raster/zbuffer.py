@@ -138,27 +138,40 @@ class Interpolant:
     about twice as fast on large batches as gathering (F, 3, K) corners.
     """
 
-    def __init__(self, values: ArrayLike) -> None:
+    def __init__(self, values: ArrayLike, faces: ArrayLike | None = None) -> None:
+        """From (T, 3, K) corner values, or with ``faces`` (T, 3) from per-vertex values (N, K) (no corner copy)."""
         vals = np.asarray(values, dtype=np.float64)
-        if vals.ndim != 3 or vals.shape[1] != 3:
-            raise InvalidArgument(f"values must have shape (T, 3, K), got {vals.shape}")
-        self.triangles = vals.shape[0]
-        self._first = np.ascontiguousarray(vals[:, 0].T)
-        self._steps = [np.ascontiguousarray((vals[:, i] - vals[:, 0]).T) for i in (1, 2)]
+        if faces is None:
+            if vals.ndim != 3 or vals.shape[1] != 3:
+                raise InvalidArgument(f"values must have shape (T, 3, K), got {vals.shape}")
+            corners = [vals[:, i].T for i in range(3)]
+        else:
+            index = np.asarray(faces)
+            integral = index.size == 0 or index.dtype.kind in "iu"
+            if vals.ndim != 2 or index.ndim != 2 or index.shape[1] != 3 or not integral:
+                raise InvalidArgument(f"per-vertex values must be (N, K) and faces (T, 3) integers, got {vals.shape} "
+                                      f"and {index.shape} {index.dtype}")
+            if index.size and not 0 <= int(index.min()) <= int(index.max()) < vals.shape[0]:
+                raise InvalidArgument(f"faces index outside the {vals.shape[0]} vertices")
+            columns = np.ascontiguousarray(vals.T)
+            corners = [np.take(columns, corner, axis=1, mode="clip") for corner in index.T]
+        self.triangles = corners[0].shape[1]
+        self._first = np.ascontiguousarray(corners[0])
+        self._steps = [np.ascontiguousarray(corner - corners[0]) for corner in corners[1:]]
 
     def at(self, fragments: Fragments) -> np.ndarray:
         """The values at each fragment (F, K)."""
         face = fragments.face
-        if len(face) and int(face.max()) >= self.triangles:
-            raise InvalidArgument(f"values has {self.triangles} triangles but a fragment shows triangle "
-                                  f"{int(face.max())}")
+        if len(face) and not 0 <= int(face.min()) <= int(face.max()) < self.triangles:
+            raise InvalidArgument(f"values has {self.triangles} triangles but fragments show triangles "
+                                  f"{int(face.min())}..{int(face.max())}")
         weights = [np.ascontiguousarray(fragments.bary[:, i]) for i in (1, 2)]
         out = np.empty((self._first.shape[0], len(face)))
         term = np.empty(len(face))
         for k, row in enumerate(out):  # a few components (3), each over all fragments
-            np.take(self._first[k], face, out=row)
+            np.take(self._first[k], face, out=row, mode="clip")  # indices checked
             for step, weight in zip(self._steps, weights, strict=True):
-                np.take(step[k], face, out=term)
+                np.take(step[k], face, out=term, mode="clip")
                 term *= weight
                 row += term
         return out.T
@@ -179,153 +192,138 @@ class _Rows:
     z0: np.ndarray
     gz: np.ndarray
     face: np.ndarray
-    weight0: np.ndarray  # (K, R): the weight planes of _Triangles at column 0 of the row
+    weight0: np.ndarray  # (K, R): the weight planes of _planes at column 0 of the row
 
 
-@dataclass
-class _Triangles:
-    """Per-triangle weight planes on the snapped geometry (pixel units, centres at integers).
-
-    Plane k is ``slope[k]·x + rise[k]·y + const[k]``: k = 0, 1 give the weights of vertices 1 and 2 times their
-    1/w and k = 2 their sum over the three vertices (absent without ``inv_w``: the sum is 1), so the
-    perspective-correct weights are planes 0 and 1 divided by plane 2.
-    """
-
-    slope: np.ndarray
-    rise: np.ndarray
-    const: np.ndarray
-
-
-def _sorted_by_y(sx: np.ndarray, sy: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Each triangle's vertex columns sorted by y (a three-comparator network): ax, ay, bx, by, cx, cy."""
-    x0, x1, x2 = sx[:, 0], sx[:, 1], sx[:, 2]
-    y0, y1, y2 = sy[:, 0], sy[:, 1], sy[:, 2]
+def _sorted_by_y(v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Vertices (2, 3, T) (x and y rows) sorted by y (a stable three-comparator network): A, B, C, each (2, T)."""
+    p = [v[:, 0], v[:, 1], v[:, 2]]
     for i, j in ((0, 1), (1, 2), (0, 1)):
-        xs, ys = [x0, x1, x2], [y0, y1, y2]
-        swap = ys[i] > ys[j]
-        xs[i], xs[j] = np.where(swap, xs[j], xs[i]), np.where(swap, xs[i], xs[j])
-        ys[i], ys[j] = np.where(swap, ys[j], ys[i]), np.where(swap, ys[i], ys[j])
-        x0, x1, x2 = xs
-        y0, y1, y2 = ys
-    return x0, y0, x1, y1, x2, y2
+        swap = p[i][1] > p[j][1]
+        p[i], p[j] = np.where(swap, p[j], p[i]), np.where(swap, p[i], p[j])
+    return p[0], p[1], p[2]
 
 
-def _edge(px: np.ndarray, py: np.ndarray, qx: np.ndarray, qy: np.ndarray,
-          neutral: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Edge P->Q (P on top) as (n0, step, den): its crossing of row r is ceil((n0 + step·r) / den).
-
-    Horizontal edges get a constant crossing of ``neutral`` (no bound).
-    """
-    dx, dy = qx - px, qy - py
-    flat = dy == 0
-    n0 = np.where(flat, neutral, px * dy - py * dx)
-    step = np.where(flat, 0.0, SUBPIXEL * dx)
-    den = np.where(flat, 1.0, SUBPIXEL * dy)
+def _edges(a: np.ndarray, b: np.ndarray, c: np.ndarray,
+           neutral: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Edges AB, BC, AC (top to bottom) as (n0, step, den), each (3, T): the crossing of row r is
+    ceil((n0 + step·r) / den); horizontal edges get a constant crossing of ``neutral`` (no bound)."""
+    p, q = np.stack([a, b, a], axis=1), np.stack([b, c, c], axis=1)  # (2, 3, T)
+    d = q - p
+    flat = d[1] == 0
+    n0 = np.where(flat, neutral, p[0] * d[1] - p[1] * d[0])
+    step = np.where(flat, 0.0, SUBPIXEL * d[0])
+    den = np.where(flat, 1.0, SUBPIXEL * d[1])
     return n0, step, den
 
 
-def _setup(xy: np.ndarray, z: np.ndarray, inv_w: np.ndarray | None, width: int, height: int,
-           top: int) -> tuple[_Triangles, _Rows]:
-    """Snap, sort and bucket the triangles (frame rows from ``top`` on); the pixel runs of every row they cover."""
-    sx = np.rint(xy[:, :, 0] * SUBPIXEL)
-    sx -= SUBPIXEL // 2
-    sy = np.rint(xy[:, :, 1] * SUBPIXEL)
-    sy -= SUBPIXEL // 2 + top * SUBPIXEL
-    # screen-space plane of depth and barycentric gradients, in pixel units
-    px, py = sx / SUBPIXEL, sy / SUBPIXEL
-    e1x, e1y = px[:, 1] - px[:, 0], py[:, 1] - py[:, 0]
-    e2x, e2y = px[:, 2] - px[:, 0], py[:, 2] - py[:, 0]
-    det = e1x * e2y - e1y * e2x
-    live = det != 0
-    inv = np.divide(1.0, det, out=np.zeros_like(det), where=live)
-    lam = np.stack([e2y * inv, -e2x * inv, -e1y * inv, e1x * inv])
-    dz1, dz2 = z[:, 1] - z[:, 0], z[:, 2] - z[:, 0]
+def _planes(v: np.ndarray, z: np.ndarray, inv_w: np.ndarray | None) -> tuple[np.ndarray, ...]:
+    """Per triangle (snapped vertices v (2, 3, T) in pixels, centres at integers; depth and 1/w (3, T)): depth's
+    gradient and value at the origin (gx, gy, zc), and the weight planes ``slope·x + rise·y + const`` (K, T)
+    each: k = 0, 1 the weights of vertices 1 and 2 times their 1/w, and k = 2 their sum over the three vertices
+    (absent without ``inv_w``: the sum is 1), so the perspective-correct weights are planes 0 and 1 divided by
+    plane 2."""
+    px, py = v
+    e1x, e1y = px[1] - px[0], py[1] - py[0]
+    e2x, e2y = px[2] - px[0], py[2] - py[0]
+    inv = 1.0 / (e1x * e2y - e1y * e2x)
+    lam = (e2y * inv, -e2x * inv, -e1y * inv, e1x * inv)
+    dz1, dz2 = z[1] - z[0], z[2] - z[0]
     gx = dz1 * lam[0] + dz2 * lam[2]
     gy = dz1 * lam[1] + dz2 * lam[3]
-    zc = z[:, 0] - gx * px[:, 0] - gy * py[:, 0]
-    # screen weights l1 = lam0·x + lam1·y + c1, l2 likewise; times 1/w and their sum for perspective
-    c1 = -(lam[0] * px[:, 0] + lam[1] * py[:, 0])
-    c2 = -(lam[2] * px[:, 0] + lam[3] * py[:, 0])
+    zc = z[0] - gx * px[0] - gy * py[0]
+    c1 = -(lam[0] * px[0] + lam[1] * py[0])
+    c2 = -(lam[2] * px[0] + lam[3] * py[0])
     planes = [(lam[0], lam[1], c1), (lam[2], lam[3], c2)]
     if inv_w is not None:
-        q0, d1, d2 = inv_w[:, 0], inv_w[:, 1] - inv_w[:, 0], inv_w[:, 2] - inv_w[:, 0]
-        planes = [(a * inv_w[:, k + 1], b * inv_w[:, k + 1], c * inv_w[:, k + 1]) for k, (a, b, c) in enumerate(planes)]
+        q0, d1, d2 = inv_w[0], inv_w[1] - inv_w[0], inv_w[2] - inv_w[0]
+        planes = [(a * inv_w[k + 1], b * inv_w[k + 1], c * inv_w[k + 1]) for k, (a, b, c) in enumerate(planes)]
         planes.append((d1 * lam[0] + d2 * lam[2], d1 * lam[1] + d2 * lam[3], q0 + d1 * c1 + d2 * c2))
-    tris = _Triangles(*(np.stack([plane[i] for plane in planes]) for i in range(3)))
+    slope, rise, const = (np.stack([plane[i] for plane in planes]) for i in range(3))
+    return gx, gy, zc, slope, rise, const
 
-    ax, ay, bx, by, cx, cy = _sorted_by_y(sx, sy)
-    r0 = np.clip(np.ceil(ay / SUBPIXEL), 0, height)
-    count = (np.clip(np.ceil(cy / SUBPIXEL), 0, height) - r0).astype(np.int64)
-    xmin = np.minimum(np.minimum(ax, bx), cx)
-    xmax = np.maximum(np.maximum(ax, bx), cx)
-    live &= (count > 0) & (xmax >= 0) & (xmin <= (width - 1) * SUBPIXEL)
-    pair_left = (bx - ax) * (cy - ay) < (by - ay) * (cx - ax)  # B left of AC (y down)
+
+def _setup(xy: np.ndarray, z: np.ndarray, inv_w: np.ndarray | None, width: int, height: int,
+           top: int) -> tuple[np.ndarray, _Rows]:
+    """Snap, sort and bucket the triangles (frame rows from ``top`` on): the weight slopes (K, T) of
+    :func:`_planes` and the pixel runs of every row the triangles cover."""
+    snapped = np.empty((2, 3, len(xy)))  # x and y rows of each vertex, in 1/SUBPIXEL px, centres at integers
+    np.multiply(xy.transpose(2, 1, 0), SUBPIXEL, out=snapped)
+    np.rint(snapped, out=snapped)
+    snapped -= np.array([SUBPIXEL // 2, SUBPIXEL // 2 + top * SUBPIXEL], dtype=np.float64)[:, None, None]
+    sx, sy = snapped
+    det = (sx[1] - sx[0]) * (sy[2] - sy[0]) - (sy[1] - sy[0]) * (sx[2] - sx[0])  # exact
+    r0 = np.clip(np.ceil(np.minimum.reduce(sy) / SUBPIXEL), 0, height)
+    count = (np.clip(np.ceil(np.maximum.reduce(sy) / SUBPIXEL), 0, height) - r0).astype(np.int64)
+    xmin, xmax = np.minimum.reduce(sx), np.maximum.reduce(sx)
+    live = (det != 0) & (count > 0) & (xmax >= 0) & (xmin <= (width - 1) * SUBPIXEL)
+    # B left of AC (y down) when the y-sorted vertices turn clockwise: the sign of det, flipped by an odd sort
+    pair_left = (det < 0) ^ (sy[0] > sy[1]) ^ (sy[0] > sy[2]) ^ (sy[1] > sy[2])
     keep = np.flatnonzero(live)
+    slope = np.zeros((2 if inv_w is None else 3, len(xy)))
     if keep.size == 0:
-        return tris, _no_rows()
+        return slope, _no_rows()
     key = count[keep] * 2 + pair_left[keep]
     if int(key.max()) <= np.iinfo(np.uint16).max:
         key = key.astype(np.uint16)  # a radix sort
     order = keep[np.argsort(key, kind="stable")]
     # per selected triangle, in bucket order
-    ax, ay, bx, by, cx, cy, r0, xmin, xmax, gxo, gyo, zco = (
-        np.take(v, order) for v in (ax, ay, bx, by, cx, cy, r0, xmin, xmax, gx, gy, zc))
-    left_side = np.take(pair_left, order)
-    n_planes = tris.rise.shape[0]
-    rise = np.stack([np.take(v, order) for v in tris.rise])
-    weight0 = np.stack([np.take(v, order) for v in tris.const])
-    weight0 += rise * r0
-    key = count[order] * 2 + left_side
-    side = np.where(left_side, -_NEUTRAL, _NEUTRAL)
-    edges = [_edge(ax, ay, bx, by, side), _edge(bx, by, cx, cy, side), _edge(ax, ay, cx, cy, 0.0)]
-    edges = [(n0 + step * r0, step, den) for n0, step, den in edges]
-    inside = (xmin >= 0) & (xmax <= width * SUBPIXEL - SUBPIXEL)
-    z0 = zco + gyo * r0 - gxo * (r0 * width)
-    zstep = gyo - gxo * width
+    v = np.take(snapped, order, axis=2, mode="clip")
+    r0, xmin, xmax, count, left_side = (np.take(a, order, mode="clip") for a in (r0, xmin, xmax, count, pair_left))
+    gx, gy, zc, slope_o, rise_w, const = _planes(v / SUBPIXEL, np.take(z.T, order, axis=1, mode="clip"),
+                                               None if inv_w is None else np.take(inv_w.T, order, axis=1, mode="clip"))
+    slope[:, order] = slope_o
+    n_planes = slope.shape[0]
+    # rows carry K + 1 planes along the frame rows: depth at the flat index 0 of the row, then the weights
+    rise = np.concatenate([(gy - gx * width)[None], rise_w])
+    plane0 = np.concatenate([zc[None], const])
+    plane0 += rise * r0
+    key = count * 2 + left_side
+    n0, step, den = _edges(*_sorted_by_y(v), np.where(left_side, -_NEUTRAL, _NEUTRAL))
+    n0 += step * r0
     base = r0 * width
-    bounds = np.concatenate(([0], np.flatnonzero(np.diff(key)) + 1, [key.size])).tolist()
-    total = int(count[order].sum())
-    rows = _Rows(np.empty(total), np.empty(total), np.empty(total), np.empty(total),
-                 np.empty(total, dtype=np.int64), np.empty((n_planes, total)))
-    j = np.arange(int(count[order[-1]]), dtype=np.float64)[:, None]
+    cuts = np.concatenate(([0], np.flatnonzero(np.diff(key)) + 1))
+    inside = np.minimum.reduceat((xmin >= 0) & (xmax <= width * SUBPIXEL - SUBPIXEL), cuts).tolist()
+    bounds = [*cuts.tolist(), key.size]
+    total = int(count.sum())
+    planes = np.empty((n_planes + 1, total))
+    rows = _Rows(np.empty(total), np.empty(total), planes[0], np.empty(total),
+                 np.empty(total, dtype=np.int64), planes[1:])
+    j = np.arange(int(count[-1]), dtype=np.float64)[:, None]
+    cross = np.empty(3 * total)
     pos = 0
-    for lo, hi in itertools.pairwise(bounds):
+    for (lo, hi), within in zip(itertools.pairwise(bounds), inside, strict=True):
         n, left = divmod(int(key[lo]), 2)
         size = n * (hi - lo)
         jj = j[:n]
         sl = slice(lo, hi)
         shape = (n, hi - lo)
+        c = cross[:3 * size].reshape((3, *shape))
+        np.multiply(step[:, None, sl], jj, out=c)
+        c += n0[:, None, sl]
+        c /= den[:, None, sl]
+        np.ceil(c, out=c)
         first = rows.start[pos:pos + size].reshape(shape)
-        cross = [first, np.empty(shape), np.empty(shape)]
-        for c, (n0, step, den) in zip(cross, edges, strict=True):
-            np.multiply(step[sl], jj, out=c)
-            c += n0[sl]
-            c /= den[sl]
-            np.ceil(c, out=c)
-        pair, other, single = cross
         if left:
-            np.maximum(pair, other, out=first)
-            last = single
+            np.maximum(c[0], c[1], out=first)
+            last = c[2]
         else:
-            np.minimum(pair, other, out=other)
-            first[...] = single
-            last = other
-        if not inside[sl].all():
+            np.minimum(c[0], c[1], out=c[1])
+            first[...] = c[2]
+            last = c[1]
+        if not within:
             np.clip(first, 0, width, out=first)
             np.clip(last, 0, width, out=last)
         np.subtract(last, first, out=rows.length[pos:pos + size].reshape(shape))
         first += base[sl]
         first += jj * width
-        zr = rows.z0[pos:pos + size].reshape(shape)
-        np.multiply(zstep[sl], jj, out=zr)
-        zr += z0[sl]
-        rows.gz[pos:pos + size].reshape(shape)[...] = gxo[sl]
+        rows.gz[pos:pos + size].reshape(shape)[...] = gx[sl]
         rows.face[pos:pos + size].reshape(shape)[...] = order[sl]
-        w0 = rows.weight0[:, pos:pos + size].reshape((-1, *shape))
-        np.multiply(rise[:, None, sl], jj, out=w0)
-        w0 += weight0[:, None, sl]
+        p0 = planes[:, pos:pos + size].reshape((-1, *shape))
+        np.multiply(rise[:, None, sl], jj, out=p0)
+        p0 += plane0[:, None, sl]
         pos += size
-    return tris, rows
+    return slope, rows
 
 
 def _no_rows() -> _Rows:
@@ -346,10 +344,10 @@ def _expand(rows: _Rows, offset: np.ndarray, first: np.ndarray, lo: int, hi: int
     """Pixels of rows lo..hi: (flat index, depth, owning row)."""
     owner = np.repeat(np.arange(lo, hi), rows.length[lo:hi])
     pix = np.arange(first[lo], first[hi], dtype=np.int64)
-    pix += np.take(offset, owner)
-    depth = np.take(rows.gz, owner)
+    pix += np.take(offset, owner, mode="clip")
+    depth = np.take(rows.gz, owner, mode="clip")
     depth *= pix
-    depth += np.take(rows.z0, owner)
+    depth += np.take(rows.z0, owner, mode="clip")
     return pix, depth, owner
 
 
@@ -404,7 +402,7 @@ class ZBuffer:
             raise InvalidArgument(f"inv_w row {row} must be > 0 (clip before rasterizing): {q[row].tolist()}")
         if count == 0:
             return _empty_fragments()
-        tris, rows = _setup(pts, z, q, self.width, self.height, self.top)
+        slope, rows = _setup(pts, z, q, self.width, self.height, self.top)
         np.maximum(rows.length, 0, out=rows.length)
         length = rows.length.astype(np.int64)
         if not length.any():
@@ -434,7 +432,7 @@ class ZBuffer:
             out = _Columns(lowered, self._memory(lowered, reuse))
             for i, (a, _) in enumerate(chunks):
                 pix, zz, owner = again(i)
-                out.put(int(first[a]), pix, owner, zz, rows, tris, self.width)
+                out.put(int(first[a]), pix, owner, zz, rows, slope, self.width)
             return out.fragments(self.top)
         pieces = []
         for i in range(len(chunks)):
@@ -446,7 +444,7 @@ class ZBuffer:
         out = _Columns(won, self._memory(won, reuse))
         pos = 0
         for piece in pieces:
-            out.put(pos, *piece, rows, tris, self.width)
+            out.put(pos, *piece, rows, slope, self.width)
             pos += piece[0].size
         fragments = out.fragments(0)
         if lowered != len(fragments):
@@ -487,22 +485,23 @@ class _Columns:
         self.bary = memory[4 * size:7 * size].view(np.float64).reshape(3, size)
 
     def put(self, pos: int, pix: np.ndarray, owner: np.ndarray, depth: np.ndarray, rows: _Rows,
-            tris: _Triangles, width: int) -> None:
-        """Store fragments (flat pixel index, owning row, depth) from pos on, with their weights."""
+            slope: np.ndarray, width: int) -> None:
+        """Store fragments (flat pixel index, owning row, depth) from pos on, with their weights (``slope``: the
+        weight slopes (K, T) of :func:`_planes`, by triangle)."""
         sl = slice(pos, pos + pix.size)
         ys = np.floor_divide(pix, width, out=self.ys[sl])
         xs = np.subtract(pix, ys * width, out=self.xs[sl])
-        face = np.take(rows.face, owner, out=self.face[sl])
+        face = np.take(rows.face, owner, out=self.face[sl], mode="clip")
         self.depth[sl] = depth
         l0, l1, l2 = self.bary[0, sl], self.bary[1, sl], self.bary[2, sl]
         for k, out in ((0, l1), (1, l2)):
-            np.take(tris.slope[k], face, out=out)  # np.take, unlike fancy indexing, lets other threads run
+            np.take(slope[k], face, out=out, mode="clip")  # np.take, unlike fancy indexing, lets other threads run
             out *= xs
-            out += np.take(rows.weight0[k], owner)
-        if tris.slope.shape[0] == 3:
-            total = np.take(tris.slope[2], face)
+            out += np.take(rows.weight0[k], owner, mode="clip")
+        if slope.shape[0] == 3:
+            total = np.take(slope[2], face, mode="clip")
             total *= xs
-            total += np.take(rows.weight0[2], owner)
+            total += np.take(rows.weight0[2], owner, mode="clip")
             np.divide(1.0, total, out=total)
             l1 *= total
             l2 *= total

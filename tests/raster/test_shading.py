@@ -219,9 +219,9 @@ def test_rgb_rounds_each_channel_and_clamps():
     values = np.array([0.0, 0.5 / 255, 1.5 / 255, 127.5 / 255, 0.49999 / 255, 1.0, -0.3, 1.7, 200.2 / 255])
     rgb = np.stack([values, values[::-1], np.roll(values, 3)], axis=1)
     xs, ys = grid(3, 3)
-    for mode in ("RGB", "RGBA"):
+    for mode, layout in (("RGB", rgb), ("RGBA", rgb), ("RGB", np.asfortranarray(rgb))):  # F order: a shader's
         canvas = Canvas(3, 3, mode)
-        write_colours(canvas, xs, ys, rgb)
+        write_colours(canvas, xs, ys, layout)
         expected = [[min(255, max(0, round(255 * c))) for c in row] for row in rgb.tolist()]  # Python round: ties even
         np.testing.assert_array_equal(canvas.array.reshape(9, -1)[:, :3], expected)
         if mode == "RGBA":

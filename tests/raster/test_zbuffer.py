@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from pixelpen.errors import InvalidArgument, InvalidArgumentType
 from pixelpen.raster import zbuffer
-from pixelpen.raster.zbuffer import CHUNK, Fragments, ZBuffer
+from pixelpen.raster.zbuffer import CHUNK, Fragments, Interpolant, ZBuffer
 
 # ---------------------------------------------------------------- the scalar reference (textbook, exact)
 
@@ -319,6 +319,26 @@ def test_interpolate_and_subset():
         fr.interpolate(np.zeros((1, 2, 2)))
     with pytest.raises(InvalidArgument, match="mask"):
         fr.subset(np.ones(3, dtype=bool))
+
+
+def test_per_vertex_interpolant_equals_the_corner_form_bit_for_bit():
+    rng = np.random.default_rng(3)
+    vertices, faces = rng.uniform(-2, 2, (30, 4)), rng.integers(0, 30, (50, 3))
+    xy = rng.uniform(-2, 22, (50, 3, 2))
+    fr = ZBuffer(20, 20).rasterize(xy, rng.uniform(0, 1, (50, 3)), rng.uniform(0.5, 2, (50, 3)))
+    assert len(fr) > 100
+    got = Interpolant(vertices, faces).at(fr)
+    assert np.array_equal(got, Interpolant(vertices[faces]).at(fr))
+    assert np.array_equal(got, fr.interpolate(vertices[faces]))
+    with pytest.raises(InvalidArgument, match="per-vertex values"):
+        Interpolant(vertices, faces[:, :2])
+    with pytest.raises(InvalidArgument, match="outside the 30 vertices"):
+        Interpolant(vertices, faces + 1)
+    with pytest.raises(InvalidArgument, match="values has 1 triangles"):
+        Interpolant(vertices, faces[:1]).at(fr)
+    bad = Fragments(fr.xs[:1], fr.ys[:1], np.array([-1]), fr.bary[:1], fr.depth[:1])
+    with pytest.raises(InvalidArgument, match="fragments show triangles -1"):
+        Interpolant(vertices, faces).at(bad)
 
 
 def test_compose_with_hand_clipped_triangles():
