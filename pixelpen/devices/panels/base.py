@@ -7,8 +7,10 @@ windows, or their bounding window when that costs fewer bytes; more are planned 
 ``windows.plan_windows``), each window as the controller's window commands (MIPI: CASET or RASET left out
 when the window before it in the frame set the same columns or rows) and its pixels packed natively.  The
 next frame is full after open, ``reset()``, a rotation change, a bus fault or an interruption (Ctrl-C) in
-the middle of a frame.  ``fps=`` (or ``refresh(target_fps)``) paces frames with a FramePacer: drawing
-between due frames only accumulates damage, so frames coalesce, never queue.
+the middle of a frame.  A frame that is the last one shifted vertically is scrolled by the controller
+(``scrolling.HardwareScroll``: MIPI VSCRDEF/VSCSAD), then only its new rows are sent.  ``fps=`` (or
+``refresh(target_fps)``) paces frames with a FramePacer: drawing between due frames only accumulates damage, so
+frames coalesce, never queue.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ import numpy as np
 
 from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
 from pixelpen.devices.panels.frames import FrameStats, PanelStats
+from pixelpen.devices.panels.scrolling import HardwareScroll
 from pixelpen.devices.panels.trim import MAX_WINDOWS, trim_damage
 from pixelpen.devices.panels.windows import WindowCost, window_cost
 from pixelpen.devices.panels.wiring import Interface, Pins, Wiring, open_wiring, parse_target, sim_wiring
@@ -117,8 +120,7 @@ class PanelDisplay(RasterDisplay):
         self.persist = persist
         self.refresh_mode = refresh
         self.invert = profile.invert if invert is None else invert
-        self.clock = clock
-        self.target_fps = fps
+        self.clock, self.target_fps = clock, fps
         self.stats = PanelStats()
         self._wiring_source = wiring
         self._wiring: Wiring | None = wiring if isinstance(wiring, Wiring) else None
@@ -131,6 +133,7 @@ class PanelDisplay(RasterDisplay):
         self._force = False
         self._frame = FrameStats()
         self._cost: WindowCost | None = None
+        self._scroll = HardwareScroll(self._send_step)
         super().__init__(self._capabilities(), mode=self.canvas_mode, background=background, deferral=deferral)
 
     # -- construction from URLs -------------------------------------------------------------------
@@ -409,12 +412,9 @@ class PanelDisplay(RasterDisplay):
 
     def _capabilities(self) -> Capabilities:
         """Size and model at the current rotation."""
-        w, h = self.profile.size
-        if self.rotation % 180:
-            w, h = h, w
-        colour: ColourModel = "mono" if self.canvas_mode == "1" else "rgb565"
-        if self.pixel_format == "rgb666":
-            colour = "rgb666"
+        w, h = self.profile.size[::-1] if self.rotation % 180 else self.profile.size
+        fmt = self.pixel_format
+        colour: ColourModel = "mono" if self.canvas_mode == "1" else "rgb666" if fmt == "rgb666" else "rgb565"
         return Capabilities(model=self.profile.name, category="output", kind="raster", size=(float(w), float(h)),
                             unit_mm=PIXEL_PITCH_MM, colour_model=colour, y_down=True, can_erase=True,
                             limits={"controller": self.profile.controller, "rotation": self.rotation})
@@ -492,8 +492,8 @@ class PanelDisplay(RasterDisplay):
     def _show(self, canvas: Canvas) -> None:
         """Send the damaged (or, when due, every) pixel of ``canvas``; a fault or interruption makes the next full.
 
-        Host work first (trim, plan, pack every window, update the shadow), then the bus calls: the frame is
-        timed once, host seconds up to the first bus call, bus seconds (the display's clock) from there."""
+        Host work first (scroll, trim, plan, pack every window, update the shadow), then the bus calls: the frame
+        is timed once, host seconds up to the first bus call, bus seconds (the display's clock) from there."""
         started = time.perf_counter()
         frame = self._frame = FrameStats(full=self._full or self.refresh_mode == "full")
         native = self._native(canvas.array)
@@ -506,11 +506,12 @@ class PanelDisplay(RasterDisplay):
             shadow = self._shadow = np.empty_like(units)
         else:
             damage = [self._native_rect(r, canvas.width, canvas.height) for r in canvas.damage()]
+            damage = self._scroll.detect(native, damage, shadow, self._units)
             units = self._update_units(native, damage)
             rects = trim_damage(damage, units, shadow, self.cost)
-        if not rects:
+        if not rects and not self._scroll.pending:
             return
-        if frame.full:
+        if frame.full or not rects:
             windows = rects
         elif len(rects) <= MAX_WINDOWS:  # trim's cut is already planned by the cost model
             windows = self.cost.cut_or_bounding(rects)
@@ -523,6 +524,7 @@ class PanelDisplay(RasterDisplay):
         frame.host_seconds = time.perf_counter() - started
         self._wait_te()
         on_bus = self.clock.now()
+        self._scroll.start_frame(frame.full)
         previous = None
         for window, data in zip(windows, packed, strict=True):
             self._write_window(window, data, previous)
@@ -545,8 +547,7 @@ class PanelDisplay(RasterDisplay):
         units = self._units
         if units is None or self.pixel_format != "rgb565be":
             return self._to_units(native)
-        for r in damage:
-            rows, cols = r.slices
+        for rows, cols in (r.slices for r in damage):
             units[rows, cols] = rgb888_to_rgb565(native[rows, cols])
         return units
 
@@ -559,8 +560,8 @@ class PanelDisplay(RasterDisplay):
         if units.dtype == np.uint16:
             return [units[y0:y1, x0:x1].astype(">u2").tobytes() for x0, y0, x1, y1 in windows]
         native = units.view(np.bool_) if self.canvas_mode == "1" else units
-        box = bounding(windows)
-        if len(windows) == 1 or box.area > max(2 * sum(w.area for w in windows), PACK_ONCE):
+        box = bounding(windows or [Rect(0, 0, 0, 0)])  # no windows: a frame of scroll commands alone
+        if len(windows) <= 1 or box.area > max(2 * sum(w.area for w in windows), PACK_ONCE):
             return [pack(native[w.slices], self.pixel_format) for w in windows]
         unit_rows = self.cost.align[1] if self.pixel_format == "mono-pages" else 1
         data = np.frombuffer(pack(native[box.slices], self.pixel_format), dtype=np.uint8)

@@ -6,7 +6,9 @@ Rotation is MADCTL (MY/MX/MV) with the module's CASET/RASET offsets for that rot
 (COLMOD 0x66) with ``colour=rgb666``.  A window is ``2A xs xe``, ``2B ys ye``, ``2C`` + pixels: 11
 command and parameter bytes, 6 when the window before it in the frame had the same rows or columns (the
 controller keeps CASET/RASET; RAMWR starts at the window's first pixel).  With a ``te`` line wired TEON
-(35h 00h) is sent and every frame starts at the V-blank pulse.
+(35h 00h) is sent and every frame starts at the V-blank pulse.  Where the frame's rows are the memory's rows
+(MADCTL MV clear) a frame that is the last one shifted vertically is scrolled by VSCRDEF/VSCSAD over the glass's
+rows (``scrolling``; ``hardware_scroll=off`` turns it off), and every window's rows are mapped through the scroll.
 """
 
 from __future__ import annotations
@@ -15,10 +17,11 @@ import struct
 from typing import Any, ClassVar
 
 from pixelpen.devices.panels.base import PanelDisplay
+from pixelpen.devices.panels.scrolling import mipi_scroll_area
 from pixelpen.display.registry import register_display
 from pixelpen.errors import ConfigError
 from pixelpen.options import OptionSpec, OptionValues, boolean, choice
-from pixelpen.profiles.panel import COLMOD, MADCTL_BGR, PanelGeometry, PanelProfile
+from pixelpen.profiles.panel import COLMOD, MADCTL_BGR, MADCTL_MV, MADCTL_MY, PanelGeometry, PanelProfile
 from pixelpen.raster.damage import Rect
 
 CASET, RASET, RAMWR = 0x2A, 0x2B, 0x2C
@@ -37,9 +40,12 @@ class MipiDcsDisplay(PanelDisplay):
         OptionSpec("colour", choice("rgb565", "rgb666"), None,
                    "pixels on the wire: rgb565 (COLMOD 0x55, 2 bytes) or rgb666 (0x66, 3 bytes); "
                    "default the profile's"),
+        OptionSpec("hardware_scroll", boolean, True,
+                   "scroll in the controller (VSCRDEF/VSCSAD) when a frame is the last one shifted vertically"),
     )
 
-    def __init__(self, *args: Any, bgr: bool | None = None, colour: str | None = None, **kwargs: Any) -> None:
+    def __init__(self, *args: Any, bgr: bool | None = None, colour: str | None = None, hardware_scroll: bool = True,
+                 **kwargs: Any) -> None:
         profile: PanelProfile = kwargs["profile"]
         if colour is not None and colour not in _FORMATS:
             raise ConfigError(f"colour must be rgb565 or rgb666, got {colour!r}")
@@ -49,6 +55,9 @@ class MipiDcsDisplay(PanelDisplay):
         super().__init__(*args, **kwargs)
         g = self.geometry
         self._offsets = (g.x_offset, g.y_offset)
+        self._scroll.enabled = bool(hardware_scroll)
+        rows = self.profile.ram_size[1]
+        self._scroll.default = mipi_scroll_area(rows, 0, rows, reversed=False)
 
     @classmethod
     def compatible_controllers(cls) -> tuple[str, ...]:
@@ -57,8 +66,8 @@ class MipiDcsDisplay(PanelDisplay):
 
     @classmethod
     def controller_options(cls, opts: OptionValues, profile: PanelProfile) -> dict[str, Any]:
-        """``bgr`` and ``colour``."""
-        return {"bgr": opts["bgr"], "colour": opts["colour"]}
+        """``bgr``, ``colour`` and ``hardware_scroll``."""
+        return {"bgr": opts["bgr"], "colour": opts["colour"], "hardware_scroll": opts["hardware_scroll"]}
 
     @property
     def pixel_format(self) -> str:
@@ -80,9 +89,12 @@ class MipiDcsDisplay(PanelDisplay):
         return g.width, g.height
 
     def _setup(self) -> None:
-        """COLMOD, MADCTL, INVON/INVOFF and (with a TE line) TEON; the rotation's CASET/RASET offsets are kept."""
+        """COLMOD, MADCTL, INVON/INVOFF and (with a TE line) TEON; the rotation's CASET/RASET offsets and scroll
+        area (the glass's rows in the memory; none when MV makes the frame's rows memory columns) are kept."""
         g = self.geometry
         self._offsets = (g.x_offset, g.y_offset)
+        self._scroll.set_area(None if g.madctl & MADCTL_MV else mipi_scroll_area(
+            self.profile.ram_size[1], g.y_offset, g.height, reversed=bool(g.madctl & MADCTL_MY)))
         self._command(COLMOD_CMD)
         self._data(bytes([COLMOD[self._format]]))
         self._command(MADCTL)
@@ -93,17 +105,27 @@ class MipiDcsDisplay(PanelDisplay):
             self._data(b"\x00")
 
     def _write_window(self, window: Rect, pixels: bytes, previous: Rect | None) -> None:
-        """CASET and RASET (each left out when ``previous`` set the same columns or rows: the controller keeps
-        them, and RAMWR starts again at the window's first pixel), RAMWR and the pixels."""
+        """CASET and RASET (each left out when the window before set the same columns or rows: the controller
+        keeps them, and RAMWR starts again at the window's first pixel), RAMWR and the pixels; the rows mapped
+        through the hardware scroll, a window wrapping its ring sent as two."""
         x, y = self._offsets
-        if previous is None or (previous.x0, previous.x1) != (window.x0, window.x1):
-            self._command(CASET)
-            self._data(struct.pack(">HH", window.x0 + x, window.x1 - 1 + x))
-        if previous is None or (previous.y0, previous.y1) != (window.y0, window.y1):
-            self._command(RASET)
-            self._data(struct.pack(">HH", window.y0 + y, window.y1 - 1 + y))
-        self._command(RAMWR)
-        self._data(pixels)
+        columns = None if previous is None else (previous.x0, previous.x1)
+        rows = None if previous is None else self._scroll.rows(previous.y0, previous.y1)[-1]
+        row_bytes = len(pixels) // window.height
+        start = 0
+        for y0, y1 in self._scroll.rows(window.y0, window.y1):
+            if columns != (window.x0, window.x1):
+                columns = (window.x0, window.x1)
+                self._command(CASET)
+                self._data(struct.pack(">HH", window.x0 + x, window.x1 - 1 + x))
+            if rows != (y0, y1):
+                rows = (y0, y1)
+                self._command(RASET)
+                self._data(struct.pack(">HH", y0 + y, y1 - 1 + y))
+            self._command(RAMWR)
+            end = start + (y1 - y0) * row_bytes
+            self._data(pixels[start:end])
+            start = end
 
     def _power(self, on: bool) -> None:
         self._command(DISPON if on else DISPOFF)
