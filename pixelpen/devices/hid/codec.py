@@ -431,10 +431,8 @@ class ReportDecoder:
         return out
 
     def _bitmap_batch(self, arr: np.ndarray) -> dict[int, np.ndarray]:
-        """:meth:`_bitmap`'s bits over a batch by bit offset, bool as :meth:`_element_batch` gives them, from eight
-        passes over their bytes when they fill a quarter of them (an NKRO bitmap: not a pass per key).  Bit ``k``
-        of every byte is one shift over the bytes transposed, so each column is a contiguous row of the result
-        (``np.unpackbits`` along the rows is 4x slower, across them the columns would be strided)."""
+        """:meth:`_bitmap`'s bits by bit offset, bool as :meth:`_element_batch` gives them, when they fill a quarter
+        of their bytes: eight shifts over the bytes transposed, each column a contiguous row (4x unpackbits')."""
         offsets = [e.bit_offset for e in self._bitmap()]
         first, last = min(offsets, default=0) // 8, max(offsets, default=0) // 8
         if not offsets or 8 * (last - first + 1) > 4 * len(offsets):
