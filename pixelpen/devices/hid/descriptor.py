@@ -35,7 +35,7 @@ from functools import partial
 from itertools import starmap
 
 from pixelpen.devices.hid.fields import Collection, Field, ReportDescriptor, ReportKind, ReportLayout
-from pixelpen.devices.hid.items import exponent_value, scan
+from pixelpen.devices.hid.items import SIGN, exponent_value, s32, scan
 from pixelpen.devices.hid.quirks import fixup
 from pixelpen.errors import ParseError
 
@@ -65,8 +65,6 @@ _LOCAL_EXTRAS = {0x38: "designator_index", 0x48: "designator_minimum", 0x58: "de
 """Local items kept for the dump, by prefix without its size bits."""
 _REPORT_BITS = (MAX_BUFFER_SIZE - 1) * 8
 """Bits a report may hold after its ID byte (``hid_add_field``'s check)."""
-_SIGN = tuple((0, 0x100, 0x10000, 0x100000000)[prefix & 3] for prefix in range(256))
-"""Per prefix byte, what ``value - ((value << 1) & _SIGN[prefix])`` subtracts to read its data signed."""
 _PAD = bytes(4)
 
 # What the item loop does per prefix byte, numbered by how often descriptors use them (the branches are tried in
@@ -174,7 +172,7 @@ def _parse(data: bytes, source: str | None, reject_long_items: bool,
     zeros = len(data.rstrip(b"\0"))  # a 0x00 item from here on starts the trailing zero bytes
     buf = data + _PAD
     ops = _OPS
-    sign = _SIGN
+    sign = SIGN  # items.signed_value, inline: a call per item costs more than the item
     i = offset = 0
     while i < n:
         offset = i
@@ -226,7 +224,7 @@ def _parse(data: bytes, source: str | None, reject_long_items: bool,
                     report = reports[prefix >> 4 << 8 | rid] = _Report(_KINDS[prefix >> 4], rid or None, [])
                 lo, hi = lmin, lmax
                 if lo < 0:
-                    hi = ((hi & _M32) ^ 0x80000000) - 0x80000000  # s32
+                    hi = s32(hi)
                     if hi < lo:
                         raise _error(data, source, f"Logical Maximum {hi} is below Logical Minimum {lo}", offset)
                 else:
@@ -262,7 +260,7 @@ def _parse(data: bytes, source: str | None, reject_long_items: bool,
                     report.fields.append((
                         report.kind, report.report_id, page, kept, start + 8 if rid else start, report_size,
                         report_count, lo, hi, pmin,
-                        ((pmax & _M32) ^ 0x80000000) - 0x80000000 if pmin < 0 else pmax & _M32, unit, exponent,
+                        s32(pmax) if pmin < 0 else pmax & _M32, unit, exponent,
                         value, open_[-1] if open_ else None, offset, dict(extra) if extra else {}))
             elif op == _COLLECTION:
                 if len(open_) == MAX_COLLECTION_DEPTH:

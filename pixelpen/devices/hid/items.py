@@ -36,7 +36,8 @@ ITEM_NAMES: dict[tuple[int, int], str] = {
 """Item names by (type, tag) (HID 1.11 §6.2.2.4–6.2.2.8)."""
 
 _SIZES = (0, 1, 2, 4)
-_BITS = (0, 8, 16, 32)
+SIGN = tuple((0, 0x100, 0x10000, 0x100000000)[prefix & 3] for prefix in range(256))
+"""Per prefix byte, what ``value - ((value << 1) & SIGN[prefix])`` subtracts to read its data signed."""
 
 
 class Item(NamedTuple):
@@ -72,8 +73,7 @@ class Item(NamedTuple):
 
 def signed_value(prefix: int, value: int) -> int:
     """A short item's unsigned data as two's complement of the size its prefix gives (``item_sdata``)."""
-    bits = _BITS[prefix & 3]
-    return value - (1 << bits) if bits and value >> (bits - 1) else value
+    return value - ((value << 1) & SIGN[prefix])
 
 
 def s32(value: int) -> int:

@@ -399,6 +399,7 @@ def test_random_reports_never_crash_the_decoder():
 @pytest.mark.parametrize("hexdesc", [
     "0509a101090115002501754895018102090175088102c0",  # Button 1 as a 72-bit and an 8-bit element
     "0509a1010901150027ffffffff754095018102090175088102c0",  # as a 64-bit unsigned and an 8-bit one
+    "0509a101090115002501754895018102090175018102c0",  # as a 72-bit and a one-bit (bool) element
     "0507a1011900296515ff2505754895018100c0",  # an array of 72-bit elements
 ])
 def test_batches_refuse_what_they_cannot_hold_exactly(hexdesc):
@@ -407,6 +408,16 @@ def test_batches_refuse_what_they_cannot_hold_exactly(hexdesc):
     with pytest.raises(InvalidArgument, match="one by one"):
         d.decoder(kind, rid).decode_batch(bytes(3 * lay.length))
     d.decode(bytes(lay.length))  # one by one they decode
+
+
+def test_a_usage_in_a_one_bit_and_a_byte_element_stacks_into_one_int64_matrix():
+    """Button 1 as a 1-bit and then an 8-bit element (bits 0 and 1..8): the bool column and the int64 one stack."""
+    d = parse_descriptor(bytes.fromhex("0509a10109011500257f75019501810209017508810275078101c0"))
+    dec = d.decoder()
+    rows = np.array([[0b00000011, 0], [0b11111110, 0b1]], np.uint8)  # by hand: bit 0; bits 1..8
+    batch = dec.decode_batch(rows)[(9, 1)]
+    assert batch.dtype == np.int64 and batch.tolist() == [[1, 1], [0, 0xFF]]
+    assert batch.tolist() == [d.decode(bytes(r))[(9, 1)] for r in rows]
 
 
 @pytest.mark.parametrize("gap", [0, 3, 200])
