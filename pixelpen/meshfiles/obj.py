@@ -54,7 +54,7 @@ VERTEX_NUMBERS = (3, 4, 6, 7)
 CORNER = re.compile(rb"([+-]?\d{1,18})(?:/([+-]?\d{1,18})|/([+-]?\d{1,18})?/([+-]?\d{1,18}))?")
 """One ``f`` corner: v, v/vt, v//vn or v/vt/vn."""
 LONG_INDEX = re.compile(rb"[+-]?\d{19,}")
-"""An index of more than 18 digits: read as the largest int64 (so out of range), as numpy reads it."""
+"""An index of more than 18 digits: read as the largest int64 of its sign (so out of range), saturated."""
 
 
 
@@ -165,7 +165,7 @@ def _general_obj(data: bytes, source: str, limits: Limits) -> Mesh:
         bad = np.flatnonzero(~np.isfinite(values))
         if len(bad):
             token = int(tokens[bad[0]])  # the per-line reader's words
-            raise table.error(f"field {token - int(table.first_token[table.token_line[token]])} is out of range", token)
+            raise table.error(f"field {table.field(token)} is out of range", token)
         if out is not None and rows is not None:
             first = np.cumsum(count[read] - 1) - (count[read] - 1)
             out[rows[read]] = values[first[:, None] + np.arange(3)]

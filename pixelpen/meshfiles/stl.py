@@ -101,8 +101,7 @@ def _ascii(data: bytes, source: str, limits: Limits) -> FloatArray:
             bad = np.flatnonzero(~np.isfinite(values))
             if len(bad):
                 token = int(tokens[bad[0]])  # the per-line reader's words
-                raise table.error(f"vertex {'xyz'[(token - int(table.first_token[table.token_line[token]])) - 1]} is "
-                                  "out of range", token)
+                raise table.error(f"vertex {'xyz'[table.field(token) - 1]} is out of range", token)
             return values.reshape(-1, 3)
     return _walk(table, lines)
 

@@ -353,6 +353,10 @@ class TextTable:
         """The 1-based column of token index ``token`` on its line."""
         return int(self.token_start[token] - self.line_start[self.token_line[token]]) + 1
 
+    def field(self, token: int) -> int:
+        """Token index ``token``'s place on its line (0: the keyword)."""
+        return int(token - self.first_token[self.token_line[token]])
+
     def token(self, index: int) -> bytes:
         """The bytes of token ``index``."""
         return self.data[self.token_start[index]:self.token_end[index]]
