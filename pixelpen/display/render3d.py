@@ -231,8 +231,8 @@ def _triangles(items: list[_Item], matrix: np.ndarray) -> _Triangles:
 
 def _bands(y: np.ndarray, rows: int, height: int) -> list[tuple[int, np.ndarray]]:
     """Horizontal bands of ``rows`` rows (the last may be shorter): (top row, indices of the triangles whose
-    device ``y`` (K, 3) reach it)."""
-    y0, y1, y2 = (y[:, k] + 0.5 for k in range(3))  # the z-buffer's device y of the canvas pixel centres
+    z-buffer ``y`` (K, 3), the canvas's pixel centres, reach it)."""
+    y0, y1, y2 = y[:, 0], y[:, 1], y[:, 2]
     first = np.floor(np.minimum(np.minimum(y0, y1), y2) / rows)
     last = np.floor(np.maximum(np.maximum(y0, y1), y2) / rows)
     bands = []
@@ -257,15 +257,18 @@ def render_raster(scene: Scene, pipeline: geo.ViewingPipeline, canvas: Canvas, t
     # the canvas's pixel (i, j) is centred on the device point (i, j); the z-buffer samples pixel centres at +0.5
     xy, depth = tris.device[..., :2] + 0.5, tris.device[..., 2]
     viewer, lights = scene.camera.viewer(), scene.effective_lights()
-    shaders = []
-    for it in items:
+    offsets = tris.offsets.tolist()
+    shaders: list[Shader | None] = []
+    for it, lo, hi in zip(items, offsets[:-1], offsets[1:], strict=True):
+        if lo == hi:  # no front triangle: nothing to light
+            shaders.append(None)
+            continue
         smooth = it.item.shading != "flat"
         shaders.append(Shader(
             it.mesh.vertices, it.mesh.faces[it.front], mode=it.item.shading, material=it.item.material,
             lights=lights, viewer=viewer, vertex_normals=it.mesh.vertex_normals() if smooth else None,
             face_colours=None if it.item.face_colours is None else it.item.face_colours[it.front],
             polygons=it.mesh.polygon[it.front]))
-    offsets = tris.offsets.tolist()
     rows = max(1, min(canvas.height, BAND_PIXELS // canvas.width))
     local = threading.local()  # z-buffers per thread, moved from band to band (their work arrays are kept)
 
@@ -278,11 +281,14 @@ def render_raster(scene: Scene, pipeline: geo.ViewingPipeline, canvas: Canvas, t
         zbuffer = buffers[height]
         zbuffer.clear(top)
         fragments = zbuffer.rasterize(xy[index], depth[index], tris.inv_w[index], reuse=True)
-        np.take(index, fragments.face, out=fragments.face)
-        if tris.clipped:
-            fragments = fragments.compose(tris.source, tris.weights)
+        if tris.clipped:  # the band's triangles only: compose checks what it is given
+            fragments = fragments.compose(tris.source[index], tris.weights[index])
+        else:
+            np.take(index, fragments.face, out=fragments.face)
         out = []
         for shader, lo, hi in zip(shaders, offsets[:-1], offsets[1:], strict=True):
+            if shader is None:
+                continue
             mine = fragments
             if (lo, hi) != (0, offsets[-1]):
                 mine = fragments.subset((fragments.face >= lo) & (fragments.face < hi))
@@ -293,7 +299,7 @@ def render_raster(scene: Scene, pipeline: geo.ViewingPipeline, canvas: Canvas, t
 
     drawn = 0
     with ThreadPoolExecutor(_workers()) as pool:
-        for pieces in pool.map(lambda job: band(*job), _bands(tris.device[..., 1], rows, canvas.height)):
+        for pieces in pool.map(lambda job: band(*job), _bands(xy[..., 1], rows, canvas.height)):
             for pixels in pieces:
                 pixels.store(canvas)
                 drawn += len(pixels.index)
