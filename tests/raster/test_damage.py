@@ -9,7 +9,16 @@ from hypothesis import strategies as st
 
 from pixelpen.errors import ConfigError
 from pixelpen.raster.canvas import Canvas
-from pixelpen.raster.damage import FEW_RECTS, DamageTracker, Rect, bounding, merge_rects, tile_damage
+from pixelpen.raster.damage import (
+    FEW_RECTS,
+    DamageTracker,
+    Rect,
+    bounding,
+    group_any,
+    mask_runs,
+    merge_rects,
+    tile_damage,
+)
 
 
 def covered(rects: list[Rect], shape: tuple[int, int]) -> np.ndarray:
@@ -179,3 +188,25 @@ def test_bounding_is_the_union_of_every_rectangle():
     rects = [Rect(5, 2, 9, 4), Rect(1, 7, 3, 8), Rect(4, 0, 6, 1)]
     assert bounding(rects) == Rect(1, 0, 9, 8) == rects[0].union(rects[1]).union(rects[2])
     assert bounding([Rect(2, 3, 4, 5)]) == Rect(2, 3, 4, 5)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 9), st.integers(1, 9), st.integers(1, 4), st.integers(0, 2**32 - 1))
+def test_group_any_and_mask_runs_against_plain_references(height, width, k, seed):
+    """group_any is logical_or.reduceat over groups of k rows; mask_runs lists each row's runs, row by row."""
+    mask = np.random.default_rng(seed).random((height, width)) < 0.4
+    if height:
+        expected = np.logical_or.reduceat(mask, np.arange(0, height, k), axis=0)
+        np.testing.assert_array_equal(group_any(mask, k), expected)
+    runs = []
+    for y, row in enumerate(mask.tolist()):  # scalar reference: walk each row
+        x = 0
+        while x < width:
+            if row[x]:
+                start = x
+                while x < width and row[x]:
+                    x += 1
+                runs.append((y, start, x))
+            x += 1
+    rows, starts, ends = mask_runs(mask)
+    assert list(zip(rows.tolist(), starts.tolist(), ends.tolist(), strict=True)) == runs

@@ -2,7 +2,7 @@
 
 A frame is the canvas's damage trimmed to the pixels that differ from what the panel last received (a
 shadow copy of the sent frame in the wire's units — RGB565 values on an RGB565 panel, converted only inside
-the damage — compared by ``trim.trim_damage``), whose cut is sent as it is (at most ``trim.MAX_WINDOWS``
+the damage — compared by ``trim.trim_damage``), whose cut is sent as it is (at most ``windows.MAX_WINDOWS``
 windows, or their bounding window when that costs fewer bytes; more are planned by
 ``windows.plan_windows``), each window as the controller's window commands (MIPI: CASET or RASET left out
 when the window before it in the frame set the same columns or rows) and its pixels packed natively.  The
@@ -28,8 +28,8 @@ import numpy as np
 from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
 from pixelpen.devices.panels.frames import FrameStats, PanelStats
 from pixelpen.devices.panels.scrolling import HardwareScroll
-from pixelpen.devices.panels.trim import MAX_WINDOWS, trim_damage
-from pixelpen.devices.panels.windows import WindowCost, window_cost
+from pixelpen.devices.panels.trim import trim_damage
+from pixelpen.devices.panels.windows import MAX_WINDOWS, WindowCost, window_cost
 from pixelpen.devices.panels.wiring import Interface, Pins, Wiring, open_wiring, parse_target, sim_wiring
 from pixelpen.display.base import Deferral
 from pixelpen.display.capabilities import Capabilities, ColourModel

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pixelpen.devices.panels.windows import WindowCost
-from pixelpen.raster.damage import Rect, bounding, pixel_mask
+from pixelpen.devices.panels.windows import MAX_WINDOWS, WindowCost
+from pixelpen.raster.damage import Rect, bounding, group_any, mask_runs, pixel_mask
 
 EXACT_TRIM = 1 / 16
 """Damage of at most this share of the panel is cut exactly (bands of identical rows, runs of columns)."""
@@ -30,9 +30,6 @@ MAX_BANDS = 8
 """Bands of identical rows a cut by bands makes at most; a more ragged change is cut by :func:`_band_runs`."""
 BAND_ROWS = 4
 """Rows (at least one alignment unit) of the bands a ragged change is cut into."""
-MAX_WINDOWS = 32
-"""Windows a ragged change is cut into at most (the planner's ``max_windows``): a tall change gets bands of
-more rows, and gaps are closed cheapest first until the cut fits."""
 
 
 def trim_damage(rects: list[Rect], native: np.ndarray, shadow: np.ndarray, cost: WindowCost) -> list[Rect]:
@@ -61,7 +58,7 @@ def trim_damage(rects: list[Rect], native: np.ndarray, shadow: np.ndarray, cost:
         cut = _bands(units) if exact else None
         if cut is None:
             band = max(BAND_ROWS // ay, -(-units.shape[0] // MAX_WINDOWS), 1)
-            cut = _band_runs(units, band, cost.bytes_per_pixel * ax * ay, cost.window_bytes + cost.data_framing)
+            cut = _band_runs(units, band, cost.bytes_per_pixel * ax * ay, cost.window_overhead)
         if ax == ay == 1:
             out.extend(Rect(a.x0 + x0, a.y0 + y0, a.x0 + x1, a.y0 + y1) for x0, y0, x1, y1 in cut)
         else:  # the last units may be cut by the rectangle's edge
@@ -73,30 +70,10 @@ def trim_damage(rects: list[Rect], native: np.ndarray, shadow: np.ndarray, cost:
 def _units(diff: np.ndarray, ax: int, ay: int) -> np.ndarray:
     """The changed mask per alignment unit (ax x ay pixels; the last ones may be cut by the rectangle's edge)."""
     if ay > 1:
-        diff = _or_rows(diff, ay)
+        diff = group_any(diff, ay)
     if ax > 1:
-        diff = _or_rows(diff.T, ax).T
+        diff = group_any(diff.T, ax).T
     return diff
-
-
-def _or_rows(mask: np.ndarray, k: int) -> np.ndarray:
-    """Each group of ``k`` rows of a 2-D mask OR-ed into one (the last group may be shorter): a reshape, ten
-    times quicker than ``logical_or.reduceat``."""
-    whole = mask.shape[0] // k * k
-    out = np.asarray(mask[:whole].reshape(whole // k, k, mask.shape[1]).any(axis=1))
-    if whole < mask.shape[0]:
-        out = np.concatenate([out, mask[whole:].any(axis=0, keepdims=True)])
-    return out
-
-
-def _runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(row, first column, end column) of every run of True in a 2-D mask, in row-major order: the rows laid
-    end to end with a False between them, so every run starts and ends at a change of the flat array."""
-    height, width = mask.shape
-    flat = np.zeros(height * (width + 1) + 1, dtype=np.bool_)
-    flat[1:].reshape(height, width + 1)[:, :width] = mask
-    rows, cols = np.divmod(np.flatnonzero(flat[1:] != flat[:-1]), width + 1)
-    return rows[0::2], cols[0::2], cols[1::2]
 
 
 def _bands(mask: np.ndarray) -> list[tuple[int, int, int, int]] | None:
@@ -115,7 +92,7 @@ def _bands(mask: np.ndarray) -> list[tuple[int, int, int, int]] | None:
     if len(starts) > MAX_BANDS:
         return None
     ends = [*starts[1:], box.shape[0]]
-    bands, run_starts, run_ends = _runs(box[starts])
+    bands, run_starts, run_ends = mask_runs(box[starts])
     return [(x0 + s, y0 + starts[k], x0 + e, y0 + ends[k])
             for k, s, e in zip(bands.tolist(), run_starts.tolist(), run_ends.tolist(), strict=True)]
 
@@ -124,7 +101,7 @@ def _band_runs(mask: np.ndarray, band: int, unit_bytes: float, window_bytes: int
     """A cover of the True units of ``mask`` by (x0, y0, x1, y1) boxes: bands of ``band`` rows, each cut into
     the runs of its changed columns; a gap between two runs of a band is closed when its ``unit_bytes`` cost
     no more than a window's ``window_bytes``, then the cheapest gaps while more than MAX_WINDOWS boxes remain."""
-    bands, starts, ends = _runs(_or_rows(mask, band) if band > 1 else mask)
+    bands, starts, ends = mask_runs(group_any(mask, band) if band > 1 else mask)
     rows = np.minimum(mask.shape[0] - bands * band, band)
     gap = (starts[1:] - ends[:-1]) * rows[1:] * float(unit_bytes)
     other = bands[1:] != bands[:-1]

@@ -11,7 +11,7 @@ cost with :func:`pixelpen.raster.damage.merge_rects`: two windows become their b
 costs no more; more than ``max_windows`` are merged cheapest-first until they fit.
 
 A display sends ``trim.trim_damage``'s cut (already made by this cost model) through
-:meth:`WindowCost.cut_or_bounding` when it has at most ``trim.MAX_WINDOWS`` windows, and plans more.
+:meth:`WindowCost.cut_or_bounding` when it has at most ``windows.MAX_WINDOWS`` windows, and plans more.
 
 Guarantees: every damaged pixel is in a window; every window is aligned (up to the panel's edge) and
 inside the panel; at most ``max_windows``; the plan costs no more than one bounding window and, when the
@@ -37,6 +37,8 @@ SSD1306_WINDOW_BYTES = 6
 """``21 s e 22 s e``: column and page window (horizontal addressing mode)."""
 SH1106_PAGE_BYTES = 3
 """``B0+page``, column low nibble ``0x0L``, column high nibble ``0x1H``: one page of a page-mode window."""
+MAX_WINDOWS = 32
+"""Windows a frame is sent in at most, by default: trim cuts a ragged change into no more, the planner merges to it."""
 MAX_RECTS = 64
 """Rectangles planned one by one; more are sent as their bounding window (merging is quadratic per step)."""
 _BAND_GAP = 1 << 24
@@ -83,7 +85,7 @@ def plan_windows(
     align: tuple[int, int] = (1, 1),
     bytes_per_pixel: float,
     window_overhead: float,
-    max_windows: int = 32,
+    max_windows: int = MAX_WINDOWS,
     band_rows: int | None = None,
 ) -> list[Rect]:
     """The windows to send for damage ``rects`` on a ``width`` x ``height`` panel (half-open Rects, sorted).
@@ -146,6 +148,11 @@ class WindowCost:
     align: tuple[int, int] = (1, 1)
     band_rows: int | None = None
 
+    @property
+    def window_overhead(self) -> int:
+        """A window's bytes beside its pixels under the merge model: its commands and one data framing."""
+        return self.window_bytes + self.data_framing
+
     def window(self, rect: Rect) -> PlanCost:
         """What sending one window costs (cut into bands first where the controller needs it)."""
         total_bytes = transfers = 0
@@ -163,16 +170,16 @@ class WindowCost:
 
     def cut_or_bounding(self, rects: list[Rect]) -> list[Rect]:
         """``rects`` as they are, or their bounding window when that costs fewer bytes under the merge model."""
-        box, overhead = bounding(rects), self.window_bytes + self.data_framing
+        box, overhead = bounding(rects), self.window_overhead
         if box.area * self.bytes_per_pixel + overhead < sum(r.area for r in rects) * self.bytes_per_pixel + len(
                 rects) * overhead:
             return [box]
         return rects
 
-    def plan(self, rects: Sequence[Rect], *, width: int, height: int, max_windows: int = 32) -> list[Rect]:
+    def plan(self, rects: Sequence[Rect], *, width: int, height: int, max_windows: int = MAX_WINDOWS) -> list[Rect]:
         """:func:`plan_windows` with this controller's alignment, bands and per-window overhead."""
         return plan_windows(rects, width=width, height=height, align=self.align, bytes_per_pixel=self.bytes_per_pixel,
-                            window_overhead=self.window_bytes + self.data_framing, max_windows=max_windows,
+                            window_overhead=self.window_overhead, max_windows=max_windows,
                             band_rows=self.band_rows)
 
 

@@ -8,8 +8,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pixelpen.devices.panels.trim import MAX_WINDOWS, _band_runs, trim_damage
-from pixelpen.devices.panels.windows import window_cost
+from pixelpen.devices.panels.trim import _band_runs, trim_damage
+from pixelpen.devices.panels.windows import MAX_WINDOWS, window_cost
 from pixelpen.raster.damage import Rect
 
 W = H = 96
