@@ -184,7 +184,7 @@ class HardwareScroll:
             return damage
         rows = frame_rows(native)
         new = row_hashes(rows)
-        self._candidate = rows.copy(), new
+        self._candidate = (rows.copy() if np.may_share_memory(rows, native) else rows), new  # (a rotation's copy)
         if previous is None or previous[0].shape != rows.shape:
             return damage
         d = self._last = best_shift(new, previous[1], self._last)
