@@ -401,9 +401,9 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             now = self._where_found
             if state.stopped_at is not None and now is not None and not now.position_lost:
                 # the last session asked where the device stopped before it parked it
-                x, y, pen, tol = state.stopped_at
+                x, y, pen, tol, *held = state.stopped_at
                 self._where_found = DeviceWhere(
-                    (x, y), None if pen < 0 else bool(pen), tolerance=tol,
+                    (x, y), None if pen < 0 else bool(pen), tolerance=tol, held=held == [1],
                     detail=f"stopped at {x:g},{y:g} (asked before the last session parked it)")
             sent = len(dl) if state.sent is None else state.sent
             self._job, self._head, self._job_state = dl, None, state  # a PositionUnknown below keeps the file current
@@ -559,7 +559,7 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             at = self._stopped_at
             self._job_state.stopped_at = None if at is None or at.position is None else [
                 float(at.position[0]), float(at.position[1]), -1 if at.pen_down is None else int(at.pen_down),
-                at.tolerance]
+                at.tolerance, int(at.held)]
             self._job_state.save(self.state_file)
 
     def _hold_while_paused(self) -> None:

@@ -24,9 +24,13 @@ status report during a plot (``?`` every ``TRACK_POLL_S`` while the driver waits
 ``ok``: a stroke counts as confirmed only once that report is on the path) is checked against the path sent
 (:class:`~pixelpen.devices.plotters.grbl_encode.PathTrack`): off the path, or with the pen up along a drawn leg
 (down along a travel), the driver feeds hold at once and raises LinkError.  The line that lost a byte is then
-found (:func:`~pixelpen.devices.plotters.grbl_encode.explain_position`: the first line sent whose one-byte
-variant puts the pen there) and the resume draws from its start; an ``error:N`` names its line itself (it never
-ran; GRBL stopped before it or took the shortcut past it).  Unexplained: the strokes in flight are redrawn whole.
+found (:func:`~pixelpen.devices.plotters.grbl_encode.explain_position`: the first line sent, from the leg where the
+last report saw the pen on the path, whose one-byte variant puts the pen there) and the resume draws from its
+start, or from where it left its leg when it ran along it within ``INK_TOLERANCE_MM`` (a digit dropped after the
+point: :meth:`~pixelpen.devices.plotters.grbl_encode.Garble.inked_to`); an ``error:N`` names its line itself (it
+never ran; GRBL stopped before it or took the shortcut past it).  The pen's state is read before the reset that
+ends the driver's hold, and a held GRBL may rest anywhere on the path (``DeviceWhere.held``).  Unexplained: the
+strokes in flight are redrawn whole.
 A wrong target draws its wrong leg before any report can show it (GRBL has no checksum): that stray is not undone.
 
 After a fault (``_where``, on the fresh link): GRBL is left to run what it received (Idle and silent for
@@ -55,6 +59,7 @@ from pixelpen.devices.plotters.grbl_encode import (
     REALTIME_STATUS,
     CharacterCounter,
     CoordinateFormat,
+    Garble,
     GrblStatus,
     PathTrack,
     PenMotion,
@@ -63,6 +68,7 @@ from pixelpen.devices.plotters.grbl_encode import (
     stroke_lines,
 )
 from pixelpen.devices.plotters.grbl_stream import (
+    INK_TOLERANCE_MM,
     STATUS_INTERVAL_S,
     STOP_WAIT_S,
     GrblStream,
@@ -176,8 +182,10 @@ class GrblPlotter(GrblStream):
         self._stale_seen = 0
         self.legs: list[SentLeg] = []
         """The motion lines sent and not yet confirmed, to explain a report off the path by a garbled line."""
-        self._garbled: SentLeg | None = None
-        """The line that ran garbled or was rejected: the resume draws again from its start."""
+        self._garbled: Garble | None = None
+        """The line that ran garbled or was rejected: the resume draws again from where it left its leg."""
+        self._on_path: tuple[float, float] | None = None
+        """Where the last status report of the plot found the pen on the path (the legs before it ran as sent)."""
         self._fault_hold = False
         self._unverified: tuple[int, int | None] | None = None
         """(strokes done, track point) of a confirming ok whose position check is still to come."""
@@ -259,6 +267,7 @@ class GrblPlotter(GrblStream):
             self._send_line(line, wait=True)
         self.track.start(self._work_units(self.query_status()))
         self.legs = []
+        self._on_path = None
         self._fault_hold = False
         self._unverified = None
         self._tracking = True
@@ -397,7 +406,8 @@ class GrblPlotter(GrblStream):
             self._stale = False
         if lost or status.state in ("Alarm", "Sleep"):
             return DeviceWhere(None, None, position_lost=True, detail=lost or f"GRBL is in {status.state} state")
-        if status.held:  # no line is parsed during a hold: end it as _connect would, position kept when at rest
+        pen, held = self._pen_down_of(status), status.held  # as it came to rest: the reset ending a hold lifts it
+        if held:  # no line is parsed during a hold: end it as _connect would, position kept when at rest
             self.soft_reset()
             self._settle()
             status = self.query_status()
@@ -411,14 +421,19 @@ class GrblPlotter(GrblStream):
         tolerance_mm = 0.0015 + (math.sqrt(2.0) / steps if math.isfinite(steps) and steps > 0 else 0.0)
         tolerance = max(0.5, tolerance_mm / self.profile.unit_mm)
         at = self._work_units(status)
-        if garbled is not None and not self._ran_before(garbled, at, tolerance):
-            start = garbled.vertex is None or garbled.vertex <= 1  # the stroke's first leg: the whole stroke again
-            point = garbled.end if garbled.vertex is None else garbled.start
-            return DeviceWhere(point, not start, tolerance=tolerance,
+        if garbled is not None and not self._ran_before(garbled.leg, at, tolerance):
+            leg = garbled.leg
+            inked = garbled.inked_to(at, INK_TOLERANCE_MM / self.profile.unit_mm)
+            if inked is not None:  # the changed line ran along its leg before it parted: that part is drawn
+                point, down = inked, True
+            else:
+                point = leg.end if leg.vertex is None else leg.start
+                down = not (leg.vertex is None or leg.vertex <= 1)  # the stroke's first leg: the whole stroke again
+            return DeviceWhere(point, down, tolerance=tolerance,
                                detail=f"GRBL {status.state} at {at} units, off the path after the garbled line "
-                               f"{garbled.line!r}: drawn as sent up to {point}")
-        return DeviceWhere(at, self._pen_down_of(status), tolerance=tolerance, reached=reached,
-                           detail=f"GRBL {status.state} at {at} units")
+                               f"{leg.line!r}: drawn as sent up to {point}")
+        return DeviceWhere(at, pen, tolerance=tolerance, reached=reached, held=held,
+                           detail=f"GRBL {status.state} at {at} units" + (" (held)" if held else ""))
 
     def _ran_before(self, garbled: SentLeg, at: tuple[float, float], tolerance: float) -> bool:
         """True when GRBL stopped at ``at`` on the path sent before the ``garbled`` line (it never reached it)."""

@@ -513,45 +513,99 @@ def garbled_variants(line: str) -> list[dict[str, list[float]]]:
     return seen
 
 
+@dataclass(frozen=True)
+class Garble:
+    """A motion line that did not run as sent: ``leg`` as sent, ``target`` where GRBL took the pen instead.
+
+    ``target`` None: the line drew nothing of its leg (GRBL rejected it, or it ran with the wrong pen).
+    """
+
+    leg: SentLeg
+    target: tuple[float, float] | None
+
+    def inked_to(self, stop: tuple[float, float], tolerance: float) -> tuple[float, float] | None:
+        """The farthest point of the leg as sent that the changed line drew, or None.
+
+        The pen ran straight from the leg's start towards ``target`` (and stopped at ``stop`` if that lies on the
+        way).  When all it ran stayed within ``tolerance`` of the leg (a digit dropped after the point), it drew
+        the leg that far.  None when it left the leg (that is a stray line, and the leg is drawn again from its
+        start), got no farther than ``tolerance``, or the line drew nothing of its leg.
+        """
+        if self.target is None or not self.leg.down:
+            return None
+        a, b, v = (np.asarray(p, dtype=np.float64) for p in (self.leg.start, self.leg.end, self.target))
+        length = float(np.hypot(*(b - a)))
+        if length <= tolerance:
+            return None
+        unit = (b - a) / length
+        wrong = v - a
+        span = float(wrong @ wrong)
+        ran = 1.0  # share of start -> target run: all of it, unless the stop lies on the way
+        if span > 0:
+            u = min(1.0, max(0.0, float((np.asarray(stop, dtype=np.float64) - a) @ wrong) / span))
+            if float(np.hypot(*(a + u * wrong - stop))) <= tolerance:
+                ran = u
+        off = abs(float(wrong[0] * unit[1] - wrong[1] * unit[0]))  # the target's distance from the leg's line
+        if off * ran > tolerance:
+            return None  # it left the leg: a stray line (its first stretch near the leg is drawn again)
+        along = min(length, max(0.0, ran * float(wrong @ unit)))
+        if along <= tolerance:
+            return None
+        point = a + along * unit
+        return (float(point[0]), float(point[1]))
+
+
 def explain_position(
     legs: list[SentLeg], position: tuple[float, float], pen_down: bool | None, tolerance: float,
-    unit_mm: float, is_down: Callable[[float], bool],
-) -> int | None:
+    unit_mm: float, is_down: Callable[[float], bool], since: tuple[float, float] | None = None,
+) -> Garble | None:
     """The first of ``legs`` whose line, with one byte dropped, puts the pen at ``position`` (pen ``pen_down``).
 
     A changed target moves the pen off the path until the next line's target (the explanation of a position off
     the path); a changed S value lifts or lowers the pen along this leg and the legs after it that set none (tried
-    first for a position on the path with the wrong pen).  None when no single dropped byte explains it.
+    first for a position on the path with the wrong pen).  ``since``: where an earlier report found the pen on the
+    path; the legs before the first one through it ran as sent.  Of several explanations the first is taken: a
+    resume from too early a leg draws a leg twice, one from too late a leg would lose one.  None when no single
+    dropped byte explains it.
     """
     q = np.asarray(position, dtype=np.float64)
 
-    def on(a: tuple[float, float], b: tuple[float, float]) -> bool:
+    def on(a: tuple[float, float], b: tuple[float, float], p: np.ndarray = q) -> bool:
         pa, pb = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
         d = pb - pa
         dd = float(d @ d)
-        t = 0.0 if dd == 0 else min(1.0, max(0.0, float((q - pa) @ d) / dd))
-        return float(np.hypot(*(pa + t * d - q))) <= tolerance
+        t = 0.0 if dd == 0 else min(1.0, max(0.0, float((p - pa) @ d) / dd))
+        return float(np.hypot(*(pa + t * d - p))) <= tolerance
 
-    def moved() -> int | None:
+    if since is not None:
+        seen = np.asarray(since, dtype=np.float64)
+        legs = legs[next((i for i, leg in enumerate(legs) if on(leg.start, leg.end, seen)), 0):]
+
+    def targets(leg: SentLeg) -> list[tuple[dict[str, list[float]], tuple[float, float]]]:
+        out = []
+        for words in garbled_variants(leg.line):
+            x, y = (words[a][0] / unit_mm if a in words else e for a, e in zip("XY", leg.end, strict=True))
+            out.append((words, (x, y)))
+        return out
+
+    def moved() -> Garble | None:
         for i, leg in enumerate(legs):
-            for words in garbled_variants(leg.line):
-                x, y = (words[a][0] / unit_mm if a in words else e for a, e in zip("XY", leg.end, strict=True))
+            for _, (x, y) in targets(leg):
                 if math.hypot(x - leg.end[0], y - leg.end[1]) > tolerance and (
                         on(leg.start, (x, y)) or (i + 1 < len(legs) and on((x, y), legs[i + 1].end))):
-                    return i
+                    return Garble(leg, (x, y))
         return None
 
-    def lifted() -> int | None:
+    def lifted() -> Garble | None:
         for i, leg in enumerate(legs):
-            for words in garbled_variants(leg.line):
-                x, y = (words[a][0] / unit_mm if a in words else e for a, e in zip("XY", leg.end, strict=True))
+            for words, (x, y) in targets(leg):
                 down = False if 5 in words.get("M", []) else is_down(words["S"][0]) if "S" in words else leg.down
                 if (x, y) == leg.end and down != leg.down and pen_down == down:
                     for later in legs[i:]:
                         if later is not leg and "S" in later.line:
                             break
                         if on(later.start, later.end) and later.down != down:
-                            return i
+                            return Garble(leg, None)
         return None
 
     if any(on(leg.start, leg.end) for leg in legs):  # on the path with the wrong pen: an S value, else a target

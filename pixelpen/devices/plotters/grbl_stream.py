@@ -23,6 +23,7 @@ from pixelpen.devices.plotters.grbl_encode import (
     REALTIME_RESUME,
     REALTIME_STATUS,
     CharacterCounter,
+    Garble,
     GrblStatus,
     PathTrack,
     PenMotion,
@@ -50,6 +51,9 @@ SETTLE_LIMIT_S = 120.0
 TRACK_TOLERANCE_MM = 0.03
 """How far a status report's position may lie off the path sent before the driver calls it a corrupted line
 (GRBL steps along a straight leg within one step of it: 0.0125 mm at 80 steps/mm)."""
+INK_TOLERANCE_MM = 0.05
+"""How near its leg a garbled line must have run to have drawn that leg: a pen's line is 0.1 mm wide or more, so
+ink within 0.05 mm of the leg is the leg itself, and the resume does not draw it again."""
 GARBLE_ERRORS = frozenset({1, 2, 3, 11, *range(20, 39)})
 """``error:N`` codes a line pixelpen wrote can only earn by being garbled on the wire (syntax, words): said so."""
 POSITION_LOSING_ALARMS = frozenset({1, 3, 6, 7, 8, 9, 10})
@@ -89,7 +93,8 @@ class GrblStream(PlotterDisplay):
     _stale_seen: int
     legs: list[SentLeg]
     _unverified: tuple[int, int | None] | None
-    _garbled: SentLeg | None
+    _garbled: Garble | None
+    _on_path: tuple[float, float] | None
     _fault_hold: bool
 
     def _wait_acks(self) -> None:
@@ -226,7 +231,7 @@ class GrblStream(PlotterDisplay):
             leg = next((g for g in self.legs if isinstance(tag, Tag) and g.line == sent
                         and (g.stroke, g.vertex) == (tag.stroke, tag.vertex)), None)
             if leg is not None:
-                self._garbled = leg  # it never ran: the resume draws from its start on
+                self._garbled = Garble(leg, None)  # it never ran: the resume draws from its start on
             elif isinstance(tag, Tag):
                 self._mark_damaged(range(tag.stroke, tag.stroke + 1))  # redrawn whole: part of it never ran
             raise ProtocolError(
@@ -290,9 +295,10 @@ class GrblStream(PlotterDisplay):
             why = self.track.check(where, pen, tolerance)
             if why is not None:
                 self._stop_motion()
-                first = explain_position(self.legs, where, pen, tolerance, self.profile.unit_mm, self._s_is_down)
-                if first is not None:
-                    self._garbled = self.legs[first]  # that line ran garbled: drawn right up to its start
+                garble = explain_position(self.legs, where, pen, tolerance, self.profile.unit_mm, self._s_is_down,
+                                          since=self._on_path)
+                if garble is not None:
+                    self._garbled = garble  # that line ran garbled: drawn right up to its start, and along it
                 else:
                     self._mark_damaged(range(self.confirmed, max(self._sent_end, self.confirmed + 1)))
                 self._unverified = None
@@ -300,6 +306,7 @@ class GrblStream(PlotterDisplay):
                     f"grbl: position check failed: {why} (GRBL reports {status.state} at {self._work_units(status)} "
                     "units): a line was changed on the wire (a dropped byte), so the plot stops here"
                 )
+            self._on_path = where
             if self._unverified is not None:
                 done, track = self._unverified
                 self._unverified = None

@@ -30,6 +30,10 @@ class DeviceWhere:
     """Device units within which the position counts as on a vertex or a segment."""
     detail: str = ""
     """What the device said, for messages."""
+    held: bool = False
+    """A hold stopped the device mid-instruction: it may rest anywhere on the path, also where the family's
+    instructions never end (the pen down on a stroke's first point, or lifted at a stroke's last, where lowering and
+    drawing, or lifting and travelling, are one instruction)."""
     reached: tuple[int, int] | None = None
     """(stroke, k): acknowledgements prove the device ran at least to point k of the points given to ``_send_stroke``
     for that stroke (k = 0: the pen-up travel to points[0]); None: no such lower bound."""
@@ -65,8 +69,9 @@ def locate(
     to the next stroke are one instruction); ``down_at_start``: it may rest with the pen down at a stroke's
     first point before drawing (False where lowering and drawing are one instruction).  A pen reported up
     rests only between strokes (the base lifts it nowhere else); a device that lifts by itself inside a
-    stroke must report ``pen_down=None``.  ``where.reached`` (stroke, k) drops every place before point k of that
-    stroke (in the window's points).
+    stroke must report ``pen_down=None``.  A device stopped by a hold (``where.held``) may rest anywhere on the
+    path: ``lifts`` and ``down_at_start`` are then taken as true.  ``where.reached`` (stroke, k) drops every place
+    before point k of that stroke (in the window's points).
     """
     if where.position is None:
         return []
@@ -74,6 +79,8 @@ def locate(
     tol = float(where.tolerance)
     found: list[ResumePoint] = []
     up_ok, down_ok = where.pen_down is not True, where.pen_down is not False
+    if where.held:  # stopped mid-motion: after a lift that shares its line with the travel, or right after a drop
+        lifts, down_at_start = (lambda stroke: True), True
     prev, prev_index = before, None
     for index, pts in window:
         p = np.asarray(pts, float)

@@ -52,7 +52,8 @@ class PlotState:
     lifts: list[int] | None = None
     """Unconfirmed strokes after which the pen was lifted in place (None: unknown)."""
     stopped_at: list[float] | None = None
-    """[x, y, pen down 1/0/-1 unknown, tolerance]: where the device stopped, asked before the safe stop parked it."""
+    """[x, y, pen down 1/0/-1 unknown, tolerance(, held 1/0)]: where the device stopped, asked before the safe stop
+    parked it (held: a hold stopped it mid-instruction, see DeviceWhere.held)."""
     start: list[float] | None = None
     """[stroke, x, y]: the pen position before that stroke's travel, the first stroke of the run (None: unknown)."""
     version: int = STATE_VERSION
@@ -120,12 +121,14 @@ class PlotState:
             raise ParseError("plot state field 'lifts' is not a list of stroke numbers", source=str(path),
                              token=state.lifts)
         if state.stopped_at is not None and not (
-            isinstance(state.stopped_at, list) and len(state.stopped_at) == 4
+            isinstance(state.stopped_at, list) and len(state.stopped_at) in (4, 5)
             and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
                     for v in state.stopped_at)
             and state.stopped_at[2] in (-1, 0, 1) and state.stopped_at[3] >= 0
+            and state.stopped_at[4:] in ([], [0], [1])
         ):
-            raise ParseError("plot state field 'stopped_at' is not [x, y, pen -1/0/1, tolerance]", source=str(path),
+            raise ParseError("plot state field 'stopped_at' is not [x, y, pen -1/0/1, tolerance(, held 0/1)]",
+                             source=str(path),
                              token=state.stopped_at)
         if state.start is not None and not (
             isinstance(state.start, list) and len(state.start) == 3

@@ -148,6 +148,15 @@ def test_pieces_still_missing_keep_a_job_unfinished(tmp_path):
 # -- the state file ---------------------------------------------------------------------------------------
 
 
+def test_where_a_held_device_stopped_is_kept_with_its_hold(tmp_path):
+    """[x, y, pen, tolerance, held]; a file of the older 4-field form still loads (not held)."""
+    path = tmp_path / "s.json"
+    PlotState("x", "f", 3, 1, stopped_at=[10.0, 20.0, 0, 0.5, 1]).save(path)
+    assert PlotState.load(path).stopped_at == [10.0, 20.0, 0, 0.5, 1]
+    PlotState("x", "f", 3, 1, stopped_at=[10.0, 20.0, 0, 0.5]).save(path)
+    assert PlotState.load(path).stopped_at == [10.0, 20.0, 0, 0.5]
+
+
 def test_a_version_1_state_file_still_loads_with_every_unconfirmed_stroke_in_doubt(tmp_path):
     path = tmp_path / "s.json"
     path.write_text(json.dumps({"url": "x", "fingerprint": "f", "strokes": 5, "confirmed": 2, "version": 1}))
@@ -162,7 +171,8 @@ def test_a_version_1_state_file_still_loads_with_every_unconfirmed_stroke_in_dou
      ({"start": [9, 0, 0]}, "'start' is not"), ({"start": [1.5, 0, 0]}, "'start' is not"),
      ({"start": [0, 1]}, "'start' is not"), ({"missing": [[9, 0, 0]]}, "'missing' is not"),
      ({"missing": [[1, 0]]}, "'missing' is not"), ({"reached": [1]}, "'reached' is not"),
-     ({"written": [1, -1]}, "'written' is not"), ({"written": [7, 0]}, "'written' is not")],
+     ({"written": [1, -1]}, "'written' is not"), ({"written": [7, 0]}, "'written' is not"),
+     ({"stopped_at": [1, 2, 1, 0.5, 2]}, "'stopped_at' is not"), ({"stopped_at": [1, 2, 1]}, "'stopped_at' is not")],
 )
 def test_bad_state_fields_are_named(tmp_path, fields, message):
     path = tmp_path / "s.json"
