@@ -24,10 +24,10 @@ status report during a plot (``?`` every ``TRACK_POLL_S`` while the driver waits
 ``ok``: a stroke counts as confirmed only once that report is on the path) is checked against the path sent
 (:class:`~pixelpen.devices.plotters.grbl_encode.PathTrack`): off the path, or with the pen up along a drawn leg
 (down along a travel), the driver feeds hold at once and raises LinkError.  The line that lost a byte is then
-found (:func:`~pixelpen.devices.plotters.grbl_encode.explain_position`: the first line sent, from the leg where the
+found (:func:`~pixelpen.devices.plotters.grbl_garble.explain_position`: the first line sent, from the leg where the
 last report saw the pen on the path, whose one-byte variant puts the pen there) and the resume draws from its
 start, or from where it left its leg when it ran along it within ``INK_TOLERANCE_MM`` (a digit dropped after the
-point: :meth:`~pixelpen.devices.plotters.grbl_encode.Garble.inked_to`); an ``error:N`` names its line itself (it
+point: :meth:`~pixelpen.devices.plotters.grbl_garble.Garble.inked_to`); an ``error:N`` names its line itself (it
 never ran; GRBL stopped before it or took the shortcut past it).  The pen's state is read before the reset that
 ends the driver's hold, and a held GRBL may rest anywhere on the path (``DeviceWhere.held``).  Unexplained: the
 strokes in flight are redrawn whole.
@@ -59,14 +59,13 @@ from pixelpen.devices.plotters.grbl_encode import (
     REALTIME_STATUS,
     CharacterCounter,
     CoordinateFormat,
-    Garble,
     GrblStatus,
     PathTrack,
     PenMotion,
-    SentLeg,
     number,
     stroke_lines,
 )
+from pixelpen.devices.plotters.grbl_garble import Garble, SentLeg
 from pixelpen.devices.plotters.grbl_stream import (
     INK_TOLERANCE_MM,
     STATUS_INTERVAL_S,

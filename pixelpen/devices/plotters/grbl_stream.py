@@ -23,16 +23,14 @@ from pixelpen.devices.plotters.grbl_encode import (
     REALTIME_RESUME,
     REALTIME_STATUS,
     CharacterCounter,
-    Garble,
     GrblStatus,
     PathTrack,
     PenMotion,
-    SentLeg,
-    explain_position,
     parse_code,
     parse_status,
     parse_welcome,
 )
+from pixelpen.devices.plotters.grbl_garble import Garble, SentLeg, explain_position
 from pixelpen.drivers.stream import Link
 from pixelpen.errors import Disconnected, LinkError, LinkTimeout, ParseError, ProtocolError
 
