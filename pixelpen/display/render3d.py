@@ -4,7 +4,7 @@ Both paths share the front end: every item's world mesh (surfaces tessellated to
 scale they are seen at), back faces culled unless the material is two-sided (a face is a front face when it is
 counter-clockwise seen from the viewer: :func:`front_faces`, in clip space),
 world -> clip space (:meth:`Camera.world_to_clip` with the display's window as the view-plane window), the
-front triangles of all items clipped together (``clip_triangles_homogeneous``), divided, and NDC x, y taken to
+front triangles of every item clipped (``clip_faces_homogeneous``), divided, and NDC x, y taken to
 device units by ``display.pipeline.matrix @ ViewVolume.ndc_to_window``.
 
 * Raster (:func:`render_raster`): the frame is drawn in horizontal bands of about :data:`BAND_PIXELS`
@@ -12,9 +12,11 @@ device units by ``display.pipeline.matrix @ ViewVolume.ndc_to_window``.
   rows and the triangles that reach them (depth NDC z, perspective-correct weights from 1/w), fragments
   re-expressed against their source triangles, shaded per item by a :class:`~pixelpen.raster.shading.Shader`
   prepared once per draw (world coordinates) and converted to the canvas's values
-  (:func:`~pixelpen.raster.shading.native_pixels`); the calling thread stores them band by band. A band's
-  buffers stay in the CPU's caches, and the result is the whole-frame z-buffer's, pixel for pixel. The
-  z-buffers live for one draw: a scene drawn over a picture covers it where it has pixels.
+  (:func:`~pixelpen.raster.shading.native_pixels_unchecked`: fragments and a shader's output need no checks);
+  the calling thread stores them band by band. A band's buffers stay in the CPU's caches, and the result is the
+  whole-frame z-buffer's, pixel for pixel. The band z-buffers are kept from draw to draw (:class:`_BufferPool`,
+  cleared before each band: no fresh memory pages per draw); a scene drawn over a picture covers it where it
+  has pixels.
 * Vector (:func:`scene_strokes`): each item's feature edges of its front faces (``Mesh.feature_edges``),
   clipped (``clip_segments_homogeneous``), divided, and split by :func:`pixelpen.vector.hiddenline.hidden_lines`
   against all items' clipped front triangles; the visible pieces, joined, are stroke shapes in the item's style.
@@ -38,15 +40,10 @@ import numpy as np
 from pixelpen import geometry as geo
 from pixelpen.display.flatten import DeviceShape
 from pixelpen.display.scene3d import Camera, Scene, SceneItem
-from pixelpen.geometry.clip3d import (
-    clip_points_homogeneous,
-    clip_segments_homogeneous,
-    clip_triangles_homogeneous,
-    perspective_divide,
-)
+from pixelpen.geometry.clip3d import clip_faces_homogeneous, clip_segments_homogeneous, perspective_divide_unchecked
 from pixelpen.geometry.mesh import Mesh
 from pixelpen.raster.canvas import Canvas
-from pixelpen.raster.shading import NativePixels, Shader, native_pixels
+from pixelpen.raster.shading import NativePixels, Shader, native_pixels_unchecked
 from pixelpen.raster.zbuffer import ZBuffer
 from pixelpen.vector.hiddenline import HiddenLines, hidden_lines
 
@@ -55,6 +52,10 @@ FIT_MARGIN = 0.05
 
 EDGE_ON = 1e-9
 """A face whose clip-space determinant is below this fraction of its bound is seen edge-on (a back face)."""
+
+STEP_FACES = 1 << 14
+"""Faces per vectorised step of :func:`front_faces`: temporaries this small are reused from the heap, where
+larger ones come as fresh memory pages each time (a page fault each, costly on a busy machine)."""
 
 BAND_PIXELS = 1 << 17
 """Pixels per band of the raster path (width x rows): a band's buffers stay in the CPU's caches."""
@@ -86,6 +87,8 @@ class _Item:
     item: SceneItem
     mesh: Mesh
     front: np.ndarray
+    faces: np.ndarray
+    """(F, 3) the front faces (mesh.faces[front])."""
     clip: np.ndarray
 
 
@@ -156,19 +159,22 @@ def front_faces(clip: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
     The determinant of the face's (x, y, w) rows is, up to a positive factor, the side of the face's plane the
     centre of projection lies on (Olano & Greer's homogeneous test): one test for parallel and perspective
-    views, exact also for vertices behind the viewer, and no face normals needed."""
-    corners = np.ascontiguousarray(faces.T)
+    views, exact also for vertices behind the viewer, and no face normals needed. Computed STEP_FACES faces at
+    a time."""
     columns = np.ascontiguousarray(clip[:, (0, 1, 3)].T)
-    (x0, x1, x2), (y0, y1, y2), (w0, w1, w2) = ([np.take(c, k) for k in corners] for c in columns)
-    det = x0 * (y1 * w2 - w1 * y2) - y0 * (x1 * w2 - w1 * x2) + w0 * (x1 * y2 - y1 * x2)
     # a face seen edge-on has det = 0 up to rounding: it is a back face (as a line it would hide edges behind);
     # |det| is at most the product of the rows' lengths, each at most |x| + |y| + |w|
     size = np.abs(columns).sum(axis=0)
-    bound = np.take(size, corners[0])
-    bound *= np.take(size, corners[1])
-    bound *= np.take(size, corners[2])
-    bound *= EDGE_ON
-    front: np.ndarray = det > bound
+    front = np.empty(len(faces), dtype=bool)
+    for lo in range(0, len(faces), STEP_FACES):
+        corners = np.ascontiguousarray(faces[lo:lo + STEP_FACES].T)
+        (x0, x1, x2), (y0, y1, y2), (w0, w1, w2) = ([np.take(c, k) for k in corners] for c in columns)
+        det = x0 * (y1 * w2 - w1 * y2) - y0 * (x1 * w2 - w1 * x2) + w0 * (x1 * y2 - y1 * x2)
+        bound = np.take(size, corners[0])
+        bound *= np.take(size, corners[1])
+        bound *= np.take(size, corners[2])
+        bound *= EDGE_ON
+        np.greater(det, bound, out=front[lo:lo + STEP_FACES])
     return front
 
 
@@ -178,7 +184,7 @@ def _prepare(scene: Scene, window: Sequence[float], meshes: list[Mesh]) -> list[
     for item, mesh in zip(scene.items, meshes, strict=True):
         clip = scene.camera.clip_coordinates(mesh.vertices, window)
         front = np.ones(len(mesh.faces), dtype=bool) if item.material.two_sided else front_faces(clip, mesh.faces)
-        prepared.append(_Item(item, mesh, front, clip))
+        prepared.append(_Item(item, mesh, front, np.compress(front, mesh.faces, axis=0), clip))
     return prepared
 
 
@@ -197,36 +203,42 @@ def _to_device(ndc: np.ndarray, matrix: np.ndarray) -> np.ndarray:
     return out
 
 
+def _joined(parts: list[np.ndarray], shape: tuple[int, ...]) -> np.ndarray:
+    """The parts concatenated (a single part as it is, no copy; none: an empty (0, *shape) array)."""
+    if len(parts) == 1:
+        return parts[0]
+    return np.concatenate(parts) if parts else np.zeros((0, *shape))
+
+
 def _triangles(items: list[_Item], matrix: np.ndarray) -> _Triangles:
-    """All items' front triangles clipped together, in device coordinates: triangles whose three vertices are
-    inside the view volume pass whole (projected once per vertex), the rest go through the clipper."""
-    counts = [int(it.front.sum()) for it in items]
+    """All items' front triangles clipped (``clip_faces_homogeneous``), in device coordinates: triangles whose
+    three vertices are inside the view volume pass whole (projected once per vertex), the rest are clipped."""
+    counts = [len(it.faces) for it in items]
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    device, inv_w, whole, cut = [], [], [], []
+    device, inv_w, source, weights = [], [], [], []
+    passed = 0
     for it, offset in zip(items, offsets[:-1].tolist(), strict=True):
-        faces = it.mesh.faces[it.front]
-        inside = clip_points_homogeneous(it.clip)
-        vertices = np.zeros((len(inside), 3))
-        vertices[inside] = _to_device(perspective_divide(it.clip[inside]), matrix)
-        passed = inside[faces].all(axis=1)
-        kept = faces[passed]
-        device.append(vertices[kept])
-        inv_w.append(1.0 / np.where(inside, it.clip[:, 3], 1.0)[kept])
-        whole.append(offset + np.flatnonzero(passed))
-        cut.append((offset + np.flatnonzero(~passed), it.clip[faces[~passed]]))
-    source = np.concatenate(whole) if whole else np.zeros(0, np.int64)
-    dev = np.concatenate(device) if device else np.zeros((0, 3, 3))
-    q = np.concatenate(inv_w) if inv_w else np.zeros((0, 3))
-    straddle = np.concatenate([index for index, _ in cut]) if cut else np.zeros(0, np.int64)
-    if not straddle.size:
-        return _Triangles(dev, q, source, np.broadcast_to(np.eye(3), (len(source), 3, 3)), offsets, False)
-    out, local, weights = clip_triangles_homogeneous(np.concatenate([tris for _, tris in cut]))
-    source = np.concatenate([source, straddle[local]])
-    order = np.argsort(source, kind="stable")
-    weights = np.concatenate([np.broadcast_to(np.eye(3), (len(dev), 3, 3)), weights])[order]
-    dev = np.concatenate([dev, _to_device(perspective_divide(out), matrix)])[order]
-    q = np.concatenate([q, 1.0 / out[..., 3]])[order]
-    return _Triangles(dev, q, source[order], weights, offsets, True)
+        faces = it.faces
+        split = clip_faces_homogeneous(it.clip, faces)
+        if split.inside.all():  # the common case: no masks
+            vertices = _to_device(perspective_divide_unchecked(it.clip), matrix)
+            q = 1.0 / it.clip[:, 3]
+        else:
+            vertices = np.zeros((len(split.inside), 3))
+            vertices[split.inside] = _to_device(perspective_divide_unchecked(it.clip[split.inside]), matrix)
+            q = 1.0 / np.where(split.inside, it.clip[:, 3], 1.0)
+        kept = faces if split.whole.all() else np.compress(split.whole, faces, axis=0)
+        passed += len(kept)
+        device += [np.take(vertices, kept, axis=0), _to_device(perspective_divide_unchecked(split.out), matrix)]
+        inv_w += [np.take(q, kept), 1.0 / split.out[..., 3]]
+        source += [offset + np.flatnonzero(split.whole), offset + split.source]
+        weights += [np.broadcast_to(np.eye(3), (len(kept), 3, 3)), split.weights]
+    if passed == offsets[-1]:  # every triangle passed whole: source is 0..K-1, the weights the identity
+        return _Triangles(_joined(device[::2], (3, 3)), _joined(inv_w[::2], (3,)), np.arange(passed),
+                          np.broadcast_to(np.eye(3), (passed, 3, 3)), offsets, False)
+    order = np.argsort(np.concatenate(source), kind="stable")
+    return _Triangles(np.concatenate(device)[order], np.concatenate(inv_w)[order], np.concatenate(source)[order],
+                      np.concatenate(weights)[order], offsets, True)
 
 
 def _bands(y: np.ndarray, rows: int, height: int) -> list[tuple[int, np.ndarray]]:
@@ -241,6 +253,35 @@ def _bands(y: np.ndarray, rows: int, height: int) -> list[tuple[int, np.ndarray]
         if index.size:
             bands.append((top, index))
     return bands
+
+
+class _BufferPool:
+    """Band z-buffers kept from draw to draw, with their depth and fragment memory (no fresh pages per draw):
+    the MAX_WORKERS + 1 released last (a draw's full bands and its shorter last one), found by size. Each holds
+    at most about 9 float64 a band pixel (depth, fragments, ties), some 10 MB at the default BAND_PIXELS."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._free: list[ZBuffer] = []
+
+    def acquire(self, width: int, height: int, top: int) -> ZBuffer:
+        """A cleared width x height z-buffer over the frame rows from ``top`` on, kept or new."""
+        with self._lock:
+            kept = [i for i, z in enumerate(self._free) if (z.width, z.height) == (width, height)]
+            zbuffer = self._free.pop(kept[-1]) if kept else None
+        if zbuffer is None:
+            return ZBuffer(width, height, top=top)
+        zbuffer.clear(top)
+        return zbuffer
+
+    def release(self, zbuffer: ZBuffer) -> None:
+        """Give a z-buffer back to be kept (the oldest kept one goes when there are too many)."""
+        with self._lock:
+            self._free.append(zbuffer)
+            del self._free[:-(MAX_WORKERS + 1)]
+
+
+_BUFFERS = _BufferPool()
 
 
 def _workers() -> int:
@@ -265,21 +306,22 @@ def render_raster(scene: Scene, pipeline: geo.ViewingPipeline, canvas: Canvas, t
             continue
         smooth = it.item.shading != "flat"
         shaders.append(Shader(
-            it.mesh.vertices, it.mesh.faces[it.front], mode=it.item.shading, material=it.item.material,
+            it.mesh.vertices, it.faces, mode=it.item.shading, material=it.item.material,
             lights=lights, viewer=viewer, vertex_normals=it.mesh.vertex_normals() if smooth else None,
             face_colours=None if it.item.face_colours is None else it.item.face_colours[it.front],
-            polygons=it.mesh.polygon[it.front]))
+            polygons=it.mesh.polygon[it.front] if it.item.shading == "flat" else None))
     rows = max(1, min(canvas.height, BAND_PIXELS // canvas.width))
-    local = threading.local()  # z-buffers per thread, moved from band to band (their work arrays are kept)
 
     def band(top: int, index: np.ndarray) -> list[NativePixels]:
         """One band's pixels per item, shaded and converted to the canvas's values."""
-        height = min(rows, canvas.height - top)
-        buffers: dict[int, ZBuffer] = local.__dict__.setdefault("buffers", {})
-        if height not in buffers:
-            buffers[height] = ZBuffer(canvas.width, height, top=top)
-        zbuffer = buffers[height]
-        zbuffer.clear(top)
+        zbuffer = _BUFFERS.acquire(canvas.width, min(rows, canvas.height - top), top)
+        try:
+            return shaded(zbuffer, index)
+        finally:
+            _BUFFERS.release(zbuffer)
+
+    def shaded(zbuffer: ZBuffer, index: np.ndarray) -> list[NativePixels]:
+        """The band's pixels drawn with ``zbuffer`` (its fragments live in the buffer's memory until released)."""
         fragments = zbuffer.rasterize(xy[index], depth[index], tris.inv_w[index], reuse=True)
         if tris.clipped:  # the band's triangles only: compose checks what it is given
             fragments = fragments.compose(tris.source[index], tris.weights[index])
@@ -294,7 +336,7 @@ def render_raster(scene: Scene, pipeline: geo.ViewingPipeline, canvas: Canvas, t
                 mine = fragments.subset((fragments.face >= lo) & (fragments.face < hi))
                 mine.face -= lo
             if len(mine):
-                out.append(native_pixels(canvas, mine.xs, mine.ys, shader(mine)))
+                out.append(native_pixels_unchecked(canvas, mine.xs, mine.ys, shader(mine)))
         return out
 
     drawn = 0
@@ -325,7 +367,7 @@ def scene_strokes(scene: Scene, pipeline: geo.ViewingPipeline, tolerance: float)
     if not segments:
         return [], RenderStats(sum(len(it.front) for it in items), int(tris.offsets[-1]), len(tris.source))
     clipped, kept = clip_segments_homogeneous(np.concatenate(segments).reshape(-1, 2, 4))
-    edges = _to_device(perspective_divide(clipped), matrix)
+    edges = _to_device(perspective_divide_unchecked(clipped), matrix)
     visible = hidden_lines(tris.device, edges, np.concatenate(edge_faces)[kept])
     owner = np.concatenate(owners)[kept][visible.edge]
     shapes = []

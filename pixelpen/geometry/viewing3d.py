@@ -27,6 +27,8 @@ import numpy as np
 from pixelpen.errors import InvalidArgument
 from pixelpen.geometry.clip3d import (
     PLANES,
+    FaceClip,
+    clip_faces_homogeneous,
     clip_points_homogeneous,
     clip_polygon_homogeneous,
     clip_segments_homogeneous,
@@ -50,7 +52,9 @@ __all__ = [
     "CAVALIER",
     "PLANES",
     "STANDARD_VIEWS",
+    "FaceClip",
     "ViewVolume",
+    "clip_faces_homogeneous",
     "clip_points_homogeneous",
     "clip_polygon_homogeneous",
     "clip_segments_homogeneous",

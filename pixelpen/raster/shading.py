@@ -42,6 +42,8 @@ from pixelpen.raster.illumination import Light, Material, Viewer, as_colours, co
 from pixelpen.raster.palette import Palette
 from pixelpen.raster.zbuffer import Fragments, Interpolant
 
+Box = tuple[int, int, int, int]
+
 SHADING_MODES: tuple[str, ...] = ("flat", "gouraud", "phong")
 """The modes :func:`shade` offers."""
 
@@ -149,12 +151,12 @@ class Shader:
         if face.size and (face.min() < 0 or face.max() >= self.faces):
             raise InvalidArgument(f"fragments name faces outside 0..{self.faces - 1}")
         if self.mode == "gouraud":  # the colours are in the interpolated values
-            return self._values[0].at(fragments)
+            return self._values[0].at_valid(fragments)
         colours = self._colours if self._colours.ndim == 1 else self._colours[face]
         if self.mode == "flat":
             scale, specular = self._flat
             return combine(colours, scale[face], specular[face])
-        positions, normals = (values.at(fragments) for values in self._values)
+        positions, normals = (values.at_valid(fragments) for values in self._values)
         return combine(colours, *illumination_terms(positions, normals, *self._terms))
 
 
@@ -166,9 +168,10 @@ def shade(fragments: Fragments, vertices: ArrayLike, faces: ArrayLike, **options
     return Shader(vertices, faces, **options)(fragments)
 
 
-def _pixels(canvas: Canvas, xs: ArrayLike, ys: ArrayLike, rows: int) -> tuple[np.ndarray, np.ndarray]:
-    """Validate integer pixel coordinates (rows,) inside the canvas; return them as int64."""
-    out = []
+def _pixels(canvas: Canvas, xs: ArrayLike, ys: ArrayLike, rows: int) -> tuple[np.ndarray, np.ndarray, Box | None]:
+    """Validate integer pixel coordinates (rows,) inside the canvas; return them as int64, with their bounding box
+    (x0, y0, x1, y1) half-open (None when there are none)."""
+    out, bounds = [], []
     for name, values, size in (("xs", xs, canvas.width), ("ys", ys, canvas.height)):
         arr = np.asarray(values)
         if arr.ndim != 1 or (arr.size and arr.dtype.kind not in "iu"):
@@ -176,11 +179,16 @@ def _pixels(canvas: Canvas, xs: ArrayLike, ys: ArrayLike, rows: int) -> tuple[np
         if arr.shape[0] != rows:
             raise InvalidArgument(f"{name} has {arr.shape[0]} entries for {rows} colours")
         arr = arr.astype(np.int64, copy=False)
-        if arr.size and (arr.min() < 0 or arr.max() >= size):
-            i = int(np.flatnonzero((arr < 0) | (arr >= size))[0])
-            raise InvalidArgument(f"{name}[{i}] = {int(arr[i])} lies outside the {canvas.width}x{canvas.height} canvas")
+        if arr.size:
+            low, high = int(arr.min()), int(arr.max())
+            if low < 0 or high >= size:
+                i = int(np.flatnonzero((arr < 0) | (arr >= size))[0])
+                raise InvalidArgument(f"{name}[{i}] = {int(arr[i])} lies outside the {canvas.width}x{canvas.height} "
+                                      "canvas")
+            bounds.append((low, high))
         out.append(arr)
-    return out[0], out[1]
+    box = (bounds[0][0], bounds[1][0], bounds[0][1] + 1, bounds[1][1] + 1) if bounds else None
+    return out[0], out[1], box
 
 
 def _intensities(rgb: ArrayLike) -> np.ndarray:
@@ -263,7 +271,7 @@ class NativePixels:
     """(F,) flat pixel index y·width + x."""
     values: np.ndarray
     """(F,) or (F, C) native values."""
-    box: tuple[int, int, int, int] | None
+    box: Box | None
     """Bounding box (x0, y0, x1, y1) of the pixels, half-open; None when there are none."""
 
     def store(self, canvas: Canvas) -> None:
@@ -279,8 +287,20 @@ def native_pixels(canvas: Canvas, xs: ArrayLike, ys: ArrayLike, rgb: ArrayLike) 
     if not isinstance(canvas, Canvas):
         raise InvalidArgumentType(f"canvas must be a Canvas, got {type(canvas).__name__}")
     colours = _intensities(rgb)
-    px, py = _pixels(canvas, xs, ys, colours.shape[0])
-    if not px.size:
+    px, py, box = _pixels(canvas, xs, ys, colours.shape[0])
+    return _convert(canvas, px, py, colours, box)
+
+
+def native_pixels_unchecked(canvas: Canvas, xs: np.ndarray, ys: np.ndarray, rgb: np.ndarray) -> NativePixels:
+    """:func:`native_pixels` of input known good: int64 pixels inside the canvas (z-buffer fragments) and finite
+    float64 (F, 3) intensities (a :class:`Shader`'s), without the validation passes over them."""
+    box = (int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1) if xs.size else None
+    return _convert(canvas, xs, ys, rgb, box)
+
+
+def _convert(canvas: Canvas, px: np.ndarray, py: np.ndarray, colours: np.ndarray, box: Box | None) -> NativePixels:
+    """Validated pixels, intensities and their box as native values."""
+    if box is None:
         return NativePixels(px, np.zeros(0, canvas.array.dtype), None)
     if canvas.mode == "P":
         values = _indexed(canvas, px, py, colours * 255.0)
@@ -288,7 +308,6 @@ def native_pixels(canvas: Canvas, xs: ArrayLike, ys: ArrayLike, rgb: ArrayLike) 
         values = _mono(px, py, _rgb8(colours, 255.0))
     else:
         values = _native(canvas.mode, _rgb8(colours, 255.0))
-    box = (int(px.min()), int(py.min()), int(px.max()) + 1, int(py.max()) + 1)
     return NativePixels(py * canvas.width + px, values, box)
 
 

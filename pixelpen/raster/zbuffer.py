@@ -165,11 +165,16 @@ class Interpolant:
         if len(face) and not 0 <= int(face.min()) <= int(face.max()) < self.triangles:
             raise InvalidArgument(f"values has {self.triangles} triangles but fragments show triangles "
                                   f"{int(face.min())}..{int(face.max())}")
+        return self.at_valid(fragments)
+
+    def at_valid(self, fragments: Fragments) -> np.ndarray:
+        """:meth:`at` for fragments whose faces are known to lie in 0..T-1 (checked once by the caller)."""
+        face = fragments.face
         weights = [np.ascontiguousarray(fragments.bary[:, i]) for i in (1, 2)]
         out = np.empty((self._first.shape[0], len(face)))
         term = np.empty(len(face))
         for k, row in enumerate(out):  # a few components (3), each over all fragments
-            np.take(self._first[k], face, out=row, mode="clip")  # indices checked
+            np.take(self._first[k], face, out=row, mode="clip")  # indices in range
             for step, weight in zip(self._steps, weights, strict=True):
                 np.take(step[k], face, out=term, mode="clip")
                 term *= weight
@@ -217,16 +222,16 @@ def _edges(a: np.ndarray, b: np.ndarray, c: np.ndarray,
     return n0, step, den
 
 
-def _planes(v: np.ndarray, z: np.ndarray, inv_w: np.ndarray | None) -> tuple[np.ndarray, ...]:
-    """Per triangle (snapped vertices v (2, 3, T) in pixels, centres at integers; depth and 1/w (3, T)): depth's
-    gradient and value at the origin (gx, gy, zc), and the weight planes ``slope·x + rise·y + const`` (K, T)
-    each: k = 0, 1 the weights of vertices 1 and 2 times their 1/w, and k = 2 their sum over the three vertices
-    (absent without ``inv_w``: the sum is 1), so the perspective-correct weights are planes 0 and 1 divided by
-    plane 2."""
+def _planes(v: np.ndarray, det: np.ndarray, z: np.ndarray, inv_w: np.ndarray | None) -> tuple[np.ndarray, ...]:
+    """Per triangle (snapped vertices v (2, 3, T) in pixels, centres at integers, and their determinant
+    (v1 − v0) x (v2 − v0) (T,), exact, from :func:`_setup`; depth and 1/w (3, T)): depth's gradient and value at
+    the origin (gx, gy, zc), and the weight planes ``slope·x + rise·y + const`` (K, T) each: k = 0, 1 the
+    weights of vertices 1 and 2 times their 1/w, and k = 2 their sum over the three vertices (absent without
+    ``inv_w``: the sum is 1), so the perspective-correct weights are planes 0 and 1 divided by plane 2."""
     px, py = v
     e1x, e1y = px[1] - px[0], py[1] - py[0]
     e2x, e2y = px[2] - px[0], py[2] - py[0]
-    inv = 1.0 / (e1x * e2y - e1y * e2x)
+    inv = 1.0 / det
     lam = (e2y * inv, -e2x * inv, -e1y * inv, e1x * inv)
     dz1, dz2 = z[1] - z[0], z[2] - z[0]
     gx = dz1 * lam[0] + dz2 * lam[2]
@@ -270,7 +275,9 @@ def _setup(xy: np.ndarray, z: np.ndarray, inv_w: np.ndarray | None, width: int, 
     # per selected triangle, in bucket order
     v = np.take(snapped, order, axis=2, mode="clip")
     r0, xmin, xmax, count, left_side = (np.take(a, order, mode="clip") for a in (r0, xmin, xmax, count, pair_left))
-    gx, gy, zc, slope_o, rise_w, const = _planes(v / SUBPIXEL, np.take(z.T, order, axis=1, mode="clip"),
+    # the determinant in pixels² is the exact one in snapped units scaled by a power of two: exact too
+    det_px = np.take(det, order, mode="clip") / (SUBPIXEL * SUBPIXEL)
+    gx, gy, zc, slope_o, rise_w, const = _planes(v / SUBPIXEL, det_px, np.take(z.T, order, axis=1, mode="clip"),
                                                None if inv_w is None else np.take(inv_w.T, order, axis=1, mode="clip"))
     slope[:, order] = slope_o
     n_planes = slope.shape[0]
@@ -413,7 +420,9 @@ class ZBuffer:
         offset = rows.start.astype(np.int64) - first[:-1]
         flat = self.depth.reshape(-1)
         lo = int(rows.start.min())
-        before = flat[lo:int((rows.start + length).max())].copy()
+        window = flat[lo:int((rows.start + length).max())]
+        # the depths before this call; in a cleared buffer all +inf, seen without copying them
+        before: np.ndarray | float = np.inf if float(window.min()) == np.inf else window.copy()
         chunks = _chunks(first)
         keep = first[-1] <= KEEP_PIXELS
         expanded = []
@@ -427,28 +436,30 @@ class ZBuffer:
             """The pixels of chunk i, kept from pass 1 or expanded again."""
             return expanded[i] if keep else _expand(rows, offset, first, *chunks[i])
 
-        lowered = int(np.count_nonzero(flat[lo:lo + before.size] < before))
+        lowered = int(np.count_nonzero(window < before))
         if lowered == first[-1]:  # every candidate is alone at its pixel and nearer: all of them win
             out = _Columns(lowered, self._memory(lowered, reuse))
             for i, (a, _) in enumerate(chunks):
                 pix, zz, owner = again(i)
                 out.put(int(first[a]), pix, owner, zz, rows, slope, self.width)
-            return out.fragments(self.top)
-        pieces = []
-        for i in range(len(chunks)):
-            pix, zz, owner = again(i)
-            win = zz == flat[pix]
-            win &= zz < before[pix - lo]
-            pieces.append((pix[win], owner[win], zz[win]))
-        won = sum(piece[0].size for piece in pieces)
-        out = _Columns(won, self._memory(won, reuse))
-        pos = 0
-        for piece in pieces:
-            out.put(pos, *piece, rows, slope, self.width)
-            pos += piece[0].size
-        fragments = out.fragments(0)
-        if lowered != len(fragments):
-            fragments = fragments.subset(self._lowest_face(fragments.ys * self.width + fragments.xs, fragments.face))
+            fragments = out.fragments()
+        else:
+            pieces = []
+            for i in range(len(chunks)):
+                pix, zz, owner = again(i)
+                win = zz == flat[pix]
+                win &= zz < (before if isinstance(before, float) else before[pix - lo])
+                pieces.append((pix[win], owner[win], zz[win]))
+            won = sum(piece[0].size for piece in pieces)
+            out = _Columns(won, self._memory(won, reuse))
+            pos = 0
+            for piece in pieces:
+                out.put(pos, *piece, rows, slope, self.width)
+                pos += piece[0].size
+            fragments = out.fragments()
+            if lowered != len(fragments):  # ties: the lowest face (pixels counted in the buffer's rows)
+                fragments = fragments.subset(self._lowest_face(fragments.ys * self.width + fragments.xs,
+                                                               fragments.face))
         fragments.ys += self.top
         return fragments
 
@@ -489,8 +500,12 @@ class _Columns:
         """Store fragments (flat pixel index, owning row, depth) from pos on, with their weights (``slope``: the
         weight slopes (K, T) of :func:`_planes`, by triangle)."""
         sl = slice(pos, pos + pix.size)
-        ys = np.floor_divide(pix, width, out=self.ys[sl])
-        xs = np.subtract(pix, ys * width, out=self.xs[sl])
+        if width & (width - 1):
+            ys = np.floor_divide(pix, width, out=self.ys[sl])
+            xs = np.subtract(pix, ys * width, out=self.xs[sl])
+        else:  # a power of two: a shift and a mask, several times faster than dividing (pix is never negative)
+            ys = np.right_shift(pix, width.bit_length() - 1, out=self.ys[sl])
+            xs = np.bitwise_and(pix, width - 1, out=self.xs[sl])
         face = np.take(rows.face, owner, out=self.face[sl], mode="clip")
         self.depth[sl] = depth
         l0, l1, l2 = self.bary[0, sl], self.bary[1, sl], self.bary[2, sl]
@@ -508,7 +523,6 @@ class _Columns:
         np.subtract(1.0, l1, out=l0)
         l0 -= l2
 
-    def fragments(self, top: int) -> Fragments:
-        """The filled arrays as Fragments, rows counted from frame row ``top``."""
-        self.ys += top
+    def fragments(self) -> Fragments:
+        """The filled arrays as Fragments (rows of the buffer, from 0)."""
         return Fragments(self.xs, self.ys, self.face, self.bary.T, self.depth)

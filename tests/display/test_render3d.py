@@ -361,6 +361,23 @@ def test_an_empty_scene_or_one_beyond_the_far_plane_draws_nothing():
         scene.add_mesh(SQUARE + np.array([0, 0, -100.0]), SQUARE_FACES)  # far is −25
 
 
+def test_a_backdrop_on_the_far_plane_is_drawn_though_its_clip_depth_rounds_just_beyond():
+    camera = {**FRONT, "near": 1.0, "far": -1.05}
+    backdrop = SQUARE * 2 + np.array([-5, -5, -1.05])  # at n = far, covering the window
+    scene = Scene(camera=camera)
+    scene.add_mesh(backdrop, SQUARE_FACES, material={"colour": (1, 1, 1), "ka": 1.0}, edges="outlines")
+    scene.add_light("ambient", (1, 1, 1))
+    clip = scene.camera.clip_coordinates(backdrop, (0, 0, 10, 10))
+    assert (clip[:, 2] > clip[:, 3]).all()  # the precondition: z/w = 1 + 2e-16, beyond the far plane by rounding
+    with CanvasDisplay() as raster, StrokeDisplay() as vector:
+        raster.window(0, 0, 10, 10)
+        vector.window(-10, -10, 20, 20)
+        raster.draw(scene)
+        vector.draw(scene)
+    assert (pixels(raster) == 255).all()
+    assert len(vector.display_list) > 0
+
+
 def test_triangles_cut_by_the_window_keep_their_own_colours_beside_whole_ones():
     # a huge square (two faces, red below its diagonal y = x, blue above) is clipped by the view volume's sides;
     # a small green square in front of it passes whole: each pixel shows the face the textbook geometry puts there
@@ -398,3 +415,41 @@ def test_drawing_in_bands_on_threads_gives_the_whole_frames_pixels(monkeypatch, 
     banded = draw()
     assert (whole.max(axis=2) > 0).mean() > 0.3  # the sphere is there
     assert np.array_equal(banded, whole)
+
+
+def test_band_buffers_kept_from_draw_to_draw_start_cleared():
+    from pixelpen.display import render3d
+
+    def draw(scene, size=(20, 20)):
+        with CanvasDisplay(size=size) as display:
+            display.window(0, 0, 10, 10)
+            display.draw(scene)
+        return pixels(display)
+
+    near, far = Scene(camera=FRONT), Scene(camera=FRONT)
+    near.add_mesh(SQUARE + np.array([0, 0, 4.0]), SQUARE_FACES, material={"colour": (1, 0, 0), "ka": 1.0})
+    far.add_mesh(SQUARE + np.array([0, 0, -20.0]), SQUARE_FACES, material={"colour": (0, 0, 1), "ka": 1.0})
+    for scene in (near, far):
+        scene.add_light("ambient", (1, 1, 1))
+    first = draw(far)
+    draw(near)  # leaves nearer depths in the kept buffers ...
+    np.testing.assert_array_equal(draw(far), first)  # ... which must not hide the far square
+    assert (first[1:-1, 1:-1] == (0, 0, 255)).all()
+    draw(far, size=(30, 30))  # another size lets the kept buffers go
+    assert len(render3d._BUFFERS._free) <= render3d.MAX_WORKERS + 1
+    np.testing.assert_array_equal(draw(far), first)
+
+
+@pytest.mark.parametrize("step", [1, 5, 1 << 14])
+def test_front_faces_in_steps_match_the_determinant_of_each_face(monkeypatch, step):
+    from pixelpen.display import render3d
+
+    rng = np.random.default_rng(4)
+    clip = rng.normal(size=(40, 4))
+    faces = rng.integers(0, 40, (203, 3))
+    monkeypatch.setattr(render3d, "STEP_FACES", step)
+    front = render3d.front_faces(clip, faces)
+    det = np.array([np.linalg.det(clip[face][:, (0, 1, 3)]) for face in faces])  # rows (x, y, w) of each corner
+    clear = np.abs(det) > 1e-6
+    assert clear.mean() > 0.9 and 0.3 < front.mean() < 0.7
+    assert np.array_equal(front[clear], det[clear] > 0)

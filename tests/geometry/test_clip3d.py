@@ -11,11 +11,13 @@ from pixelpen.errors import InvalidArgument
 from pixelpen.geometry import clip3d
 from pixelpen.geometry.clip import clip_polygon
 from pixelpen.geometry.clip3d import (
+    clip_faces_homogeneous,
     clip_points_homogeneous,
     clip_polygon_homogeneous,
     clip_segments_homogeneous,
     clip_triangles_homogeneous,
     perspective_divide,
+    perspective_divide_unchecked,
 )
 
 # ---------------------------------------------------------------------------------------------
@@ -31,40 +33,49 @@ BOUNDARIES = (
 )
 
 
-def inside_reference(p, tol=0.0):
+ON_TOL = 1e-12
+"""The documented on-plane tolerance: a point within 1e-12 of its largest |coordinate| outside a plane is on it."""
+
+
+def on_side(f, p, tol=ON_TOL):
+    """The point is inside boundary f, to the tolerance scaled by its own size."""
+    return f(p) >= -tol * max(abs(float(v)) for v in p)
+
+
+def inside_reference(p, tol=ON_TOL):
     """The point satisfies the six clip inequalities (with a tolerance scaled by its size) and w > 0."""
-    scale = max(abs(float(v)) for v in p) or 1.0
-    return p[3] > 0 and all(f(p) >= -tol * scale for f in BOUNDARIES)
+    return p[3] > 0 and all(on_side(f, p, tol) for f in BOUNDARIES)
 
 
 def liang_barsky_reference(p0, p1):
-    """Scalar Liang–Barsky in 4D: the kept parameter interval (t0, t1) or None."""
+    """Scalar Liang–Barsky in 4D: the kept parameter interval (t0, t1) or None (ends within the tolerance of a
+    plane are on it)."""
     t0, t1 = 0.0, 1.0
     for f in BOUNDARIES:
+        in0, in1 = on_side(f, p0), on_side(f, p1)
         d0, d1 = f(p0), f(p1)
-        if d0 < 0 and d1 < 0:
+        if not in0 and not in1:
             return None
-        if d0 < 0:
-            t0 = max(t0, d0 / (d0 - d1))
-        elif d1 < 0:
-            t1 = min(t1, d0 / (d0 - d1))
+        if not in0:
+            t0 = max(t0, min(d0 / (d0 - d1), 1.0))
+        elif not in1:
+            t1 = min(t1, max(d0 / (d0 - d1), 0.0))
     return (t0, t1) if t0 <= t1 else None
 
 
 def sutherland_hodgman_reference(polygon):
     """Scalar Sutherland–Hodgman in 4D against the six boundaries (a list of 4-vectors); a vertex within 1e-12 of
-    the polygon's size outside a boundary counts as on it (the clipper's documented tolerance)."""
+    its own size outside a boundary counts as on it (the clipper's documented tolerance)."""
     poly = [np.asarray(p, dtype=float) for p in polygon]
-    tol = 1e-12 * max(float(np.abs(p).max()) for p in poly)
     for f in BOUNDARIES:
         out = []
         for i, a in enumerate(poly):
             b = poly[(i + 1) % len(poly)]
             da, db = f(a), f(b)
-            if da >= -tol:
+            if on_side(f, a):
                 out.append(a)
-            if (da >= -tol) != (db >= -tol):
-                out.append(a + da / (da - db) * (b - a))
+            if on_side(f, a) != on_side(f, b):
+                out.append(a + min(max(da / (da - db), 0.0), 1.0) * (b - a))
         poly = out
     return [p for p in poly if p[3] > 0]
 
@@ -416,11 +427,108 @@ def test_many_triangles_are_vectorised():
 
 
 # ---------------------------------------------------------------------------------------------
+# The on-plane tolerance: one inside test for points, segments, polygons and triangles
+
+JUST_OUT = math.nextafter(3.0, 4.0)  # z/w just beyond the far plane z = w = 3, by rounding only
+
+
+def backdrop(z):
+    """A far-plane triangle, w = 3, all three vertices at depth z."""
+    return np.array([(-2.0, -2.0, z, 3.0), (2.0, -2.0, z, 3.0), (0.0, 2.0, z, 3.0)])
+
+
+def test_a_backdrop_rounding_just_outside_the_far_plane_is_kept_whole_everywhere():
+    tri = backdrop(JUST_OUT)
+    assert all(not (p[3] - p[2] >= 0) for p in tri)  # outside without the tolerance ...
+    assert clip_points_homogeneous(tri).all()  # ... inside with it, for every primitive alike
+    out, source, weights = clip_triangles_homogeneous(tri[None])
+    np.testing.assert_array_equal(out, tri[None])
+    assert source.tolist() == [0]
+    np.testing.assert_array_equal(weights, np.eye(3)[None])
+    np.testing.assert_array_equal(clip_polygon_homogeneous(tri), tri)
+    edges = np.stack([tri, np.roll(tri, -1, axis=0)], axis=1)
+    clipped, kept = clip_segments_homogeneous(edges)
+    assert kept.tolist() == [0, 1, 2]
+    np.testing.assert_array_equal(clipped, edges)
+
+
+def test_a_backdrop_with_one_vertex_on_the_plane_is_kept_as_before():
+    tri = backdrop(JUST_OUT)
+    tri[0, 2] = 3.0
+    out, _, _ = clip_triangles_homogeneous(tri[None])
+    np.testing.assert_array_equal(out, tri[None])
+
+
+@pytest.mark.parametrize("z", [3.0 * (1 + 1e-9), 3.0 + 1e-6, 4.0])
+def test_a_triangle_beyond_the_tolerance_is_still_rejected(z):
+    tri = backdrop(z)
+    assert not clip_points_homogeneous(tri).any()
+    assert len(clip_triangles_homogeneous(tri[None])[0]) == 0
+    assert len(clip_polygon_homogeneous(tri)) == 0
+    assert len(clip_segments_homogeneous(np.stack([tri, np.roll(tri, -1, axis=0)], axis=1))[1]) == 0
+
+
+def test_a_triangle_crossing_the_far_plane_is_cut_there_not_at_the_tolerance():
+    tri = backdrop(3.0)
+    tri[0, 2] = 6.0  # vertex 0 far beyond, the others on the plane
+    out, _, _ = clip_triangles_homogeneous(tri[None])
+    np.testing.assert_array_equal(out[..., 2], out[..., 3])  # the piece left lies in the far plane
+    assert sum(shoelace(t[:, :2] / 3.0) for t in out) == pytest.approx(0.0, abs=1e-12)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(clip_points(), clip_points(), clip_points()), min_size=1, max_size=6),
+       st.sampled_from([0.0, 1e-13, -1e-13, 1e-11, -1e-11]))
+def test_whole_triangles_are_those_whose_points_are_inside(triangles, nudge):
+    tris = np.array(triangles, dtype=float)
+    tris[..., :3] *= 1 + nudge  # on the planes, just off them within the tolerance, or just beyond it
+    inside = clip_points_homogeneous(tris.reshape(-1, 4)).reshape(-1, 3).all(axis=1)
+    out, source, _ = clip_triangles_homogeneous(tris)
+    for t in np.flatnonzero(inside):
+        np.testing.assert_array_equal(out[source == t], tris[t][None])
+    assert_inside(out)
+
+
+# ---------------------------------------------------------------------------------------------
+# Faces of a vertex table
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(clip_points(), min_size=3, max_size=10), st.data())
+def test_faces_of_a_vertex_table_clip_as_their_triangles(points, data):
+    vertices = np.array(points, dtype=float)
+    n = len(vertices)
+    faces = np.array(data.draw(st.lists(st.tuples(*[st.integers(0, n - 1)] * 3), max_size=8)),
+                     dtype=np.int64).reshape(-1, 3)
+    split = clip_faces_homogeneous(vertices, faces)
+    assert split.inside.tolist() == [inside_reference(p) for p in vertices]
+    np.testing.assert_array_equal(split.whole, split.inside[faces].all(axis=1))
+    assert np.all(np.diff(split.source) >= 0) and not split.whole[split.source].any()
+    out, source, weights = clip_triangles_homogeneous(vertices[faces])
+    cut = ~split.whole[source] if len(faces) else np.zeros(0, bool)
+    np.testing.assert_array_equal(split.out, out[cut])
+    np.testing.assert_array_equal(split.source, source[cut])
+    np.testing.assert_array_equal(split.weights, weights[cut])
+    np.testing.assert_array_equal(out[~cut], vertices[faces[split.whole]])
+
+
+def test_faces_are_validated():
+    vertices = np.ones((3, 4))
+    with pytest.raises(InvalidArgument, match=r"faces must be a \(T, 3\) integer"):
+        clip_faces_homogeneous(vertices, [[0.0, 1.0, 2.0]])
+    with pytest.raises(InvalidArgument, match=r"faces row 1 \[0, 1, 3\] indexes outside the 3 vertices"):
+        clip_faces_homogeneous(vertices, [[0, 1, 2], [0, 1, 3]])
+    with pytest.raises(InvalidArgument, match=r"vertices contains a non-finite value"):
+        clip_faces_homogeneous([(0, 0, 0, np.nan)], np.zeros((0, 3), np.int64))
+
+
+# ---------------------------------------------------------------------------------------------
 # Perspective divide and bad input
 
 
 def test_perspective_divide():
     np.testing.assert_array_equal(perspective_divide([(2, 4, 1, 2), (1, 1, 1, 1)]), [(1, 2, 0.5), (1, 1, 1)])
+    np.testing.assert_array_equal(perspective_divide_unchecked(np.array([(2.0, 4, 1, 2)])), [(1, 2, 0.5)])
     assert perspective_divide(np.ones((2, 3, 4))).shape == (2, 3, 3)
     h = np.ones((2, 3, 4))
     h[1, 2, 3] = -0.5

@@ -10,7 +10,7 @@ import pytest
 from pixelpen.errors import InvalidArgument, InvalidArgumentType
 from pixelpen.raster.canvas import Canvas
 from pixelpen.raster.illumination import Light, Material, Viewer
-from pixelpen.raster.shading import Shader, native_pixels, shade, write_colours
+from pixelpen.raster.shading import Shader, native_pixels, native_pixels_unchecked, shade, write_colours
 from pixelpen.raster.zbuffer import Fragments
 from tests.raster.test_illumination import reference_intensity
 
@@ -306,6 +306,22 @@ def test_native_pixels_leave_the_canvas_alone_until_stored():
     assert pixels.index.tolist() == [3 * 6 + 1, 5] and pixels.box == (1, 0, 6, 4)
     pixels.store(canvas)
     assert canvas.array[3, 1] == 0xF800 and canvas.array[0, 5] == 0x001F and canvas.damage() != []
+
+
+@pytest.mark.parametrize("mode", ["RGB", "RGBA", "RGB565", "L", "1", "P"])
+def test_unchecked_native_pixels_equal_the_checked_ones_on_good_input(mode):
+    rng = np.random.default_rng(11)
+    palette = np.array([[0, 0, 0], [255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]]) if mode == "P" else None
+    canvas = Canvas(9, 7, mode, palette=palette)
+    index = rng.choice(63, 40, replace=False)
+    xs, ys = index % 9, index // 9
+    rgb = rng.uniform(-0.05, 1.05, (40, 3))  # a little outside [0, 1] too: both clamp
+    checked, unchecked = native_pixels(canvas, xs, ys, rgb), native_pixels_unchecked(canvas, xs, ys, rgb)
+    assert unchecked.box == checked.box == (int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
+    np.testing.assert_array_equal(unchecked.index, checked.index)
+    np.testing.assert_array_equal(unchecked.values, checked.values)
+    none = native_pixels_unchecked(canvas, xs[:0], ys[:0], rgb[:0])
+    assert none.box is None and none.index.size == 0
 
 
 def test_empty_write_changes_nothing():

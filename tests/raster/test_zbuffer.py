@@ -101,15 +101,17 @@ depth3 = st.lists(st.sampled_from([0.0, 0.25, 0.5, 0.75, 1.0]) | st.floats(0, 1)
 
 @settings(max_examples=40, deadline=None)
 @given(st.lists(st.tuples(tri_xy, depth3, st.lists(st.floats(0.1, 4.0), min_size=3, max_size=3)),
-                min_size=1, max_size=6), st.booleans())
-def test_matches_brute_force_reference(scene, perspective):
+                min_size=1, max_size=6), st.booleans(), st.sampled_from([13, 16]))
+def test_matches_brute_force_reference(scene, perspective, width):
+    # width 16: a power of two, whose flat pixel indices the buffer splits by a shift and a mask
     xy = np.array([s[0] for s in scene], dtype=float)
     depth = np.array([s[1] for s in scene], dtype=float)
     inv_w = np.array([s[2] for s in scene], dtype=float) if perspective else None
-    zb = ZBuffer(13, 11)
+    zb = ZBuffer(width, 11)
     fr = zb.rasterize(xy, depth, inv_w)
-    assert_matches(as_dict(fr), reference(xy, depth, 13, 11, inv_w), xy, depth)
-    assert np.array_equal(np.isfinite(zb.depth), np.isin(np.arange(13 * 11), fr.ys * 13 + fr.xs).reshape(11, 13))
+    assert_matches(as_dict(fr), reference(xy, depth, width, 11, inv_w), xy, depth)
+    covered = np.isin(np.arange(width * 11), fr.ys * width + fr.xs).reshape(11, width)
+    assert np.array_equal(np.isfinite(zb.depth), covered)
 
 
 @settings(max_examples=30, deadline=None)
@@ -330,6 +332,7 @@ def test_per_vertex_interpolant_equals_the_corner_form_bit_for_bit():
     got = Interpolant(vertices, faces).at(fr)
     assert np.array_equal(got, Interpolant(vertices[faces]).at(fr))
     assert np.array_equal(got, fr.interpolate(vertices[faces]))
+    assert np.array_equal(got, Interpolant(vertices, faces).at_valid(fr))  # the same, without the range check
     with pytest.raises(InvalidArgument, match="per-vertex values"):
         Interpolant(vertices, faces[:, :2])
     with pytest.raises(InvalidArgument, match="outside the 30 vertices"):
