@@ -82,8 +82,8 @@ class Rect(NamedTuple):
 
 def bounding(rects: Iterable[Rect]) -> Rect:
     """The bounding rectangle of one or more rectangles."""
-    rects = list(rects)
-    return Rect(min(r.x0 for r in rects), min(r.y0 for r in rects), max(r.x1 for r in rects), max(r.y1 for r in rects))
+    x0, y0, x1, y1 = zip(*rects, strict=True)
+    return Rect(min(x0), min(y0), max(x1), max(y1))
 
 
 def merge_rects(

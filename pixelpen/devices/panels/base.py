@@ -1,14 +1,15 @@
 """PanelDisplay: a raster display on a panel controller behind a bus: init, partial refresh, pacing, safe close.
 
 A frame is the canvas's damage trimmed to the pixels that differ from what the panel last received (a
-shadow copy of the sent frame in the wire's units — RGB565 values on an RGB565 panel, converted only inside
-the damage — compared by ``trim.trim_damage``), whose cut is sent as it is (at most ``windows.MAX_WINDOWS``
+shadow copy of the sent frame in the wire's units, ``packing``: RGB565 values on an RGB565 panel, converted only
+inside the damage, compared by ``trim.trim_damage``), whose cut is sent as it is (at most ``windows.MAX_WINDOWS``
 windows, or their bounding window when that costs fewer bytes; more are planned by
 ``windows.plan_windows``), each window as the controller's window commands (MIPI: CASET or RASET left out
 when the window before it in the frame set the same columns or rows) and its pixels packed natively.  The
 next frame is full after open, ``reset()``, a rotation change, a bus fault or an interruption (Ctrl-C) in
 the middle of a frame.  A frame that is the last one shifted vertically is scrolled by the controller
-(``scrolling.HardwareScroll``: MIPI VSCRDEF/VSCSAD), then only its new rows are sent.  ``fps=`` (or
+(``scrolling.HardwareScroll``: MIPI VSCRDEF/VSCSAD, SSD1306 the display start line), then only its new rows
+are sent.  ``fps=`` (or
 ``refresh(target_fps)``) paces frames with a FramePacer: drawing between due frames only accumulates damage, so
 frames coalesce, never queue.
 """
@@ -27,6 +28,7 @@ import numpy as np
 
 from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
 from pixelpen.devices.panels.frames import FrameStats, PanelStats
+from pixelpen.devices.panels.packing import pack_windows, to_units, update_units
 from pixelpen.devices.panels.scrolling import HardwareScroll
 from pixelpen.devices.panels.trim import trim_damage
 from pixelpen.devices.panels.windows import MAX_WINDOWS, WindowCost, window_cost
@@ -39,8 +41,7 @@ from pixelpen.errors import ConfigError, InvalidArgument, LinkError, URLError
 from pixelpen.options import OptionSpec, OptionValues, boolean, choice, integer, pixels, positive, text
 from pixelpen.profiles.panel import InitStep, PanelProfile, load_panel_profile, panel_profile_for
 from pixelpen.raster.canvas import Canvas
-from pixelpen.raster.colour import rgb888_to_rgb565
-from pixelpen.raster.damage import Rect, bounding
+from pixelpen.raster.damage import Rect
 from pixelpen.sim.base import BusDevice, create_simulator
 from pixelpen.sim.base import simulator_options as simulator_specs
 from pixelpen.urls import DeviceURL
@@ -51,9 +52,6 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-PACK_ONCE = 8192
-"""Windows whose bounding box has at most this many pixels (a 128x64 OLED's frame) are packed in one
-conversion (numpy's per-call cost outweighs converting the pixels between them)."""
 TE_TIMEOUT = 0.05
 """Seconds to wait for the tearing-effect pulse before sending anyway (three frames at 60 Hz)."""
 PIXEL_PITCH_MM = 0.2
@@ -127,7 +125,8 @@ class PanelDisplay(RasterDisplay):
         self._simulator = simulator if simulator is not None or not isinstance(wiring, Wiring) else wiring.simulator
         self._shadow: np.ndarray | None = None
         self._units: np.ndarray | None = None
-        """The frame in the shadow's units (``_to_units``), kept between frames when it is a conversion."""
+        """The frame in the shadow's units when they are a conversion (``packing.to_units``), kept between frames;
+        None when the native frame is its own units."""
         self._full = True
         self._pacer: FramePacer | None = None
         self._force = False
@@ -252,9 +251,9 @@ class PanelDisplay(RasterDisplay):
         """Send the settings of the options after the init table: scan direction, inversion, colour depth..."""
 
     @abstractmethod
-    def _write_window(self, window: Rect, pixels: bytes, previous: Rect | None) -> None:
-        """Send one window: the controller's window commands, then ``pixels`` (already packed); ``previous`` is
-        the window sent before it in this frame (None for the first), whose settings the controller still holds."""
+    def _write_windows(self, windows: list[Rect], packed: list[bytes]) -> None:
+        """Send a frame's windows in order: each one's window commands (those the window before it in the frame
+        set may be left out: the controller still holds them), then its pixels (already packed)."""
 
     @abstractmethod
     def _power(self, on: bool) -> None:
@@ -476,7 +475,8 @@ class PanelDisplay(RasterDisplay):
     # -- frames ------------------------------------------------------------------------------------
     def _native(self, array: np.ndarray) -> np.ndarray:
         """The canvas array as the controller's window space sees it (a view turned by the software rotation)."""
-        return np.rot90(array, -(self._soft_turn() // 90))
+        turn = self._soft_turn()
+        return np.rot90(array, -(turn // 90)) if turn else array
 
     def _native_rect(self, r: Rect, width: int, height: int) -> Rect:
         """A canvas rectangle in window space (``width`` x ``height`` is the canvas size)."""
@@ -502,12 +502,18 @@ class PanelDisplay(RasterDisplay):
         if frame.full or shadow is None or shadow.shape[:2] != (height, width):
             rects = [Rect(0, 0, width, height)]
             frame.full = True
-            units = self._units = self._to_units(native)
+            self._units = to_units(native, self.pixel_format)
+            units = native if self._units is None else self._units
             shadow = self._shadow = np.empty_like(units)
         else:
             damage = [self._native_rect(r, canvas.width, canvas.height) for r in canvas.damage()]
             damage = self._scroll.detect(native, damage, shadow, self._units)
-            units = self._update_units(native, damage)
+            native, damage = self._scroll.to_ram(native, damage)
+            if self._units is None:
+                units = native
+            else:
+                units = self._units
+                update_units(units, native, damage)
             rects = trim_damage(damage, units, shadow, self.cost)
         if not rects and not self._scroll.pending:
             return
@@ -518,56 +524,22 @@ class PanelDisplay(RasterDisplay):
         else:
             windows = self.cost.plan(rects, width=width, height=height)
         self._full = True  # until the last window is out
-        packed = self._pack(units, windows)
+        fmt = self.pixel_format
+        packed = pack_windows(units.view(np.bool_) if self.canvas_mode == "1" else units, windows, fmt,
+                              self.cost.align[1] if fmt == "mono-pages" else 1)
         for x0, y0, x1, y1 in windows:
             shadow[y0:y1, x0:x1] = units[y0:y1, x0:x1]
         frame.host_seconds = time.perf_counter() - started
         self._wait_te()
         on_bus = self.clock.now()
         self._scroll.start_frame(frame.full)
-        previous = None
-        for window, data in zip(windows, packed, strict=True):
-            self._write_window(window, data, previous)
-            previous = window
+        self._write_windows(windows, packed)
         frame.bus_seconds = self.clock.now() - on_bus
         self._full = False
         if self._pacer is not None:
             self._pacer.sent()
         frame.windows = len(windows)
         self.stats.add(frame)
-
-    def _to_units(self, native: np.ndarray) -> np.ndarray:
-        """The frame as compared with the shadow and packed: HxW uint16 RGB565 values on an rgb565be wire
-        (pixels the wire cannot tell apart are no change), else the native view itself."""
-        return rgb888_to_rgb565(native) if self.pixel_format == "rgb565be" else native
-
-    def _update_units(self, native: np.ndarray, damage: list[Rect]) -> np.ndarray:
-        """:meth:`_to_units` of the frame, converted again only inside ``damage`` (outside it the last frame's
-        units equal the shadow, as every changed unit was sent)."""
-        units = self._units
-        if units is None or self.pixel_format != "rgb565be":
-            return self._to_units(native)
-        for rows, cols in (r.slices for r in damage):
-            units[rows, cols] = rgb888_to_rgb565(native[rows, cols])
-        return units
-
-    def _pack(self, units: np.ndarray, windows: list[Rect]) -> list[bytes]:
-        """Each window's pixels in the wire format: RGB565 values byte-swapped per window; otherwise one
-        vectorised conversion of the view of their bounding box when that is at most twice their area or
-        :data:`PACK_ONCE` pixels (else one per window), then a slice per window."""
-        from pixelpen.raster.formats import pack
-
-        if units.dtype == np.uint16:
-            return [units[y0:y1, x0:x1].astype(">u2").tobytes() for x0, y0, x1, y1 in windows]
-        native = units.view(np.bool_) if self.canvas_mode == "1" else units
-        box = bounding(windows or [Rect(0, 0, 0, 0)])  # no windows: a frame of scroll commands alone
-        if len(windows) <= 1 or box.area > max(2 * sum(w.area for w in windows), PACK_ONCE):
-            return [pack(native[w.slices], self.pixel_format) for w in windows]
-        unit_rows = self.cost.align[1] if self.pixel_format == "mono-pages" else 1
-        data = np.frombuffer(pack(native[box.slices], self.pixel_format), dtype=np.uint8)
-        grid = data.reshape(-(-box.height // unit_rows), box.width, -1)
-        return [grid[(w.y0 - box.y0) // unit_rows:-(-(w.y1 - box.y0) // unit_rows),
-                     w.x0 - box.x0:w.x1 - box.x0].tobytes() for w in windows]
 
     def _wait_te(self) -> None:
         """Start at the tearing-effect pulse when a TE line is wired (a missing pulse is logged, not fatal)."""

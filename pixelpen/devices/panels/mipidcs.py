@@ -28,6 +28,8 @@ CASET, RASET, RAMWR = 0x2A, 0x2B, 0x2C
 INVOFF, INVON, DISPOFF, DISPON = 0x20, 0x21, 0x28, 0x29
 TEON, MADCTL, COLMOD_CMD = 0x35, 0x36, 0x3A
 _FORMATS = {"rgb565": "rgb565be", "rgb666": "rgb666"}
+_PAIR = struct.Struct(">HH")
+"""CASET/RASET parameters: first and last column (row), 16-bit big-endian."""
 
 
 class MipiDcsDisplay(PanelDisplay):
@@ -104,28 +106,39 @@ class MipiDcsDisplay(PanelDisplay):
             self._command(TEON)
             self._data(b"\x00")
 
-    def _write_window(self, window: Rect, pixels: bytes, previous: Rect | None) -> None:
-        """CASET and RASET (each left out when the window before set the same columns or rows: the controller
-        keeps them, and RAMWR starts again at the window's first pixel), RAMWR and the pixels; the rows mapped
-        through the hardware scroll, a window wrapping its ring sent as two."""
+    def _write_windows(self, windows: list[Rect], packed: list[bytes]) -> None:
+        """Per window CASET and RASET (each left out when the window before set the same columns or rows: the
+        controller keeps them, and RAMWR starts again at the window's first pixel), RAMWR and the pixels; the rows
+        mapped through the hardware scroll, a window wrapping its ring sent as two."""
+        bus = self.wiring.bus
+        command, data, ring = bus.command, bus.data, self._scroll.rows
         x, y = self._offsets
-        columns = None if previous is None else (previous.x0, previous.x1)
-        rows = None if previous is None else self._scroll.rows(previous.y0, previous.y1)[-1]
-        row_bytes = len(pixels) // window.height
-        start = 0
-        for y0, y1 in self._scroll.rows(window.y0, window.y1):
-            if columns != (window.x0, window.x1):
-                columns = (window.x0, window.x1)
-                self._command(CASET)
-                self._data(struct.pack(">HH", window.x0 + x, window.x1 - 1 + x))
-            if rows != (y0, y1):
-                rows = (y0, y1)
-                self._command(RASET)
-                self._data(struct.pack(">HH", y0 + y, y1 - 1 + y))
-            self._command(RAMWR)
-            end = start + (y1 - y0) * row_bytes
-            self._data(pixels[start:end])
-            start = end
+        columns: tuple[int, int] | None = None
+        rows: tuple[int, int] | None = None
+        sent = 0
+        try:
+            for (x0, y0, x1, y1), pixels in zip(windows, packed, strict=True):
+                spans = ring(y0, y1)
+                row_bytes = len(pixels) // (y1 - y0)
+                start = 0
+                for span in spans:
+                    if columns != (x0, x1):
+                        columns = (x0, x1)
+                        sent += 5
+                        command(CASET)
+                        data(_PAIR.pack(x0 + x, x1 - 1 + x))
+                    if rows != span:
+                        rows = span
+                        sent += 5
+                        command(RASET)
+                        data(_PAIR.pack(span[0] + y, span[1] - 1 + y))
+                    end = start + (span[1] - span[0]) * row_bytes
+                    sent += 1 + end - start
+                    command(RAMWR)
+                    data(pixels if len(spans) == 1 else pixels[start:end])
+                    start = end
+        finally:
+            self._frame.bytes += sent
 
     def _power(self, on: bool) -> None:
         self._command(DISPON if on else DISPOFF)

@@ -6,10 +6,10 @@ the memory row shown at the scroll area's first line, ST7789VW §8.14 and ILI934
 16-bit big-endian).  Frame row ``y`` is kept at ring row ``(y + offset) % rows``.  Before a frame is converted
 into the wire's units its rows are hashed (equal rows always hash equal) and matched against the last frame's: the
 shift ``d`` its unique rows vote for (the last shift first), when it at least halves the rows that differ, advances
-``offset`` by ``d`` and rolls the shadow and the kept units the same way; then the rows that differ from the last
-frame rolled (compared exactly, with a copy of that frame) are the frame's damage, converted and trimmed against
-the rolled shadow, so only the rows that came into view and any other change are sent (a frame that merely
-resembles a shift is still sent right).  Every later
+``offset`` by ``d`` and rolls the shadow (the kept units, equal to it, become a copy of the rolled shadow); then
+the rows that differ from the last frame rolled (compared exactly, with a copy of that frame) are the frame's
+damage, converted and trimmed against the rolled shadow, so only the rows that came into view and any other
+change are sent (a frame that merely resembles a shift is still sent right).  Every later
 window is mapped through ``offset`` and split where it wraps the ring.  A full frame puts the ring back at
 offset 0 (VSCRDEF and VSCSAD at the area's top) when the controller may be scrolled: after a scroll, or
 when a scroll's commands may not have arrived (a bus fault).
@@ -27,6 +27,8 @@ from pixelpen.profiles.panel import InitStep
 from pixelpen.raster.damage import Rect, bounding
 
 VSCRDEF, VSCSAD = 0x33, 0x37
+START_LINE = 0x40
+"""SSD1306 family: display start line 40h | line (the RAM row shown on COM0, SSD1306 §10.1.6)."""
 MIN_DAMAGE = 0.25
 """A frame is checked for a shift only when its damage's bounding box spans the frame's width and at least
 this share of its area (a cursor or a clock never pays for the row hashes)."""
@@ -47,13 +49,18 @@ class ScrollArea:
     bottom: int
     reversed: bool = False
     """Frame rows run up the memory (MADCTL MY): the ring turns the other way."""
+    start_line: bool = False
+    """Scrolled by the display start line (SSD1306 family) instead of VSCRDEF/VSCSAD: the window space is then
+    the RAM's rows (:meth:`HardwareScroll.to_ram`), as the RAM is written in whole pages."""
 
     def start(self, offset: int) -> int:
         """VSCSAD's parameter (the memory row shown at the area's first line) that keeps frame rows at ``offset``."""
         return self.top + (-offset if self.reversed else offset) % self.rows
 
     def steps(self, offset: int) -> list[InitStep]:
-        """VSCRDEF for this area and VSCSAD for ``offset``."""
+        """VSCRDEF for this area and VSCSAD for ``offset`` (a start-line area: 40h | start line alone)."""
+        if self.start_line:
+            return [InitStep(START_LINE | self.start(offset))]
         return [InitStep(VSCRDEF, b"".join(v.to_bytes(2, "big") for v in (self.top, self.rows, self.bottom))),
                 InitStep(VSCSAD, self.start(offset).to_bytes(2, "big"))]
 
@@ -125,7 +132,9 @@ def changed_rows(new: np.ndarray, old: np.ndarray, d: int) -> np.ndarray:
 
 def row_bands(changed: np.ndarray, width: int) -> list[Rect]:
     """Full-width Rects of the runs of True in ``changed`` (one flag per row)."""
-    edges = np.flatnonzero(np.diff(changed, prepend=False, append=False)).tolist()
+    padded = np.zeros(changed.size + 2, dtype=bool)
+    padded[1:-1] = changed
+    edges = np.flatnonzero(padded[1:] != padded[:-1]).tolist()
     return [Rect(0, y0, width, y1) for y0, y1 in zip(edges[0::2], edges[1::2], strict=True)]
 
 
@@ -167,9 +176,9 @@ class HardwareScroll:
     def detect(self, native: np.ndarray, damage: list[Rect], shadow: np.ndarray,
                units: np.ndarray | None) -> list[Rect]:
         """The damage of a frame ``native`` (window space), before it is converted into ``units`` (the display's
-        kept conversion; not rolled when it is ``native`` itself): ``damage`` as it is, or when ``native`` is the
-        frame before rolled by ``d`` rows, the bands of rows that differ from that roll, with ``shadow`` and
-        ``units`` rolled in place and the offset advanced."""
+        kept conversion, equal to ``shadow``; None when ``native`` is its own units): ``damage`` as it is, or when
+        ``native`` is the frame before rolled by ``d`` rows, the bands of rows that differ from that roll, with
+        ``shadow`` (and ``units``) rolled in place and the offset advanced."""
         height, width = shadow.shape[:2]
         previous, self._previous, self._candidate = self._previous, None, None
         area = self.area
@@ -193,9 +202,11 @@ class HardwareScroll:
         if not d:
             return damage
         changed = changed_rows(rows, previous[0], d)
-        for rolled in (shadow, units):
-            if rolled is not None and not np.may_share_memory(rolled, native):
-                rolled[:] = np.roll(rolled, -d, axis=0)
+        if not area.start_line:  # (a start-line controller's shadow is in RAM rows, which stay where they are)
+            rolled = np.roll(shadow, -d, axis=0)
+            shadow[:] = rolled
+            if units is not None:  # the kept units equal the shadow: every changed unit was sent
+                units[:] = rolled
         self.offset = (self.offset + d) % height
         self._pending = True
         return row_bands(changed, width)
@@ -211,7 +222,8 @@ class HardwareScroll:
             self.offset = 0
             steps = back.steps(0)
         elif self._pending and self.area is not None:
-            steps = self.area.steps(self.offset)[0 if not self._defined else 1:]
+            steps = self.area.steps(self.offset)
+            steps = steps[-1:] if self._defined else steps  # VSCRDEF once
         else:
             return
         self._unsure = True  # until every command is out
@@ -219,6 +231,16 @@ class HardwareScroll:
             self._send(step)
         self._unsure = self._pending = False
         self._defined = not full
+
+    def to_ram(self, native: np.ndarray, damage: list[Rect]) -> tuple[np.ndarray, list[Rect]]:
+        """A frame and its damage in RAM rows on a start-line controller (frame row ``y`` at RAM row ``(y +
+        offset) % rows``, a rectangle that wraps split in two); as they are elsewhere or at offset 0."""
+        if self.area is None or not self.area.start_line or not self.offset:
+            return native, damage
+        ram = [Rect(x0, r0, x1, r1) for x0, y0, x1, y1 in damage for r0, r1 in self.rows(y0, y1)]
+        rolled = np.empty_like(native)
+        rolled[self.offset:], rolled[:self.offset] = native[:-self.offset], native[-self.offset:]
+        return rolled, ram
 
     def rows(self, y0: int, y1: int) -> list[tuple[int, int]]:
         """Frame rows ``y0..y1`` (half-open) as ring rows: one range, or two where they wrap."""

@@ -5,7 +5,10 @@ COM scan direction C0h/C8h, as the profile orients rotation 0); 90 and 270 turn 
 (the canvas is then height x width) on top of the controller's 0 or 180.  Windows cover whole pages of 8 rows:
 SSD1306/SSD1309 ``21 cs ce 22 ps pe`` + page bytes (6 command bytes, column start added for modules narrower
 than the RAM); SH1106 has no window, so per page ``B0+p, 0x(c & 15), 0x1(c >> 4)`` + that page's bytes, with
-its column offset (usually 2).  Parameters are command bytes (D/C low; I2C control byte 0x00).
+its column offset (usually 2).  Parameters are command bytes (D/C low; I2C control byte 0x00).  On a module whose
+glass shows all 64 RAM rows a frame that is the last one shifted vertically is scrolled by the display start line
+(40h | line, ``scrolling.HardwareScroll``; ``hardware_scroll=off`` turns it off): the window space is then the
+RAM's rows, frame row y at RAM row (y + line) % 64.
 """
 
 from __future__ import annotations
@@ -13,10 +16,11 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from pixelpen.devices.panels.base import PanelDisplay
+from pixelpen.devices.panels.scrolling import ScrollArea
 from pixelpen.devices.panels.wiring import Interface, Pins
 from pixelpen.display.registry import register_display
 from pixelpen.errors import ConfigError
-from pixelpen.options import OptionSpec, OptionValues, i2c_address, integer
+from pixelpen.options import OptionSpec, OptionValues, boolean, i2c_address, integer
 from pixelpen.profiles.panel import InitStep, PanelGeometry, PanelProfile
 from pixelpen.raster.damage import Rect
 from pixelpen.sim.base import simulator_options as simulator_specs
@@ -47,18 +51,28 @@ class SSD1306Display(PanelDisplay):
         *PanelDisplay.OPTIONS,
         OptionSpec("addr", i2c_address, None, "I2C address (0x3c or 0x3d); default the profile's"),
         OptionSpec("contrast", integer(0, 255), None, "contrast 0..255 (81h); default the profile's"),
+        OptionSpec("hardware_scroll", boolean, True,
+                   "scroll by the display start line (40h) when a frame is the last one shifted vertically"),
     )
 
-    def __init__(self, *args: Any, contrast: int | None = None, **kwargs: Any) -> None:
+    def __init__(self, *args: Any, contrast: int | None = None, hardware_scroll: bool = True,
+                 **kwargs: Any) -> None:
         if contrast is not None and not 0 <= contrast <= 255:
             raise ConfigError(f"contrast must be 0..255, got {contrast!r}")
         self.contrast = contrast
         super().__init__(*args, **kwargs)
+        self._scroll.enabled = bool(hardware_scroll)
+        self._scroll.default = self._start_line_area()
 
     @classmethod
     def controller_options(cls, opts: OptionValues, profile: PanelProfile) -> dict[str, Any]:
-        """``contrast``."""
-        return {"contrast": opts["contrast"]}
+        """``contrast`` and ``hardware_scroll``."""
+        return {"contrast": opts["contrast"], "hardware_scroll": opts["hardware_scroll"]}
+
+    def _start_line_area(self) -> ScrollArea | None:
+        """The ring the start line turns: the RAM's 64 rows, when the glass shows them all (64 COM lines)."""
+        rows = self.profile.ram_size[1]
+        return ScrollArea(0, rows, 0, start_line=True) if rows == self.profile.size[1] == 64 else None
 
     @classmethod
     def simulator_options(cls, model: str, sim_options: dict[str, str], opts: OptionValues, profile: PanelProfile,
@@ -94,7 +108,9 @@ class SSD1306Display(PanelDisplay):
         self._command(step.command, step.params)
 
     def _setup(self) -> None:
-        """Segment remap and COM direction of the rotation, normal/inverse, the contrast when set."""
+        """Segment remap and COM direction of the rotation, normal/inverse, the contrast when set; the start-line
+        ring of the rotation (window space: RAM rows)."""
+        self._scroll.set_area(self._start_line_area())
         g = self.geometry
         self._command(SEGMENT_REMAP if g.segment_remap else SEGMENT_NORMAL,
                       COM_REVERSE if g.com_reverse else COM_NORMAL, INVERSE if self.invert else NORMAL)
@@ -111,11 +127,12 @@ class SSD1306Display(PanelDisplay):
             return p.column_offset
         return p.ram_size[0] - p.size[0] - p.column_offset
 
-    def _write_window(self, window: Rect, pixels: bytes, previous: Rect | None) -> None:
+    def _write_windows(self, windows: list[Rect], packed: list[bytes]) -> None:
+        """Per window its column and page window (``21 cs ce 22 ps pe``), then its page bytes."""
         x = self.column_start
-        self._command(COLUMN_ADDRESS, window.x0 + x, window.x1 - 1 + x, PAGE_ADDRESS, window.y0 // 8,
-                      (window.y1 - 1) // 8)
-        self._data(pixels)
+        for (x0, y0, x1, y1), pixels in zip(windows, packed, strict=True):
+            self._command(COLUMN_ADDRESS, x0 + x, x1 - 1 + x, PAGE_ADDRESS, y0 // 8, (y1 - 1) // 8)
+            self._data(pixels)
 
     def _power(self, on: bool) -> None:
         self._command(DISPLAY_ON if on else DISPLAY_OFF)
@@ -149,9 +166,10 @@ class SH1106Display(SSD1306Display):
 
     controller: ClassVar[str] = "sh1106"
 
-    def _write_window(self, window: Rect, pixels: bytes, previous: Rect | None) -> None:
-        column = window.x0 + self.column_start
-        width = window.width
-        for i, page in enumerate(range(window.y0 // 8, -(-window.y1 // 8))):
-            self._command(PAGE_START | page, column & 0x0F, 0x10 | column >> 4)
-            self._data(pixels[i * width:(i + 1) * width])
+    def _write_windows(self, windows: list[Rect], packed: list[bytes]) -> None:
+        """Per page of each window ``B0+p``, the column's low and high nibbles, then that page's bytes."""
+        for (x0, y0, x1, y1), pixels in zip(windows, packed, strict=True):
+            column, width = x0 + self.column_start, x1 - x0
+            for i, page in enumerate(range(y0 // 8, -(-y1 // 8))):
+                self._command(PAGE_START | page, column & 0x0F, 0x10 | column >> 4)
+                self._data(pixels[i * width:(i + 1) * width])

@@ -6,11 +6,13 @@ panel or :data:`EXACT_PIXELS`) is first cut exactly: cropped to its bounding box
 axis, then cut into bands of identical rows and each band into its runs of changed columns (a square moving
 by a few pixels costs only the strips it uncovered and covered).  A change making more than
 :data:`MAX_BANDS` such bands (text, glyphs changing), and any larger damage (a diagonal across the screen has
-the whole screen as its bounding box), is cut into bands of :data:`BAND_ROWS` rows (more for a tall change,
-so that there are at most :data:`MAX_WINDOWS` bands), each band into the runs of its changed columns, the
+the whole screen as its bounding box), is cut into bands of :data:`BAND_ROWS` rows from the top of each run of
+rows holding a change (more rows for a tall change, so that there are at most :data:`MAX_WINDOWS` bands; rows
+with no change are in no band), each band into the runs of its changed columns, the
 gaps between runs closed where that costs no more than the window it saves, and the cheapest others while
 more than :data:`MAX_WINDOWS` windows remain.  A rectangle in which more than :data:`SEND_WHOLE` of its
-values changed (a video frame) is sent whole.
+values changed (a video frame) is sent whole.  Rectangles cut into more than :data:`MAX_WINDOWS` windows in
+all are cut again as their bounding box (outside the damage ``native`` equals ``shadow``).
 """
 
 from __future__ import annotations
@@ -57,13 +59,14 @@ def trim_damage(rects: list[Rect], native: np.ndarray, shadow: np.ndarray, cost:
         units = _units(mask, ax, ay)
         cut = _bands(units) if exact else None
         if cut is None:
-            band = max(BAND_ROWS // ay, -(-units.shape[0] // MAX_WINDOWS), 1)
-            cut = _band_runs(units, band, cost.bytes_per_pixel * ax * ay, cost.window_overhead)
-        if ax == ay == 1:
-            out.extend(Rect(a.x0 + x0, a.y0 + y0, a.x0 + x1, a.y0 + y1) for x0, y0, x1, y1 in cut)
-        else:  # the last units may be cut by the rectangle's edge
-            out.extend(Rect(min(a.x0 + x0 * ax, a.x1), min(a.y0 + y0 * ay, a.y1), min(a.x0 + x1 * ax, a.x1),
-                            min(a.y0 + y1 * ay, a.y1)) for x0, y0, x1, y1 in cut)
+            cut = _band_runs(units, max(BAND_ROWS // ay, 1), cost.bytes_per_pixel * ax * ay, cost.window_overhead)
+        scale, start, end = np.array(((ax, ay, ax, ay), (a.x0, a.y0, a.x0, a.y0), (a.x1, a.y1, a.x1, a.y1)))
+        cut *= scale
+        cut += start
+        np.minimum(cut, end, out=cut)  # the last units may be cut by the rectangle's edge
+        out.extend(map(Rect._make, cut.tolist()))
+    if len(out) > MAX_WINDOWS and len(rects) > 1:  # cut as one: rows with no change are in no band
+        return trim_damage([bounding(rects)], native, shadow, cost)
     return out
 
 
@@ -76,33 +79,66 @@ def _units(diff: np.ndarray, ax: int, ay: int) -> np.ndarray:
     return diff
 
 
-def _bands(mask: np.ndarray) -> list[tuple[int, int, int, int]] | None:
-    """An exact cover of the True units of ``mask`` by (x0, y0, x1, y1) boxes: the bounding box, cut into
-    bands of identical rows and each band into its runs; None when that makes more than MAX_BANDS bands."""
+def _bands(mask: np.ndarray) -> np.ndarray | None:
+    """An exact cover of the True units of ``mask`` by (x0, y0, x1, y1) boxes (an Nx4 array): the bounding box,
+    cut into bands of identical rows and each band into its runs; None when that makes more than MAX_BANDS bands."""
     rows_any: np.ndarray = np.any(mask, axis=1)
     cols_any: np.ndarray = np.any(mask, axis=0)
     y0, y1 = int(rows_any.argmax()), rows_any.shape[0] - int(rows_any[::-1].argmax())
     x0, x1 = int(cols_any.argmax()), cols_any.shape[0] - int(cols_any[::-1].argmax())
     box = mask[y0:y1, x0:x1]
     if box.all():
-        return [(x0, y0, x1, y1)]
-    new = np.ones(box.shape[0], dtype=bool)
-    new[1:] = (box[1:] != box[:-1]).any(axis=1)
-    starts = np.flatnonzero(new).tolist()
-    if len(starts) > MAX_BANDS:
+        return np.array([(x0, y0, x1, y1)])
+    new = np.ones(box.shape[0] + 1, dtype=bool)  # new[k]: a band starts at row k (and one ends at row k - 1)
+    new[1:-1] = (box[1:] != box[:-1]).any(axis=1)
+    edges = np.flatnonzero(new)
+    if edges.size > MAX_BANDS + 1:
         return None
-    ends = [*starts[1:], box.shape[0]]
-    bands, run_starts, run_ends = mask_runs(box[starts])
-    return [(x0 + s, y0 + starts[k], x0 + e, y0 + ends[k])
-            for k, s, e in zip(bands.tolist(), run_starts.tolist(), run_ends.tolist(), strict=True)]
+    bands, run_starts, run_ends = mask_runs(box[edges[:-1]])
+    boxes = np.empty((bands.size, 4), dtype=np.intp)
+    boxes[:, 0], boxes[:, 2] = run_starts, run_ends
+    boxes[:, 1], boxes[:, 3] = edges[bands], edges[bands + 1]
+    boxes += (x0, y0, x0, y0)
+    return boxes
 
 
-def _band_runs(mask: np.ndarray, band: int, unit_bytes: float, window_bytes: int) -> list[tuple[int, int, int, int]]:
-    """A cover of the True units of ``mask`` by (x0, y0, x1, y1) boxes: bands of ``band`` rows, each cut into
-    the runs of its changed columns; a gap between two runs of a band is closed when its ``unit_bytes`` cost
-    no more than a window's ``window_bytes``, then the cheapest gaps while more than MAX_WINDOWS boxes remain."""
-    bands, starts, ends = mask_runs(group_any(mask, band) if band > 1 else mask)
-    rows = np.minimum(mask.shape[0] - bands * band, band)
+def _row_bands(mask: np.ndarray, band: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The bands of :func:`_band_runs`: each one's OR-ed columns (a bands x W mask), first row and rows."""
+    lit = np.flatnonzero(mask.any(axis=1))
+    top, span = int(lit[0]), int(lit[-1]) + 1 - int(lit[0])
+    band = max(band, -(-lit.size // MAX_WINDOWS))
+    if span == lit.size:  # one run of changed rows
+        count = -(-span // band)
+        tops = top + band * np.arange(count)
+        return group_any(mask[top:top + span], band), tops, np.minimum(top + span - tops, band)
+    new_run = np.ones(lit.size, dtype=bool)
+    new_run[1:] = lit[1:] != lit[:-1] + 1
+    run_top = np.flatnonzero(new_run)
+    if run_top.size > MAX_WINDOWS:  # too many runs: one from the first changed row to the last
+        lit, run_top = np.arange(top, top + span), run_top[:1]
+    run_rows = np.diff(run_top, append=lit.size)
+    while int((-(-run_rows // band)).sum()) > MAX_WINDOWS:
+        band += 1
+    per_run = -(-run_rows // band)
+    from_top = np.arange(lit.size) - np.repeat(run_top, run_rows)
+    row_band = np.repeat(np.cumsum(per_run) - per_run, run_rows) + from_top // band
+    grouped = np.zeros((int(per_run.sum()), band, mask.shape[1]), dtype=bool)
+    grouped[row_band, from_top % band] = mask[lit]
+    firsts = np.flatnonzero(np.diff(row_band, prepend=-1))
+    ored = np.asarray(grouped.any(axis=1))
+    return ored, lit[firsts], np.diff(firsts, append=lit.size)
+
+
+def _band_runs(mask: np.ndarray, band: int, unit_bytes: float, window_bytes: int) -> np.ndarray:
+    """A cover of the True units of ``mask`` by (x0, y0, x1, y1) boxes (an Nx4 array): each run of rows holding a
+    change (all of them one run from the first to the last when there are more than MAX_WINDOWS) cut into bands
+    from its top (the last one shorter) of ``band`` rows, or the fewest more that make at most MAX_WINDOWS bands,
+    each band into the runs of its changed columns; a gap between two runs of a band is closed when its
+    ``unit_bytes`` cost no more than a window's ``window_bytes``, then the cheapest gaps while more than
+    MAX_WINDOWS boxes remain."""
+    ored, tops, heights = _row_bands(mask, band)
+    bands, starts, ends = mask_runs(ored)
+    rows = heights[bands]
     gap = (starts[1:] - ends[:-1]) * rows[1:] * float(unit_bytes)
     other = bands[1:] != bands[:-1]
     gap[other] = np.inf  # never closed: a window does not cross bands
@@ -111,13 +147,11 @@ def _band_runs(mask: np.ndarray, band: int, unit_bytes: float, window_bytes: int
     if surplus > 0:
         gap[close] = np.inf
         close[np.argpartition(gap, surplus - 1)[:surplus]] = True
-    first = np.flatnonzero(~close) + 1
-    y0 = (bands[first] * band).tolist()
-    y0.insert(0, int(bands[0]) * band)
-    heights = rows[first].tolist()
-    heights.insert(0, int(rows[0]))
-    x0 = starts[first].tolist()
-    x0.insert(0, int(starts[0]))
-    x1 = ends[first - 1].tolist()
-    x1.append(int(ends[-1]))
-    return [(a, b, c, b + h) for a, b, c, h in zip(x0, y0, x1, heights, strict=True)]
+    split = np.ones(starts.size + 1, dtype=bool)  # split[k]: a box starts at run k and ends at run k - 1
+    np.logical_not(close, out=split[1:-1])
+    begin, end = np.flatnonzero(split[:-1]), np.flatnonzero(split[1:])
+    boxes = np.empty((begin.size, 4), dtype=np.intp)
+    boxes[:, 0], boxes[:, 2] = starts[begin], ends[end]
+    boxes[:, 1] = tops[bands[begin]]
+    boxes[:, 3] = boxes[:, 1] + rows[begin]
+    return boxes

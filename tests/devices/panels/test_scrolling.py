@@ -113,8 +113,10 @@ def test_a_window_across_the_ring_end_is_split_and_the_glass_is_right() -> None:
     bus = display.bus
     assert bus is not None
     for dy in (90, 30, -50):  # offset 190, then 220: rows 210..239 wrap to 190..239, 0..9; then down
+        counted, sent = display.stats.bytes, bus.bytes_sent
         scroll(display, dy, rng)
         assert (glass(display) == expected_glass(display)).all(), dy
+        assert display.stats.bytes - counted == bus.bytes_sent - sent  # a split window is counted as sent
     assert display.simulator is not None and not display.simulator.events
 
 
@@ -259,11 +261,58 @@ def after_scroll(display: PanelDisplay) -> int:
     return int(display._scroll.offset)
 
 
+def play(display: PanelDisplay, kind: str, arg: Any, rng: np.random.Generator, shift: Any, fresh: Any, flip: int,
+         dot: Any) -> bool:
+    """One step of a scroll sequence: a scroll by ``shift`` (``flip`` xor-ed into one pixel when touched), drawing
+    operations, a rotation (``fresh`` pixels after it) or a bus fault at the arg-th data transfer of a 3-row
+    scroll, then a dot of ``dot``; True when a scroll left the hardware scroll's offset away from 0."""
+    h = display.canvas.array.shape[0]
+    if kind == "scroll":
+        dy, touch = arg
+        dy = max(-h + 1, min(h - 1, dy))
+        picture = shift(display, dy, rng)
+        if touch:  # a change inside the shifted band too
+            picture[int(rng.integers(0, h)), int(rng.integers(0, picture.shape[1]))] ^= flip
+        display.canvas.blit(picture, 0, 0)
+        display.flush()
+        return bool(after_scroll(display))
+    if kind == "draw":
+        for op in arg:
+            apply(display, op)
+            display.flush()
+    elif kind == "rotate":
+        display.rotate(arg)
+        display.canvas.blit(fresh(rng, *display.canvas.array.shape[:2]), 0, 0)
+        display.flush()
+    else:
+        bus = display.bus
+        assert bus is not None
+        real, calls = bus.data, {"n": 0}
+
+        def failing(data: bytes) -> None:
+            calls["n"] += 1
+            if calls["n"] == arg:
+                raise LinkError("injected")
+            real(data)
+
+        bus.data = failing  # type: ignore[method-assign]
+        try:
+            display.canvas.blit(shift(display, 3, rng), 0, 0)
+            display.flush()
+        except LinkError:
+            pass
+        finally:
+            bus.data = real  # type: ignore[method-assign]
+        display.canvas.lines([[0, 0, 1, 0]], dot)
+        display.flush()
+    return False
+
+
 SCROLL_PANELS = [("st7789", "240x240"), ("st7789", "135x240"), ("ili9341", "240x320"), ("st7735", "80x160")]
 
 
 @st.composite
-def scroll_sequences(draw: Any, width: int, height: int) -> list[tuple[str, Any]]:
+def scroll_sequences(draw: Any, width: int, height: int, mono: bool = False) -> list[tuple[str, Any]]:
     """Drawing operations (as the refresh property test's) with scrolls, rotations and bus faults mixed in."""
     out: list[tuple[str, Any]] = []
     for _ in range(draw(st.integers(1, 8))):
@@ -272,7 +321,7 @@ def scroll_sequences(draw: Any, width: int, height: int) -> list[tuple[str, Any]
             dy = draw(st.one_of(st.integers(-9, 9), st.integers(-height + 1, height - 1)).filter(bool))
             out.append(("scroll", (dy, draw(st.booleans()))))
         elif kind == "draw":
-            out.append(("draw", draw(operations(width, height, False))))
+            out.append(("draw", draw(operations(width, height, mono))))
         elif kind == "rotate":
             out.append(("rotate", draw(st.sampled_from([0, 90, 180, 270]))))
         else:
@@ -294,45 +343,7 @@ def test_glass_equals_canvas_after_every_frame_with_scrolls(model: str, size: st
     @given(scroll_sequences(width, height))
     def frames(ops: list[tuple[str, Any]]) -> None:
         for kind, arg in ops:
-            h = display.canvas.array.shape[0]
-            if kind == "scroll":
-                dy, touch = arg
-                dy = max(-h + 1, min(h - 1, dy))
-                picture = scrolled(display, dy, rng)
-                if touch:  # a change inside the shifted band too
-                    picture[int(rng.integers(0, h)), int(rng.integers(0, picture.shape[1]))] ^= 0xFF
-                display.canvas.blit(picture, 0, 0)
-                display.flush()
-                scrolls["n"] += bool(after_scroll(display))
-            elif kind == "draw":
-                for op in arg:
-                    apply(display, op)
-                    display.flush()
-            elif kind == "rotate":
-                display.rotate(arg)
-                display.canvas.blit(noise(rng, *display.canvas.array.shape[:2]), 0, 0)
-                display.flush()
-            else:
-                bus = display.bus
-                assert bus is not None
-                real, calls = bus.data, {"n": 0}
-
-                def failing(data: bytes, real: Any = real, calls: dict[str, int] = calls, at: int = arg) -> None:
-                    calls["n"] += 1
-                    if calls["n"] == at:
-                        raise LinkError("injected")
-                    real(data)
-
-                bus.data = failing  # type: ignore[method-assign]
-                try:
-                    display.canvas.blit(scrolled(display, 3, rng), 0, 0)
-                    display.flush()
-                except LinkError:
-                    pass
-                finally:
-                    bus.data = real  # type: ignore[method-assign]
-                display.canvas.lines([[0, 0, 1, 0]], (1, 2, 3))
-                display.flush()
+            scrolls["n"] += play(display, kind, arg, rng, scrolled, noise, 0xFF, (1, 2, 3))
             assert (glass(display) == expected_glass(display)).all(), (kind, arg)
 
     frames()

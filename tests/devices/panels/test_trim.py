@@ -5,6 +5,7 @@ whole."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -94,37 +95,50 @@ def test_unchanged_damage_is_nothing_and_a_mostly_changed_rectangle_is_sent_whol
 
 
 def band_runs_oracle(mask: np.ndarray, band: int, unit_bytes: float, window_bytes: int) -> list[tuple[int, ...]]:
-    """Plain Python: per band of rows the runs of its OR-ed columns, a gap closed when its bytes are at most a
-    window's (the rule of ``_band_runs`` before it closes more to keep to MAX_WINDOWS)."""
+    """Plain Python: each run of rows holding a change (one from the first to the last when there are more than
+    MAX_WINDOWS) cut into bands of ``band`` rows from its top (the fewest more that make at most MAX_WINDOWS
+    bands), per band the runs of its OR-ed columns, a gap closed when its bytes are at most a window's (the rule
+    of ``_band_runs`` before it closes more to keep to MAX_WINDOWS)."""
+    runs: list[list[int]] = []
+    for y in range(mask.shape[0]):
+        if mask[y].any() and runs and runs[-1][1] == y:
+            runs[-1][1] = y + 1
+        elif mask[y].any():
+            runs.append([y, y + 1])
+    if len(runs) > MAX_WINDOWS:
+        runs = [[runs[0][0], runs[-1][1]]]
+    band = max(band, -(-sum(b - a for a, b in runs) // MAX_WINDOWS))
+    while sum(-(-(b - a) // band) for a, b in runs) > MAX_WINDOWS:
+        band += 1
+    bands = [[y, min(y + band, b)] for a, b in runs for y in range(a, b, band)]
     out = []
-    for y0 in range(0, mask.shape[0], band):
-        y1 = min(y0 + band, mask.shape[0])
+    for y0, y1 in bands:
         cols = [any(mask[y, x] for y in range(y0, y1)) for x in range(mask.shape[1])]
-        runs: list[list[int]] = []
-        for x, lit in enumerate(cols):
-            if lit and runs and runs[-1][1] == x:
-                runs[-1][1] = x + 1
-            elif lit:
-                if runs and (x - runs[-1][1]) * (y1 - y0) * unit_bytes <= window_bytes:
-                    runs[-1][1] = x + 1
+        spans: list[list[int]] = []
+        for x, on in enumerate(cols):
+            if on and spans and spans[-1][1] == x:
+                spans[-1][1] = x + 1
+            elif on:
+                if spans and (x - spans[-1][1]) * (y1 - y0) * unit_bytes <= window_bytes:
+                    spans[-1][1] = x + 1
                 else:
-                    runs.append([x, x + 1])
-        out += [(a, y0, b, y1) for a, b in runs]
+                    spans.append([x, x + 1])
+        out += [(a, y0, b, y1) for a, b in spans]
     return out
 
 
 @settings(max_examples=200, deadline=None)
-@given(st.integers(0, 2**32 - 1), st.integers(1, 40), st.integers(1, 60), st.sampled_from([1, 2, 4, 8]),
-       st.sampled_from([0.02, 0.1, 0.5]), st.sampled_from([(2.0, 11), (1.0, 6), (3.0, 11)]))
+@given(st.integers(0, 2**32 - 1), st.integers(1, 90), st.integers(1, 60), st.sampled_from([1, 2, 4, 8]),
+       st.sampled_from([0.005, 0.02, 0.1, 0.5]), st.sampled_from([(2.0, 11), (1.0, 6), (3.0, 11)]))
 def test_band_runs_cover_every_changed_unit_in_bands_and_follow_the_gap_rule(seed, h, w, band, density, costs):
     unit_bytes, window_bytes = costs
     mask = np.random.default_rng(seed).random((h, w)) < density
     if not mask.any():
         mask[h // 2, w // 2] = True
-    out = _band_runs(mask, band, unit_bytes, window_bytes)
+    out = [tuple(box) for box in _band_runs(mask, band, unit_bytes, window_bytes).tolist()]
     cover = np.zeros_like(mask)
     for x0, y0, x1, y1 in out:
-        assert y0 % band == 0 and y1 == min(y0 + band, h) and 0 <= x0 < x1 <= w  # one band, inside the mask
+        assert 0 <= y0 < y1 <= h and 0 <= x0 < x1 <= w  # inside the mask
         assert not cover[y0:y1, x0:x1].any()  # no unit sent twice
         cover[y0:y1, x0:x1] = True
     assert (cover >= mask).all()
@@ -162,3 +176,18 @@ def test_a_ticking_clock_sends_its_changed_strokes_not_its_box():
         changed, sent = changed + mask.sum(), sent + cover.sum()
         spanned += (xs.max() - xs.min() + 1) * (ys.max() - ys.min() + 1)
     assert sent < 2 * changed and sent < 0.7 * spanned
+
+
+@pytest.mark.parametrize("lines", [3, MAX_WINDOWS + 1])
+def test_band_runs_start_a_band_at_each_run_of_changed_rows_and_take_too_many_runs_as_one(lines):
+    """Lines of changes 3 rows tall every 5 rows: each line is a band of its own, its blank rows in no band (a
+    band of 4 from the first row would send them); more than MAX_WINDOWS lines are banded as one run."""
+    mask = np.zeros((5 * lines, 30), bool)
+    for k in range(lines):
+        mask[5 * k:5 * k + 3, 2 + k % 7] = True
+    out = [tuple(box) for box in _band_runs(mask, 4, 2.0, 11).tolist()]
+    assert out == band_runs_oracle(mask, 4, 2.0, 11)
+    if lines <= MAX_WINDOWS:
+        assert out == [(2 + k % 7, 5 * k, 3 + k % 7, 5 * k + 3) for k in range(lines)]
+    else:
+        assert out[0][1] == 0 and out[-1][3] == 5 * lines - 2 and len(out) <= MAX_WINDOWS
