@@ -30,9 +30,7 @@ Every error is a :class:`~pixelpen.errors.ParseError` whose ``offset`` is the by
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from functools import partial
-from itertools import starmap
+from dataclasses import replace
 
 from pixelpen.devices.hid.fields import Collection, Field, ReportDescriptor, ReportKind, ReportLayout
 from pixelpen.devices.hid.items import SIGN, exponent_value, s32, scan
@@ -59,19 +57,31 @@ MAX_TOTAL_USAGES = 131072
 """Usages the fields of one descriptor may hold in all (ours: ten full Report Count ranges; about 5 MB)."""
 
 _M32 = 0xFFFFFFFF
-_KINDS = {8: ReportKind.INPUT, 9: ReportKind.OUTPUT, 11: ReportKind.FEATURE}
+_INPUT, _OUTPUT, _FEATURE = ReportKind
+_TAG_KINDS = {8: _INPUT, 9: _OUTPUT, 11: _FEATURE}
+_KINDS = tuple(_TAG_KINDS.get(prefix >> 4) if prefix & 0x0C == 0 else None for prefix in range(256))
+"""The report space of each prefix byte that is an Input, Output or Feature item."""
+_MAIN_KEYS = tuple(prefix >> 4 << 8 for prefix in range(256))
+"""A Main item's tag << 8: the key of its reports, with the report ID in the low byte."""
+_BIT_OF_KIND = {_INPUT: 1, _OUTPUT: 2, _FEATURE: 4}
+_KIND_BITS = tuple(_BIT_OF_KIND[kind] if kind else 0 for kind in _KINDS)
+"""The bit of each Input, Output and Feature prefix byte's report space in a mask of spaces."""
+_NUMBERED = tuple(frozenset(k for k, bit in _BIT_OF_KIND.items() if mask & bit) for mask in range(8))
+"""The report spaces, as a set, of each mask of :data:`_KIND_BITS`."""
 _LOCAL_EXTRAS = {0x38: "designator_index", 0x48: "designator_minimum", 0x58: "designator_maximum",
                  0x78: "string_index", 0x88: "string_minimum", 0x98: "string_maximum"}
 """Local items kept for the dump, by prefix without its size bits."""
 _REPORT_BITS = (MAX_BUFFER_SIZE - 1) * 8
 """Bits a report may hold after its ID byte (``hid_add_field``'s check)."""
-_PAD = bytes(4)
 
-# What the item loop does per prefix byte, numbered by how often descriptors use them (the branches are tried in
-# this order); the Main items are numbered last so that one comparison sends them all to one branch.
+# What the item loop does per prefix byte, numbered by how often descriptors use them: the loop sends the Main items
+# (numbered last) to their branch with one comparison, the next six (_USAGE .. _PAGE) with a second one to a small
+# tree, and tries the rest in this order.
 (_USAGE, _COUNT, _SIZE, _LMAX, _LMIN, _PAGE, _PMAX, _PMIN, _UNIT, _USAGE_MIN, _USAGE_MAX, _REPORT_ID, _EXPONENT,
- _EXT_USAGE, _PUSH, _POP, _DELIMITER, _EXTRA, _IGNORED, _BAD_GLOBAL, _RESERVED, _LONG,
- _FIELD, _COLLECTION, _END, _BAD_MAIN) = range(26)
+ _EXT_USAGE, _PUSH, _POP, _DELIMITER, _EXTRA, _IGNORED, _BAD_GLOBAL, _RESERVED,
+ _FIELD, _COLLECTION, _END, _BAD_MAIN) = range(25)
+_WIDE, _LONG = 25, 26
+"""Not a branch: a short item of 0, 2 or 4 data bytes (its branch is then read from :data:`_WIDE_OPS`), a long item."""
 _GLOBAL_OPS = {0x04: _PAGE, 0x14: _LMIN, 0x24: _LMAX, 0x34: _PMIN, 0x44: _PMAX, 0x54: _EXPONENT, 0x64: _UNIT,
                0x74: _SIZE, 0x84: _REPORT_ID, 0x94: _COUNT, 0xA4: _PUSH, 0xB4: _POP}
 _LOCAL_OPS = {0x08: _USAGE, 0x18: _USAGE_MIN, 0x28: _USAGE_MAX, 0xA8: _DELIMITER} | dict.fromkeys(_LOCAL_EXTRAS, _EXTRA)
@@ -90,10 +100,14 @@ def _op(prefix: int) -> int:
     return _MAIN_OPS.get(t, _BAD_MAIN) if kind == 0 else _RESERVED
 
 
-_OPS = tuple(_op(prefix) for prefix in range(256))
-
-
-_RawField = tuple  # a Field's arguments, as the item loop collects them
+_WIDE_OPS = [_op(prefix) for prefix in range(256)]
+"""The branch of every prefix byte (a list: its items are read faster than a tuple's)."""
+_OPS = [op if prefix & 3 == 1 or op == _LONG else _WIDE for prefix, op in enumerate(_WIDE_OPS)]
+"""What the loop reads first: the branch of a one-data-byte item, else :data:`_WIDE` or :data:`_LONG`."""
+_ALTERNATIVE = {_USAGE: _IGNORED, _USAGE_MIN: _IGNORED, _USAGE_MAX: _IGNORED, _EXT_USAGE: _IGNORED}
+_ALTERNATIVE_WIDE_OPS = [_ALTERNATIVE.get(op, op) for op in _WIDE_OPS]
+_ALTERNATIVE_OPS = [_ALTERNATIVE.get(op, op) for op in _OPS]
+"""The tables in the second and later alternative usage sets of a delimiter, whose usages are ignored."""
 
 
 def _error(data: bytes, source: str | None, message: str, offset: int, token: object = None) -> ParseError:
@@ -132,28 +146,21 @@ def _concatenate_last_usage_page(usages: list[int], extended: list[tuple[int, in
             k -= 1
 
 
-@dataclass(slots=True)
-class _Report:
-    """A report being built: its fields (as :data:`_RawField` tuples) and its length in bits (without the ID
-    byte, as the kernel counts)."""
-
-    kind: ReportKind
-    report_id: int | None
-    fields: list[_RawField]
-    bits: int = 0
-    with_usages: int = 0
+_BITS, _PADDING, _FIELDS, _KIND, _ID, _ID_BITS = range(6)
+"""A report being built is a list: its length in bits (without the ID byte, as the kernel counts), its fields
+without usages, its Field objects, its kind, its report ID (None when unnumbered) and the bits of its ID byte
+(a list is made and read faster than an object with attributes)."""
 
 
-def _parse(data: bytes, source: str | None, reject_long_items: bool,
-           warnings: list[str]) -> tuple[dict[int, _Report], list[Collection]]:
-    """The kernel's ``hid_open_report`` over the bytes: the reports by Main tag << 8 | report ID, and the collections.
+def _parse(data: bytes, source: str | None, reject_long_items: bool, warnings: list[str]) -> ReportDescriptor:
+    """The kernel's ``hid_open_report`` over the bytes, as a :class:`ReportDescriptor`.
 
     One loop cuts the items (as :func:`~pixelpen.devices.hid.items.scan` does) and parses each at once, with
     the parser state in local variables and a branch per prefix byte from :data:`_OPS`:
     ``hid_parser_global``, ``hid_parser_local`` and ``hid_parser_main`` are its branches (an item tuple, the
-    state as attributes or a method per item cost more than the parsing itself).  The bytes are read with
-    four zero bytes after them, so the last item reads its data without a bounds check; an item cut short by
-    the end is then found by :func:`scan`, which is run before any error is raised, so that a truncation is
+    state as attributes or a method per item cost more than the parsing itself).  The bytes are read from a
+    list with four zeros after it, so the last item reads its data without a bounds check; an item cut short
+    by the end is then found by :func:`scan`, which is run before any error is raised, so that a truncation is
     reported first wherever it is, as when the items are cut before they are parsed."""
 
     # globals (struct hid_global), pushed and popped as one tuple; page16 is the Usage Page as a usage's top half
@@ -164,84 +171,84 @@ def _parse(data: bytes, source: str | None, reject_long_items: bool,
     extended: list[tuple[int, int]] = []  # index runs [start, stop) of 4-byte usages, which keep their own page
     usage_min = delimiter_depth = delimiter_branch = 0
     extra: dict[str, object] = {}
-    open_: list[Collection] = []
+    parent: Collection | None = None  # the innermost open collection
+    depth = 0
     collections: list[Collection] = []
-    reports: dict[int, _Report] = {}
+    reports: dict[int, list] = {}  # by Main tag << 8 | report ID
+    order: list[tuple[ReportKind, int | None, list]] = []
+    spaces: dict[ReportKind, dict[int | None, list[Field]]] = {_INPUT: {}, _OUTPUT: {}, _FEATURE: {}}
+    numbered = unnumbered = 0  # masks of _KIND_BITS: the spaces with reports with and without an ID
     total_usages = 0
     n = len(data)
     zeros = len(data.rstrip(b"\0"))  # a 0x00 item from here on starts the trailing zero bytes
-    buf = data + _PAD
-    ops = _OPS
+    buf = [*data, 0, 0, 0, 0]  # a list: its items are read faster than a bytes object's
+    ops, wide_ops = _OPS, _WIDE_OPS
     sign = SIGN  # items.signed_value, inline: a call per item costs more than the item
+    kinds = _KINDS
+    field = Field
     i = offset = 0
     while i < n:
         offset = i
         prefix = buf[i]
-        if prefix & 3 == 1:
+        op = ops[prefix]
+        if op < _WIDE:  # one data byte: most items
             value = buf[i + 1]
             i += 2
-        elif not prefix & 3:
-            value = 0
-            i += 1
-        elif prefix & 3 == 2:
-            value = buf[i + 1] | buf[i + 2] << 8
-            i += 3
-        else:
-            value = buf[i + 1] | buf[i + 2] << 8 | buf[i + 3] << 16 | buf[i + 4] << 24
-            i += 5
-        op = ops[prefix]
-        if op == _USAGE:  # -- hid_parser_local -----------------------------------------------------------------
-            if delimiter_branch > 1:  # an alternative usage set: ignored
-                continue
-            if len(usages) >= MAX_USAGES:
-                raise _error(data, source, f"more than {MAX_USAGES} usages before one Main item", offset)
-            usages.append(page16 | value)
-        elif op == _COUNT:  # -- hid_parser_global ----------------------------------------------------------
-            if value > MAX_USAGES:
-                raise _error(data, source, f"Report Count {value} is over the kernel's {MAX_USAGES}", offset)
-            report_count = value
-        elif op == _SIZE:
-            if value > MAX_REPORT_SIZE:
-                raise _error(data, source, f"Report Size {value} bits is over the kernel's {MAX_REPORT_SIZE}", offset)
-            report_size = value
-        elif op == _LMAX:  # signed only when the minimum before it is negative
-            lmax = value - ((value << 1) & sign[prefix]) if lmin < 0 else value
-        elif op == _LMIN:
-            lmin = value - ((value << 1) & sign[prefix])
-        elif op == _PAGE:
-            usage_page = value
-            page16 = (value & 0xFFFF) << 16
-        elif op >= _FIELD:  # -- hid_parser_main ----------------------------------------------------------------
-            if op == _BAD_MAIN and prefix == 0 and offset >= zeros:
-                # the kernel reads trailing zeros as unknown Main items, which reset the local state
-                delimiter_depth = 0
-                break
+        elif op == _WIDE:  # 0, 2 or 4 data bytes: the op of the prefix, when the value is read
+            size = prefix & 3
+            if size == 2:
+                value = buf[i + 1] | buf[i + 2] << 8
+                i += 3
+            elif size:
+                value = buf[i + 1] | buf[i + 2] << 8 | buf[i + 3] << 16 | buf[i + 4] << 24
+                i += 5
+            else:
+                value = 0
+                i += 1
+            op = wide_ops[prefix]
+        else:  # a long item
+            value = buf[offset + 1]
+            i = offset + 3 + value
+            what = f"long item (tag 0x{buf[offset + 2]:02X}, {value} data bytes)"
+            if reject_long_items:
+                raise _error(data, source, f"{what}: the kernel rejects descriptors with long items", offset)
+            warnings.append(f"{what} at offset {offset} skipped")
+            continue
+        if op >= _FIELD:  # -- hid_parser_main -------------------------------------------------------------------
             if usages and (extended or usages[-1] >> 16 != usage_page):
                 _concatenate_last_usage_page(usages, extended, usage_page, page16)
             if op == _FIELD:  # hid_add_field
-                report = reports.get(prefix >> 4 << 8 | rid)
+                report = reports.get(_MAIN_KEYS[prefix] | rid)
                 if report is None:
-                    report = reports[prefix >> 4 << 8 | rid] = _Report(_KINDS[prefix >> 4], rid or None, [])
+                    kind = kinds[prefix]
+                    report = reports[_MAIN_KEYS[prefix] | rid] = [0, 0, [], kind, rid or None, 8 if rid else 0]
+                    order.append((kind, rid or None, report))
+                    spaces[kind][rid or None] = report[_FIELDS]
+                    if rid:
+                        numbered |= _KIND_BITS[prefix]
+                    else:
+                        unnumbered |= _KIND_BITS[prefix]
+                # the logical range as the kernel compares it: signed when the minimum is negative (the maximum
+                # is then an s32), unsigned otherwise; items.s32 inline, as the maximum is -2**31 .. 2**32 - 1
                 lo, hi = lmin, lmax
                 if lo < 0:
-                    hi = s32(hi)
-                    if hi < lo:
-                        raise _error(data, source, f"Logical Maximum {hi} is below Logical Minimum {lo}", offset)
-                else:
-                    hi &= _M32
-                    if hi < lo:
-                        raise _error(data, source, f"Logical Maximum {hi} is below Logical Minimum {lo}", offset)
-                start = report.bits
-                report.bits = start + report_size * report_count
-                if report.bits > _REPORT_BITS:
-                    raise _error(data, source, f"{report.kind.value} report {report.report_id} is longer than "
-                                f"{MAX_BUFFER_SIZE - 1} bytes ({report.bits} bits)", offset)
-                if usages and report.with_usages == MAX_FIELDS:
-                    warnings.append(f"{report.kind.value} report {report.report_id}: field at offset {offset} "
+                    if hi > 0x7FFFFFFF:
+                        hi -= 0x100000000
+                elif hi < 0:
+                    hi += 0x100000000
+                if hi < lo:
+                    raise _error(data, source, f"Logical Maximum {hi} is below Logical Minimum {lo}", offset)
+                start = report[_BITS]
+                bits = report[_BITS] = start + report_size * report_count
+                if bits > _REPORT_BITS:
+                    raise _error(data, source, f"{report[_KIND].value} report {report[_ID]} is longer than "
+                                 f"{MAX_BUFFER_SIZE - 1} bytes ({bits} bits)", offset)
+                fields = report[_FIELDS]
+                if usages and len(fields) >= MAX_FIELDS and len(fields) - report[_PADDING] == MAX_FIELDS:
+                    warnings.append(f"{report[_KIND].value} report {report[_ID]}: field at offset {offset} "
                                     f"dropped (the kernel keeps {MAX_FIELDS} fields per report)")
                 else:
                     if usages:
-                        report.with_usages += 1
                         if report_count == len(usages) and value & 2:  # one usage per element
                             kept = tuple(usages)
                         else:
@@ -257,30 +264,60 @@ def _parse(data: bytes, source: str | None, reject_long_items: bool,
                     else:  # padding: kept, with no usages (the kernel registers no field for it)
                         kept = ()
                         page = usage_page & 0xFFFF
-                    report.fields.append((
-                        report.kind, report.report_id, page, kept, start + 8 if rid else start, report_size,
-                        report_count, lo, hi, pmin,
-                        s32(pmax) if pmin < 0 else pmax & _M32, unit, exponent,
-                        value, open_[-1] if open_ else None, offset, dict(extra) if extra else {}))
+                        report[_PADDING] += 1
+                    fields.append(field(report[_KIND], report[_ID], page, kept, start + report[_ID_BITS],
+                                        report_size, report_count, lo, hi, pmin,
+                                        s32(pmax) if pmin < 0 else pmax & _M32, unit, exponent,
+                                        value, parent, offset, extra))
+                    extra = {}  # the field's own
             elif op == _COLLECTION:
-                if len(open_) == MAX_COLLECTION_DEPTH:
+                if depth == MAX_COLLECTION_DEPTH:
                     raise _error(data, source, f"collections nested over {MAX_COLLECTION_DEPTH} deep", offset)
-                c = Collection(value & 0xFF, usages[0] if usages else 0, offset, open_[-1] if open_ else None)
-                open_.append(c)
-                collections.append(c)
+                parent = Collection(value & 0xFF, usages[0] if usages else 0, offset, parent)
+                collections.append(parent)
+                depth += 1
             elif op == _END:
-                if not open_:
+                if parent is None:
                     raise _error(data, source, "End Collection without a Collection", offset)
-                open_.pop()
+                parent = parent.parent
+                depth -= 1
+            elif prefix == 0 and offset >= zeros:
+                # the kernel reads trailing zeros as unknown Main items, which reset the local state
+                delimiter_depth = 0
+                break
             else:
                 warnings.append(f"unknown main item 0x{prefix:02X} at offset {offset} ignored")
             if usages or usage_min or delimiter_branch or extra:
                 usages = []
                 if extended:
                     extended = []
+                if delimiter_branch:
+                    ops, wide_ops = _OPS, _WIDE_OPS
                 usage_min = delimiter_depth = delimiter_branch = 0
                 if extra:
                     extra = {}
+        elif op < _PMAX:  # the six commonest items, in a tree of comparisons one down from the Main items
+            if op < _LMAX:
+                if op == _USAGE:  # -- hid_parser_local ---------------------------------------------------------
+                    if len(usages) >= MAX_USAGES:
+                        raise _error(data, source, f"more than {MAX_USAGES} usages before one Main item", offset)
+                    usages.append(page16 | value)
+                elif op == _COUNT:  # -- hid_parser_global --------------------------------------------------
+                    if value > MAX_USAGES:
+                        raise _error(data, source, f"Report Count {value} is over the kernel's {MAX_USAGES}", offset)
+                    report_count = value
+                else:  # _SIZE
+                    if value > MAX_REPORT_SIZE:
+                        raise _error(data, source, f"Report Size {value} bits is over the kernel's "
+                                     f"{MAX_REPORT_SIZE}", offset)
+                    report_size = value
+            elif op == _LMAX:  # signed only when the minimum before it is negative
+                lmax = value - ((value << 1) & sign[prefix]) if lmin < 0 else value
+            elif op == _LMIN:
+                lmin = value - ((value << 1) & sign[prefix])
+            else:  # _PAGE
+                usage_page = value
+                page16 = (value & 0xFFFF) << 16
         elif op == _PMAX:
             pmax = value - ((value << 1) & sign[prefix]) if pmin < 0 else value
         elif op == _PMIN:
@@ -288,11 +325,8 @@ def _parse(data: bytes, source: str | None, reject_long_items: bool,
         elif op == _UNIT:
             unit = value
         elif op == _USAGE_MIN:
-            if delimiter_branch <= 1:
-                usage_min = value
+            usage_min = value
         elif op in (_USAGE_MAX, _EXT_USAGE):
-            if delimiter_branch > 1:
-                continue
             if op == _EXT_USAGE:
                 first = value
                 count = 1
@@ -334,60 +368,46 @@ def _parse(data: bytes, source: str | None, reject_long_items: bool,
                     raise _error(data, source, "nested delimiters", offset)
                 delimiter_depth += 1
                 delimiter_branch += 1
+                if delimiter_branch > 1:  # an alternative usage set: its usages are ignored
+                    ops, wide_ops = _ALTERNATIVE_OPS, _ALTERNATIVE_WIDE_OPS
             else:
                 if delimiter_depth < 1:
                     raise _error(data, source, "close delimiter without an open one", offset)
                 delimiter_depth -= 1
         elif op == _EXTRA:
             extra[_LOCAL_EXTRAS[prefix & 0xFC]] = value
-        elif op == _LONG:
-            value = buf[offset + 1]
-            i = offset + 3 + value
-            what = f"long item (tag 0x{buf[offset + 2]:02X}, {value} data bytes)"
-            if reject_long_items:
-                raise _error(data, source, f"{what}: the kernel rejects descriptors with long items", offset)
-            warnings.append(f"{what} at offset {offset} skipped")
         elif op == _BAD_GLOBAL:
             raise _error(data, source, f"unknown global item tag {prefix >> 4}", offset, f"0x{prefix:02X}")
         elif op == _RESERVED:
             warnings.append(f"reserved item 0x{prefix:02X} at offset {offset} ignored")
     if i > n:  # the last item is cut short
         scan(data, source=source)
-    if open_:
-        raise ParseError(f"unbalanced collection: {len(open_)} still open at the end of the descriptor "
-                         f"(the innermost opened here)", source=source, offset=open_[-1].offset)
+    if parent is not None:
+        raise ParseError(f"unbalanced collection: {depth} still open at the end of the descriptor "
+                         f"(the innermost opened here)", source=source, offset=parent.offset)
     if delimiter_depth:  # (trailing zeros reset it: offset is the last item's)
         raise ParseError("unbalanced delimiter at the end of the descriptor", source=source, offset=offset)
-    return reports, collections
+    if numbered & unnumbered:
+        _number_report_0(order, spaces, _NUMBERED[numbered], warnings)
+    layouts = {(kind, rid): ReportLayout(kind, rid, tuple(report[_FIELDS]),
+                                         (report[_BITS] + 7) // 8 + (0 if rid is None else 1))
+               for kind, rid, report in order}
+    return ReportDescriptor.parsed(data, spaces, layouts, tuple(collections), tuple(warnings), _NUMBERED[numbered])
 
 
-def _layouts(reports: list[_Report]) -> list[ReportLayout]:
-    """The reports built, as layouts of :class:`Field` objects (run on the descriptor's first use of them)."""
-    layouts = []
-    for r in reports:
-        kind, rid = r.kind, r.report_id
-        if rid == 0:  # report 0 of a numbered space: read with an ID byte 0
-            fields = tuple(Field(kind, 0, page, usages, bit_offset + 8, *rest)
-                           for _, _, page, usages, bit_offset, *rest in r.fields)
-        else:
-            fields = tuple(starmap(Field, r.fields))
-        layouts.append(ReportLayout(kind, rid, fields, (r.bits + 7) // 8 + (0 if rid is None else 1)))
-    return layouts
-
-
-def _descriptor(data: bytes, reports: dict[int, _Report], collections: list[Collection],
-                warnings: list[str]) -> ReportDescriptor:
-    """The parsed descriptor from the reports built; its Field objects are made when first used."""
-    numbered = frozenset([r.kind for r in reports.values() if r.report_id])
-    if numbered:
-        for r in reports.values():
-            if r.report_id is None and r.kind in numbered:
-                # the kernel reads every report of a numbered kind with an ID byte, 0 for this one
-                warnings.append(f"{r.kind.value} items with no Report ID in effect make {r.kind.value} "
-                                "report 0, read with an ID byte 0 like the numbered ones")
-                r.report_id = 0
-    return ReportDescriptor(data, partial(_layouts, list(reports.values())), tuple(collections), tuple(warnings),
-                            numbered_kinds=numbered)
+def _number_report_0(order: list[tuple[ReportKind, int | None, list]],
+                     spaces: dict[ReportKind, dict[int | None, list[Field]]], numbered: frozenset[ReportKind],
+                     warnings: list[str]) -> None:
+    """Make the reports with no ID in a space that numbers its reports report 0 (in place)."""
+    for k, (kind, rid, report) in enumerate(order):
+        if rid is None and kind in numbered:
+            # the kernel reads every report of a numbered kind with an ID byte, 0 for this one
+            warnings.append(f"{kind.value} items with no Report ID in effect make {kind.value} "
+                            "report 0, read with an ID byte 0 like the numbered ones")
+            report[_FIELDS] = [replace(f, report_id=0, bit_offset=f.bit_offset + 8) for f in report[_FIELDS]]
+            order[k] = (kind, 0, report)
+            spaces[kind] = {0 if r is None else r: report[_FIELDS] if r is None else fields
+                            for r, fields in spaces[kind].items()}
 
 
 def parse_descriptor(data: bytes, *, reject_long_items: bool = False, vendor_id: int | None = None,
@@ -400,7 +420,7 @@ def parse_descriptor(data: bytes, *, reject_long_items: bool = False, vendor_id:
     notes: list[str] = []
     if vendor_id is not None and product_id is not None:
         data, notes = fixup(data, vendor_id, product_id)
+        data = bytes(data)  # (the descriptor keeps it as it was parsed)
     if not data:
         raise ParseError("empty report descriptor", source=source, offset=0)
-    reports, collections = _parse(data, source, reject_long_items, notes)
-    return _descriptor(data, reports, collections, notes)
+    return _parse(data, source, reject_long_items, notes)

@@ -57,8 +57,8 @@ class CollectionKind(enum.IntEnum):
     USAGE_MODIFIER = 6
 
 
-# Collection and Field are read-only by contract but not frozen: a frozen dataclass's __init__ costs ~4x more,
-# and one is built per main item (the parser defers the Fields to the first use of a descriptor's layouts).
+# Collection, Field and ReportLayout are read-only by contract but not frozen: a frozen dataclass's __init__ costs
+# ~4x more, and the parser builds one per main item and per report.
 @dataclass(slots=True, eq=True, unsafe_hash=True)
 class Collection:
     """A Collection ... End Collection: its type byte, its usage, where it starts, and its parent (read-only)."""
@@ -141,9 +141,9 @@ class Field:
         return tuple((u >> 16, u & 0xFFFF) for u in self.usages)
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True, eq=True, unsafe_hash=True)
 class ReportLayout:
-    """One report of one kind: its ID (None when unnumbered), its fields and its length in bytes."""
+    """One report of one kind: its ID (None when unnumbered), its fields and its length in bytes (read-only)."""
 
     kind: ReportKind
     report_id: int | None
@@ -178,29 +178,51 @@ class _Once(Generic[_T]):
 class ReportDescriptor:
     """A parsed report descriptor: the input, output and feature reports and their fields."""
 
-    def __init__(
-        self,
-        data: bytes,
-        layouts: Sequence[ReportLayout] | Callable[[], Sequence[ReportLayout]],
-        collections: tuple[Collection, ...],
-        warnings: tuple[str, ...] = (),
-        *,
-        numbered_kinds: frozenset[ReportKind] = frozenset(),
-    ) -> None:
-        """``layouts`` may be a function giving them on first use (the parser's: making the Field objects is
-        most of a small descriptor's parse); ``numbered_kinds`` must then say which spaces they number."""
+    # slots, set by both constructors; __dict__ holds the codec's caches, made on first use
+    __slots__ = ("__dict__", "collections", "data", "feature_reports", "input_reports", "layouts", "numbered",
+                 "numbered_kinds", "output_reports", "warnings")
+
+    data: bytes
+    collections: tuple[Collection, ...]
+    layouts: dict[tuple[ReportKind, int | None], ReportLayout]
+    """Every report's layout by (kind, report ID), in the order the descriptor first names them."""
+    warnings: tuple[str, ...]
+    input_reports: dict[int | None, list[Field]]
+    """The input reports' fields by report ID (None when the space does not number its reports)."""
+    output_reports: dict[int | None, list[Field]]
+    """The output reports' fields by report ID."""
+    feature_reports: dict[int | None, list[Field]]
+    """The feature reports' fields by report ID."""
+    numbered_kinds: frozenset[ReportKind]
+    """The report spaces whose reports start with an ID byte (the kernel numbers each space on its own)."""
+    numbered: bool
+    """Whether any report starts with a report-ID byte (the descriptor has a Report ID item)."""
+
+    def __init__(self, data: bytes, layouts: Sequence[ReportLayout], collections: tuple[Collection, ...],
+                 warnings: tuple[str, ...] = ()) -> None:
+        """A descriptor of the reports ``layouts`` (the parser makes its own with :meth:`parsed`)."""
         self.data = bytes(data)
         self.collections = collections
         self.warnings = warnings
-        if callable(layouts):
-            self._pending = layouts
-        else:
-            self.layouts = {(r.kind, r.report_id): r for r in layouts}
-            numbered_kinds = frozenset(r.kind for r in layouts if r.report_id is not None)
-        self.numbered = bool(numbered_kinds)
-        """Whether any report starts with a report-ID byte (the descriptor has a Report ID item)."""
-        self.numbered_kinds = numbered_kinds
-        """The report spaces whose reports start with an ID byte (the kernel numbers each space on its own)."""
+        self.layouts = {(r.kind, r.report_id): r for r in layouts}
+        spaces: dict[ReportKind, dict[int | None, list[Field]]] = {_INPUT: {}, _OUTPUT: {}, _FEATURE: {}}
+        for r in layouts:
+            spaces[r.kind][r.report_id] = list(r.fields)
+        self.input_reports, self.output_reports, self.feature_reports = spaces.values()
+        self.numbered_kinds = frozenset(r.kind for r in layouts if r.report_id is not None)
+        self.numbered = bool(self.numbered_kinds)
+
+    @classmethod
+    def parsed(cls, data: bytes, spaces: Mapping[ReportKind, dict[int | None, list[Field]]],
+               layouts: dict[tuple[ReportKind, int | None], ReportLayout], collections: tuple[Collection, ...],
+               warnings: tuple[str, ...], numbered_kinds: frozenset[ReportKind]) -> ReportDescriptor:
+        """The parser's descriptor, of its three report spaces and its layouts as it made them."""
+        self = cls.__new__(cls)
+        self.data, self.collections, self.warnings, self.layouts = data, collections, warnings, layouts
+        self.input_reports, self.output_reports, self.feature_reports = spaces[_INPUT], spaces[_OUTPUT], \
+            spaces[_FEATURE]
+        self.numbered_kinds, self.numbered = numbered_kinds, bool(numbered_kinds)
+        return self
 
     # the codec's caches, made on first use (most descriptors parsed are decoded in one space, if at all)
     @_Once
@@ -214,31 +236,6 @@ class ReportDescriptor:
     @_Once
     def _decode_functions(self) -> dict[ReportKind, dict[int | None, Callable[[bytes], Values]]]:
         return {_INPUT: {}, _OUTPUT: {}, _FEATURE: {}}
-
-    @_Once
-    def layouts(self) -> dict[tuple[ReportKind, int | None], ReportLayout]:
-        """Every report's layout by (kind, report ID)."""
-        layouts = {(r.kind, r.report_id): r for r in self._pending()}
-        del self._pending
-        return layouts
-
-    @_Once
-    def input_reports(self) -> dict[int | None, list[Field]]:
-        """The input reports' fields by report ID (None when the space does not number its reports)."""
-        return self._space(ReportKind.INPUT)
-
-    @_Once
-    def output_reports(self) -> dict[int | None, list[Field]]:
-        """The output reports' fields by report ID."""
-        return self._space(ReportKind.OUTPUT)
-
-    @_Once
-    def feature_reports(self) -> dict[int | None, list[Field]]:
-        """The feature reports' fields by report ID."""
-        return self._space(ReportKind.FEATURE)
-
-    def _space(self, kind: ReportKind) -> dict[int | None, list[Field]]:
-        return {rid: list(r.fields) for (k, rid), r in self.layouts.items() if k is kind}
 
     def __repr__(self) -> str:
         counts = ", ".join(f"{k.value} {sorted(map(str, s))}" for k, s in

@@ -432,7 +432,7 @@ def test_errors_name_the_source():
     assert str(err).startswith("dev.bin, byte offset 0:")
 
 
-# -- the item loop and the deferred Field objects ---------------------------------------------------------------
+# -- the item loop and the parser's own ReportDescriptor ------------------------------------------------------
 def test_an_item_cut_short_at_the_end_is_reported_before_an_earlier_error():
     data = bytes([0x85, 0x00, 0x26, 0xFF])       # Report ID 0 (an error), then a Logical Maximum cut short
     assert (error_of(list(data)).offset, error_of(list(data[:2])).offset) == (2, 0)
@@ -486,14 +486,15 @@ REPORT_0 = bytes([*APP, 0x15, 0x00, 0x25, 0x7F, 0x75, 0x08, 0x95, 0x01, 0x09, 0x
 
 
 @pytest.mark.parametrize("data", [*DESCRIPTORS.values(), MS_WHEEL_MOUSE, REPORT_0])
-def test_fields_made_on_first_use_equal_an_eager_descriptor(data):
-    lazy = parse_descriptor(data)
-    spaces = (lazy.feature_reports, lazy.output_reports, lazy.input_reports)   # a space before the layouts
-    eager = ReportDescriptor(data, list(parse_descriptor(data).layouts.values()), lazy.collections, lazy.warnings)
-    assert (eager.feature_reports, eager.output_reports, eager.input_reports) == spaces
-    assert eager.layouts == lazy.layouts and list(eager.layouts) == list(lazy.layouts)
-    assert (eager.numbered, eager.numbered_kinds) == (lazy.numbered, lazy.numbered_kinds)
-    assert all(f.report_id == rid and f.kind is kind for (kind, rid), r in lazy.layouts.items() for f in r.fields)
+def test_the_parsers_descriptor_equals_one_made_from_its_layouts(data):
+    parsed = parse_descriptor(data)
+    spaces = (parsed.feature_reports, parsed.output_reports, parsed.input_reports)
+    public = ReportDescriptor(data, list(parse_descriptor(data).layouts.values()), parsed.collections,
+                              parsed.warnings)
+    assert (public.feature_reports, public.output_reports, public.input_reports) == spaces
+    assert public.layouts == parsed.layouts and list(public.layouts) == list(parsed.layouts)
+    assert (public.numbered, public.numbered_kinds) == (parsed.numbered, parsed.numbered_kinds)
+    assert all(f.report_id == rid and f.kind is kind for (kind, rid), r in parsed.layouts.items() for f in r.fields)
 
 
 # -- hid-tools as an oracle -----------------------------------------------------------------------------------
