@@ -36,7 +36,9 @@ A wrong target draws its wrong leg before any report can show it (GRBL has no ch
 After a fault (``_where``, on the fresh link): GRBL is left to run what it received (Idle and silent for
 longer than a pen dwell, or a finished hold), a half line is flushed by the ``$$`` query it spoils, ``$$``
 gives the step size (the position tolerance), and the status
-report the position (work coordinates) and the pen (spindle output or Z).  A welcome banner (power, reset,
+report the position (work coordinates) and the pen (spindle output or Z).  GRBL parses the ``$$`` only after
+every line before it (so after a dwell a garbled byte made long), but may answer it before the motion those
+lines queued starts: a busy report after it means waiting for that motion too.  A welcome banner (power, reset,
 the Arduino's auto-reset on opening the port), an alarm that loses position, ``$SLP`` or a restart seen
 during the plot mean the position is lost: the resume asks for ``$H`` (``go_home()`` with $22=1) or a check.
 
@@ -415,6 +417,17 @@ class GrblPlotter(GrblStream):
                                    detail="GRBL raised an alarm on the reset that ended its hold")
         settings = self._settings()
         status = self.query_status()
+        if status.busy and not status.held:
+            # GRBL answers $$ with motion still queued behind a long (garbled) dwell: let that run out too
+            self._stale = True
+            try:
+                while status.busy and not status.held:
+                    self._settled_status()
+                    settings = self._settings()
+                    status = self.query_status()
+            finally:
+                self._stale = False
+            pen = self._pen_down_of(status)
         steps = min(settings.get(100, math.inf), settings.get(101, math.inf))
         # a hold stops mid-leg: GRBL steps each axis within one step of the straight line
         tolerance_mm = 0.0015 + (math.sqrt(2.0) / steps if math.isfinite(steps) and steps > 0 else 0.0)

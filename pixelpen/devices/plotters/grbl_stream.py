@@ -180,7 +180,7 @@ class GrblStream(PlotterDisplay):
             if self._idle_polls >= IDLE_POLLS_BEFORE_LOSS + math.ceil(dwell / self.timeout):
                 raise LinkTimeout(
                     f"grbl: controller is {status.state} but {len(self.counter)} line(s) were never acknowledged "
-                    f"(oldest {self.counter.oldest()!r}): bytes were lost on the line"
+                    f"(oldest {self.counter.oldest()!r}): bytes were lost on the line, or a garbled G4 made it dwell"
                 )
 
     def _read_polling(self, timeout: float) -> str | None:

@@ -649,6 +649,8 @@ def host_bytes(dl: DisplayList) -> bytes:
     pytest.param(b"G1 X60.000 Y30.000", 0, 0, id="letter"),  # '1 X60...': error:1, the leg never runs
     pytest.param(b"G1 X60.000 Y30.000", 18, 0, id="newline"),  # joined with the next line: rejected both
     pytest.param(b"G1 X60.000 Y30.000", 13, 1, id="y-digit"),  # Y3.000: a wrong leg the other way
+    # P015: a 15 s dwell before the travel; GRBL answers the resume's $$ with that travel still queued
+    pytest.param(b"M3 S500 G4 P0.15 G0 X50.000 Y20.000", 13, 0, id="dwell"),
 ])
 def test_a_dropped_byte_is_located_and_redrawn_from_the_line_it_spoiled(line, byte, stray):
     """A byte GRBL drops (corrupt_at: inverted, >= 0x80) spoils one line: the resume starts at that line's start.
