@@ -559,7 +559,7 @@ class PlotterDisplay(VectorDisplay, ManualControl):
             at = self._stopped_at
             self._job_state.stopped_at = None if at is None or at.position is None else [
                 float(at.position[0]), float(at.position[1]), -1 if at.pen_down is None else int(at.pen_down),
-                at.tolerance, int(at.held)]
+                at.tolerance, *([1] if at.held else [])]  # 4 fields unless held, as readers before held expect
             self._job_state.save(self.state_file)
 
     def _hold_while_paused(self) -> None:

@@ -70,6 +70,7 @@ from pixelpen.devices.plotters.grbl_encode import (
 from pixelpen.devices.plotters.grbl_garble import Garble, SentLeg
 from pixelpen.devices.plotters.grbl_stream import (
     INK_TOLERANCE_MM,
+    SETTLE_LIMIT_S,
     STATUS_INTERVAL_S,
     STOP_WAIT_S,
     GrblStream,
@@ -371,6 +372,7 @@ class GrblPlotter(GrblStream):
             for line in [*self.pen_motion.up_lines(), "M5"]:
                 self._send_line(line, wait=True)
             self.track.start(self._work_units(self.query_status()))
+            self.legs, self._on_path = [], None  # the next plot's lines are checked afresh
             self._tracking = True
         except (LinkError, ProtocolError, ParseError) as exc:
             log.warning("grbl: could not leave the plotter safe: %s", exc)
@@ -380,7 +382,9 @@ class GrblPlotter(GrblStream):
 
         A welcome banner (GRBL just booted: power, reset, an Arduino's auto-reset on opening the port), an alarm
         that loses position, sleep, or a restart seen during the plot mean the position is lost.  A half line
-        left by the broken transfer never runs: the ``$$`` query that follows it is rejected with it.
+        left by the broken transfer never runs: the ``$$`` query that follows it is rejected with it.  A hold is
+        ended by a soft reset (the pen is read before it: the reset lifts it), and motion GRBL still queued when it
+        answered ``$$`` (behind a long, garbled dwell) is waited for; all bounded by SETTLE_LIMIT_S.
         """
         link = self._link()
         self._tracking = False
@@ -407,26 +411,29 @@ class GrblPlotter(GrblStream):
             self._stale = False
         if lost or status.state in ("Alarm", "Sleep"):
             return DeviceWhere(None, None, position_lost=True, detail=lost or f"GRBL is in {status.state} state")
-        pen, held = self._pen_down_of(status), status.held  # as it came to rest: the reset ending a hold lifts it
-        if held:  # no line is parsed during a hold: end it as _connect would, position kept when at rest
-            self.soft_reset()
-            self._settle()
+        deadline = self.clock.now() + SETTLE_LIMIT_S
+        while True:
+            held = status.held
+            pen = self._pen_down_of(status)  # as it came to rest: the reset ending a hold lifts the pen
+            if held:  # no line is parsed during a hold: end it as _connect would, position kept when at rest
+                self.soft_reset()
+                self._settle()
+                if self.query_status().state == "Alarm":
+                    return DeviceWhere(None, None, position_lost=True,
+                                       detail="GRBL raised an alarm on the reset that ended its hold")
+            settings = self._settings()
             status = self.query_status()
-            if status.state == "Alarm":
-                return DeviceWhere(None, None, position_lost=True,
-                                   detail="GRBL raised an alarm on the reset that ended its hold")
-        settings = self._settings()
-        status = self.query_status()
-        if status.busy and not status.held:
+            if not status.busy:
+                break
             # GRBL answers $$ with motion still queued behind a long (garbled) dwell: let that run out too
+            if self.clock.now() >= deadline:
+                raise LinkTimeout(f"grbl: still {status.state} {SETTLE_LIMIT_S}s after reconnecting")
             self._stale = True
             try:
-                while status.busy and not status.held:
-                    self._settled_status()
-                    settings = self._settings()
-                    status = self.query_status()
+                status = self._settled_status()
             finally:
                 self._stale = False
+        if not held:
             pen = self._pen_down_of(status)
         steps = min(settings.get(100, math.inf), settings.get(101, math.inf))
         # a hold stops mid-leg: GRBL steps each axis within one step of the straight line

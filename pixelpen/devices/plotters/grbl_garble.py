@@ -22,8 +22,8 @@ __all__ = ["Garble", "SentLeg", "explain_position", "garbled_variants", "words_o
 class SentLeg:
     """One motion line sent in a plot: it moves from ``start`` to ``end`` (device units) with the pen ``down``.
 
-    ``stroke``/``vertex`` say what it reaches (vertex None: the travel to the stroke's first point); ``pen`` is
-    the S value (servo) the line itself sets, None when it sets none.
+    ``stroke``/``vertex`` say what it reaches (vertex None: the travel to the stroke's first point); ``line`` is
+    the G-code as sent.
     """
 
     stroke: int
