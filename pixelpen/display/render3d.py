@@ -257,7 +257,7 @@ def _bands(y: np.ndarray, rows: int, height: int) -> list[tuple[int, np.ndarray]
 
 class _BufferPool:
     """Band z-buffers kept from draw to draw, with their depth and fragment memory (no fresh pages per draw):
-    the MAX_WORKERS + 1 released last (a draw's full bands and its shorter last one), found by size. Each holds
+    the threads' count + 1 released last (a draw's full bands and its shorter last one), found by size. Each holds
     at most about 9 float64 a band pixel (depth, fragments, ties), some 10 MB at the default BAND_PIXELS."""
 
     def __init__(self) -> None:
@@ -278,10 +278,20 @@ class _BufferPool:
         """Give a z-buffer back to be kept (the oldest kept one goes when there are too many)."""
         with self._lock:
             self._free.append(zbuffer)
-            del self._free[:-(MAX_WORKERS + 1)]
+            del self._free[:-(_workers() + 1)]
+
+    def clear(self) -> None:
+        """Let every kept z-buffer go."""
+        with self._lock:
+            self._free.clear()
 
 
 _BUFFERS = _BufferPool()
+
+
+def free_buffers() -> None:
+    """Release the band z-buffers kept between draws (one per drawing thread plus one, about 10 MB each)."""
+    _BUFFERS.clear()
 
 
 def _workers() -> int:

@@ -22,6 +22,8 @@ from pixelpen.geometry.clip import (
     outcodes,
 )
 from pixelpen.geometry.clip3d import (
+    FaceClip,
+    clip_faces_homogeneous,
     clip_points_homogeneous,
     clip_polygon_homogeneous,
     clip_segments_homogeneous,
@@ -92,6 +94,7 @@ __all__ = [
     "BSplineSurface",
     "BezierSurface",
     "Ellipsoid",
+    "FaceClip",
     "Mesh",
     "MeshEdges",
     "PolygonTable",
@@ -116,6 +119,7 @@ __all__ = [
     "bezier_point",
     "bspline_basis",
     "bspline_point",
+    "clip_faces_homogeneous",
     "clip_points_homogeneous",
     "clip_polygon",
     "clip_polygon_convex",

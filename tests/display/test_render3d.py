@@ -436,8 +436,11 @@ def test_band_buffers_kept_from_draw_to_draw_start_cleared():
     np.testing.assert_array_equal(draw(far), first)  # ... which must not hide the far square
     assert (first[1:-1, 1:-1] == (0, 0, 255)).all()
     draw(far, size=(30, 30))  # another size lets the kept buffers go
-    assert len(render3d._BUFFERS._free) <= render3d.MAX_WORKERS + 1
+    assert len(render3d._BUFFERS._free) <= render3d._workers() + 1
     np.testing.assert_array_equal(draw(far), first)
+    render3d.free_buffers()
+    assert not render3d._BUFFERS._free
+    np.testing.assert_array_equal(draw(far), first)  # fresh buffers after the release
 
 
 @pytest.mark.parametrize("step", [1, 5, 1 << 14])
