@@ -165,26 +165,52 @@ CHUNK_PIXELS = 1 << 17
 """Pixels converted per step by the chunked converters here and in formats: byte planes stay in L2 cache."""
 
 
+_RGB565_CHUNK = CHUNK_PIXELS // 4
+"""Pixels :func:`rgb888_to_rgb565` converts per step: its input, output and two scratch planes stay in L2."""
+_RGB565_RED, _RGB565_GREEN, _RGB565_BLUE_SHIFT, _THREE = (np.uint16(v) for v in (0xF800, 0x07E0, 11, 3))
+"""uint16 constants of :func:`_rgb565_rows` (a numpy scalar operand costs less per call than a Python int)."""
+
+
+def _rgb565_rows(rgb: np.ndarray, out: np.ndarray, green: np.ndarray, blue: np.ndarray) -> None:
+    """RGB565 of HxWx3 uint8 ``rgb`` (a pixel's bytes adjacent) into HxW uint16 ``out``; ``green``, ``blue`` alike.
+
+    Two strided reads of byte pairs instead of three of bytes (``R<<8 | G`` through a big-endian uint16 view,
+    ``G | B<<8`` through a little-endian one), then six uint16 operations on contiguous data.
+    """
+    np.copyto(out, rgb[..., 0:2].view(">u2")[..., 0])
+    np.copyto(blue, rgb[..., 1:3].view("<u2")[..., 0])
+    np.left_shift(out, _THREE, out=green)
+    green &= _RGB565_GREEN
+    out &= _RGB565_RED
+    out |= green
+    blue >>= _RGB565_BLUE_SHIFT
+    out |= blue
+
+
 def rgb888_to_rgb565(rgb: ArrayLike) -> np.ndarray:
     """uint8 RGB (shape (..., 3)) to uint16 RGB565 by truncation: ((R&0xF8)<<8) | ((G&0xFC)<<3) | (B>>3).
 
-    Works in cache-sized chunks on contiguous byte planes (about 7 ms for a 1080p frame).
+    Works in cache-sized chunks of rows (about 3.5 ms for a 1080p frame).
     """
-    arr = _uint8_triples(rgb, "rgb")
-    flat = arr.reshape(-1, 3)
-    out = np.empty(flat.shape[0], dtype=np.uint16)
-    green = np.empty(min(flat.shape[0], CHUNK_PIXELS), dtype=np.uint16)
-    for start in range(0, flat.shape[0], CHUNK_PIXELS):
-        part = flat[start:start + CHUNK_PIXELS]
-        value = out[start:start + CHUNK_PIXELS]
-        g16 = green[: part.shape[0]]
-        np.left_shift(np.ascontiguousarray(part[:, 0]), 8, out=value, dtype=np.uint16)
-        value &= 0xF800
-        np.left_shift(np.ascontiguousarray(part[:, 1]), 3, out=g16, dtype=np.uint16)
-        g16 &= 0x07E0
-        value |= g16
-        value |= np.ascontiguousarray(part[:, 2]) >> 3
-    return out.reshape(arr.shape[:-1])
+    arr = rgb
+    if type(arr) is not np.ndarray or arr.dtype != np.uint8 or arr.ndim != 3 or arr.shape[2] != 3:
+        arr = _uint8_triples(rgb, "rgb")
+        if arr.ndim != 3:
+            return rgb888_to_rgb565(arr.reshape(-1, 1, 3)).reshape(arr.shape[:-1])
+    if arr.strides[2] != 1:
+        arr = np.ascontiguousarray(arr)
+    shape = arr.shape[:2]
+    out = np.empty(shape, dtype=np.uint16)
+    rows = _RGB565_CHUNK // shape[1] if shape[1] else shape[0]
+    if shape[0] <= rows:
+        _rgb565_rows(arr, out, np.empty(shape, dtype=np.uint16), np.empty(shape, dtype=np.uint16))
+        return out
+    green = np.empty((rows, shape[1]), dtype=np.uint16)
+    blue = np.empty_like(green)
+    for y in range(0, shape[0], rows):
+        n = min(rows, shape[0] - y)
+        _rgb565_rows(arr[y:y + n], out[y:y + n], green[:n], blue[:n])
+    return out
 
 
 def rgb565_to_rgb888(values: ArrayLike) -> np.ndarray:

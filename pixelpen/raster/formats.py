@@ -31,6 +31,7 @@ Mono formats light a pixel iff: bitmap value is true; grey ``>= 128``; RGB
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -192,16 +193,25 @@ def _lit(view: np.ndarray, kind: str) -> np.ndarray:
     return lit
 
 
+_PAGE_GATHER = np.uint64(0x0102040810204080)
+"""Multiplier of a little-endian uint64 of eight 0/1 bytes: byte k lands alone on bit 56 + k (no carries)."""
+
+
 def _pages(lit: np.ndarray) -> np.ndarray:
-    """Pack an HxW bool mask into (ceil(H/8), W) SSD1306 page bytes, bit k = row 8·page + k."""
+    """Pack an HxW bool mask into (ceil(H/8), W) SSD1306 page bytes, bit k = row 8·page + k.
+
+    A column's eight rows of a page become one little-endian uint64 of 0/1 bytes, gathered into one byte by
+    one multiplication.
+    """
     h, w = lit.shape
     if h % 8:
-        lit = np.concatenate([lit, np.zeros((8 - h % 8, w), dtype=bool)])
-    bits = lit.view(np.uint8).reshape(lit.shape[0] // 8, 8, w)
-    out = bits[:, 0, :].copy()
-    for k in range(1, 8):
-        out |= bits[:, k, :] << k
-    return out
+        padded = np.zeros((h + 8 - h % 8, w), dtype=bool)
+        padded[:h] = lit
+        lit = padded
+    columns = np.ascontiguousarray(lit.reshape(lit.shape[0] // 8, 8, w).transpose(0, 2, 1)).view("<u8")[..., 0]
+    gathered = columns * _PAGE_GATHER
+    gathered >>= np.uint64(56)
+    return gathered.astype(np.uint8)
 
 
 def _reordered(pixels: np.ndarray, order: tuple[int, ...], pad: int | None = None) -> np.ndarray:
@@ -217,25 +227,37 @@ def _reordered(pixels: np.ndarray, order: tuple[int, ...], pad: int | None = Non
     return out
 
 
-def _encode(view: np.ndarray, kind: str, name: str) -> bytes:
-    """Pack one (already windowed) image view."""
-    if name in ("rgb565be", "rgb565le"):
-        values = view if kind == "rgb565" else rgb888_to_rgb565(as_rgb_image(view))
-        return values.astype(">u2" if name == "rgb565be" else "<u2", copy=False).tobytes()
-    if name == "mono-pages":
-        return _pages(_lit(view, kind)).tobytes()
-    if name == "mono-rows":
-        return np.packbits(_lit(view, kind), axis=1, bitorder="big").tobytes()
+def _rgb565(view: np.ndarray, kind: str, order: str) -> bytes:
+    """An rgb565 format: uint16 values as they are, anything else converted; ``order`` ">u2" or "<u2"."""
+    if kind == "rgb565":
+        return view.astype(order, copy=False).tobytes()
+    values = rgb888_to_rgb565(view if kind == "rgb" else as_rgb_image(view))
+    if values.dtype.str != order:
+        values.byteswap(inplace=True)  # our own array: swapped in place, its bytes in ``order``
+    return values.tobytes()
+
+
+def _colour(view: np.ndarray, kind: str, name: str) -> np.ndarray:
+    """The window as HxWx3 RGB for the 24/32-bit format ``name`` (RGB565 values are a ConfigError)."""
+    if kind == "rgb":
+        return view
     if kind == "rgb565":
         raise ConfigError(f"HxW uint16 RGB565 values pack only to rgb565be/rgb565le, not {name}")
-    rgb = as_rgb_image(view)
-    if name == "rgb666":
-        return np.bitwise_and(rgb, 0xFC).tobytes()
-    if name == "rgb888":
-        return rgb.tobytes()
-    if name == "bgr888":
-        return _reordered(rgb, (2, 1, 0)).tobytes()
-    return _reordered(rgb, (2, 1, 0), 0xFF).tobytes()  # xrgb8888: memory B, G, R, X
+    return as_rgb_image(view)
+
+
+_ENCODERS: dict[str, Callable[[np.ndarray, str], bytes]] = {
+    "rgb565be": lambda view, kind: _rgb565(view, kind, ">u2"),
+    "rgb565le": lambda view, kind: _rgb565(view, kind, "<u2"),
+    "mono-pages": lambda view, kind: _pages(_lit(view, kind)).tobytes(),
+    "mono-rows": lambda view, kind: np.packbits(_lit(view, kind), axis=1, bitorder="big").tobytes(),
+    "rgb666": lambda view, kind: np.bitwise_and(_colour(view, kind, "rgb666"), 0xFC).tobytes(),
+    "rgb888": lambda view, kind: _colour(view, kind, "rgb888").tobytes(),
+    "bgr888": lambda view, kind: _reordered(_colour(view, kind, "bgr888"), (2, 1, 0)).tobytes(),
+    # xrgb8888: memory B, G, R, X
+    "xrgb8888": lambda view, kind: _reordered(_colour(view, kind, "xrgb8888"), (2, 1, 0), 0xFF).tobytes(),
+}
+"""Each format's packer of one (already windowed) image view of a kind."""
 
 
 def pack(array: ArrayLike, fmt: str | PixelFormat, region: Region | None = None) -> bytes:
@@ -245,11 +267,15 @@ def pack(array: ArrayLike, fmt: str | PixelFormat, region: Region | None = None)
     (a view, the frame is not copied). For ``mono-pages`` the window is widened to whole pages —
     :func:`align_region` says which window the bytes cover. Rows are packed tightly (no stride).
     """
-    f = pixel_format(fmt)
-    arr = np.asarray(array)
+    encode = _ENCODERS.get(fmt) if type(fmt) is str else None
+    if encode is None:
+        encode = _ENCODERS[pixel_format(fmt).name]
+    arr = array if type(array) is np.ndarray else np.asarray(array)
     kind = image_kind(arr)
-    x0, y0, x1, y1 = align_region(f, region, arr.shape[1], arr.shape[0])
-    return _encode(arr[y0:y1, x0:x1], kind, f.name)
+    if region is not None:
+        x0, y0, x1, y1 = align_region(fmt, region, arr.shape[1], arr.shape[0])
+        arr = arr[y0:y1, x0:x1]
+    return encode(arr, kind)
 
 
 def _frame_bytes(data: object, f: PixelFormat, width: int, height: int) -> np.ndarray:
