@@ -71,12 +71,20 @@ class PlotState:
     def load(cls, path: Path) -> PlotState:
         """Read a state file; a ParseError names the file and the field that is wrong."""
         try:
-            data = json.loads(Path(path).read_text(encoding="utf-8"))
+            raw = Path(path).read_bytes()
         except OSError as exc:
             raise ParseError(f"cannot read plot state: {exc.strerror}", source=str(path)) from None
+        try:
+            data = json.loads(raw.decode("utf-8"))
+        except UnicodeDecodeError as exc:
+            raise ParseError(f"plot state is not UTF-8 text ({exc.reason})", source=str(path),
+                             offset=exc.start) from None
         except json.JSONDecodeError as exc:
             raise ParseError(f"plot state is not JSON: {exc.msg}", source=str(path), line=exc.lineno,
                              column=exc.colno) from None
+        except (RecursionError, ValueError) as exc:  # nesting too deep; an integer past Python's digit limit
+            raise ParseError(f"plot state is not readable JSON: {type(exc).__name__}: {exc}"[:200],
+                             source=str(path)) from None
         if not isinstance(data, dict) or data.get("version") not in _STATE_VERSIONS:
             raise ParseError(f"not a version-{STATE_VERSION} pixelpen plot state", source=str(path))
         try:
