@@ -76,6 +76,7 @@ from pixelpen.devices.plotters.grbl_stream import (
     GrblStream,
     Tag,
 )
+from pixelpen.devices.plotters.resume import near_segment
 from pixelpen.display.registry import register_display
 from pixelpen.drivers.discovery import list_serial_ports
 from pixelpen.drivers.stream import Link
@@ -243,8 +244,7 @@ class GrblPlotter(GrblStream):
         self._idle_polls = 0
         link.reset_input()
         link.write(REALTIME_STATUS)
-        self._stale = True  # acknowledgements of lines an earlier connection sent may still arrive
-        try:
+        with self._stale_acks():  # acknowledgements of lines an earlier connection sent may still arrive
             first = self._first_answer(max(self.timeout, BOOT_WAIT_S))
             if first == "status":
                 # GRBL was already running (no auto-reset): let it finish the lines it holds, then reset it
@@ -254,8 +254,6 @@ class GrblPlotter(GrblStream):
             elif first is None:
                 self.soft_reset()
             self._settle()
-        finally:
-            self._stale = False
         status = self.query_status()
         if status.state == "Alarm":
             if not self.unlock:
@@ -396,8 +394,7 @@ class GrblPlotter(GrblStream):
         reached, self._reached = self._reached, None
         garbled, self._garbled = self._garbled, None
         self._unverified = None
-        self._stale = True  # acknowledgements of the broken connection's lines may still arrive
-        try:
+        with self._stale_acks():  # acknowledgements of the broken connection's lines may still arrive
             first = self._first_answer(max(self.timeout, BOOT_WAIT_S))
             if first is None:
                 raise LinkTimeout(f"grbl: no answer to '?' within {max(self.timeout, BOOT_WAIT_S)}s")
@@ -407,15 +404,13 @@ class GrblPlotter(GrblStream):
                                    "auto-reset lose its position")
             status = self._settled_status()
             self._settle()
-        finally:
-            self._stale = False
         if lost or status.state in ("Alarm", "Sleep"):
             return DeviceWhere(None, None, position_lost=True, detail=lost or f"GRBL is in {status.state} state")
         deadline = self.clock.now() + SETTLE_LIMIT_S
         while True:
             held = status.held
-            pen = self._pen_down_of(status)  # as it came to rest: the reset ending a hold lifts the pen
             if held:  # no line is parsed during a hold: end it as _connect would, position kept when at rest
+                pen = self._pen_down_of(status)  # as it came to rest: the reset that ends the hold lifts the pen
                 self.soft_reset()
                 self._settle()
                 if self.query_status().state == "Alarm":
@@ -428,11 +423,8 @@ class GrblPlotter(GrblStream):
             # GRBL answers $$ with motion still queued behind a long (garbled) dwell: let that run out too
             if self.clock.now() >= deadline:
                 raise LinkTimeout(f"grbl: still {status.state} {SETTLE_LIMIT_S}s after reconnecting")
-            self._stale = True
-            try:
+            with self._stale_acks():
                 status = self._settled_status()
-            finally:
-                self._stale = False
         if not held:
             pen = self._pen_down_of(status)
         steps = min(settings.get(100, math.inf), settings.get(101, math.inf))
@@ -457,13 +449,9 @@ class GrblPlotter(GrblStream):
     def _ran_before(self, garbled: SentLeg, at: tuple[float, float], tolerance: float) -> bool:
         """True when GRBL stopped at ``at`` on the path sent before the ``garbled`` line (it never reached it)."""
         q = np.asarray(at, dtype=np.float64)
-        for leg in self.legs[: self.legs.index(garbled)] if garbled in self.legs else []:
-            a, b = np.asarray(leg.start), np.asarray(leg.end)
-            d = b - a
-            t = 0.0 if not d.any() else min(1.0, max(0.0, float((q - a) @ d) / float(d @ d)))
-            if float(np.hypot(*(a + t * d - q))) <= tolerance:
-                return True
-        return False
+        before = self.legs[: self.legs.index(garbled)] if garbled in self.legs else []
+        return any(near_segment(q, np.asarray(leg.start, dtype=np.float64), np.asarray(leg.end, dtype=np.float64),
+                                tolerance) is not None for leg in before)
 
     def _pen_position(self) -> tuple[float, float] | None:
         """Where the pen will be once everything sent has run (device units), the start of the next travel."""

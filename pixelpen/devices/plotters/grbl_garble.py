@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pixelpen.devices.plotters.resume import near_segment
+
 __all__ = ["Garble", "SentLeg", "explain_position", "garbled_variants", "words_of"]
 
 
@@ -96,12 +98,8 @@ class Garble:
             return None
         unit = (b - a) / length
         wrong = v - a
-        span = float(wrong @ wrong)
-        ran = 1.0  # share of start -> target run: all of it, unless the stop lies on the way
-        if span > 0:
-            u = min(1.0, max(0.0, float((np.asarray(stop, dtype=np.float64) - a) @ wrong) / span))
-            if float(np.hypot(*(a + u * wrong - stop))) <= tolerance:
-                ran = u
+        on_the_way = near_segment(np.asarray(stop, dtype=np.float64), a, v, tolerance)
+        ran = 1.0 if on_the_way is None else on_the_way  # the share of start -> target run: all, unless it stopped
         off = abs(float(wrong[0] * unit[1] - wrong[1] * unit[0]))  # the target's distance from the leg's line
         if off * ran > tolerance:
             return None  # it left the leg: a stray line (its first stretch near the leg is drawn again)
@@ -128,11 +126,7 @@ def explain_position(
     q = np.asarray(position, dtype=np.float64)
 
     def on(a: tuple[float, float], b: tuple[float, float], p: np.ndarray = q) -> bool:
-        pa, pb = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
-        d = pb - pa
-        dd = float(d @ d)
-        t = 0.0 if dd == 0 else min(1.0, max(0.0, float((p - pa) @ d) / dd))
-        return float(np.hypot(*(pa + t * d - p))) <= tolerance
+        return near_segment(p, np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64), tolerance) is not None
 
     if since is not None:
         seen = np.asarray(since, dtype=np.float64)
@@ -145,9 +139,11 @@ def explain_position(
             out.append((words, (x, y)))
         return out
 
+    variants = [targets(leg) for leg in legs]
+
     def moved() -> Garble | None:
         for i, leg in enumerate(legs):
-            for _, (x, y) in targets(leg):
+            for _, (x, y) in variants[i]:
                 if math.hypot(x - leg.end[0], y - leg.end[1]) > tolerance and (
                         on(leg.start, (x, y)) or (i + 1 < len(legs) and on((x, y), legs[i + 1].end))):
                     return Garble(leg, (x, y))
@@ -155,7 +151,7 @@ def explain_position(
 
     def lifted() -> Garble | None:
         for i, leg in enumerate(legs):
-            for words, (x, y) in targets(leg):
+            for words, (x, y) in variants[i]:
                 down = False if 5 in words.get("M", []) else is_down(words["S"][0]) if "S" in words else leg.down
                 if (x, y) == leg.end and down != leg.down and pen_down == down:
                     for later in legs[i:]:

@@ -8,8 +8,10 @@ See the plotter's module docstring for how strokes are confirmed and checked.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -94,6 +96,15 @@ class GrblStream(PlotterDisplay):
     _garbled: Garble | None
     _on_path: tuple[float, float] | None
     _fault_hold: bool
+
+    @contextlib.contextmanager
+    def _stale_acks(self) -> Iterator[None]:
+        """While inside: acknowledgements and errors are of an earlier connection's lines, counted and ignored."""
+        self._stale = True
+        try:
+            yield
+        finally:
+            self._stale = False
 
     def _wait_acks(self) -> None:
         while len(self.counter):

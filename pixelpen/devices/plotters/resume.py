@@ -84,7 +84,7 @@ def locate(
     prev, prev_index = before, None
     for index, pts in window:
         p = np.asarray(pts, float)
-        t = _near_segment(q, prev, p[0], tol) if prev is not None and up_ok else None
+        t = near_segment(q, prev, p[0], tol) if prev is not None and up_ok else None
         if t is not None and not (prev_index is not None and not lifts(prev_index)
                                   and np.hypot(*(q - prev)) <= tol and np.hypot(*(q - p[0])) > tol):
             found.append(ResumePoint(index))  # travelling to the stroke's start, or there with the pen still up
@@ -96,7 +96,7 @@ def locate(
                     found.append(ResumePoint(index + 1))
         else:
             for j in range(len(p) - 1):
-                t = _near_segment(q, p[j], p[j + 1], tol)
+                t = near_segment(q, p[j], p[j + 1], tol)
                 if t is None:
                     continue
                 length = float(np.hypot(*(p[j + 1] - p[j])))
@@ -118,8 +118,8 @@ def locate(
     return _distinct(found, tol)
 
 
-def _near_segment(q: np.ndarray, a: np.ndarray, b: np.ndarray, tol: float) -> float | None:
-    """Parameter t in 0..1 of the point of segment a-b nearest q, if q lies within ``tol`` of it."""
+def near_segment(q: np.ndarray, a: np.ndarray, b: np.ndarray, tol: float) -> float | None:
+    """Parameter t in 0..1 of the point of segment a-b nearest q (float64 arrays), if q lies within ``tol`` of it."""
     d = b - a
     dd = float(d @ d)
     t = 0.0 if dd == 0 else min(1.0, max(0.0, float((q - a) @ d) / dd))
