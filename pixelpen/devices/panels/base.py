@@ -549,14 +549,14 @@ class PanelDisplay(RasterDisplay):
 
     # -- the bus, counted -------------------------------------------------------------------------
     def _command(self, *cmd: int | bytes) -> None:
-        """``bus.command`` with the bytes counted in the frame's statistics."""
-        self._frame.bytes += sum(1 if isinstance(c, int) else len(c) for c in cmd)
+        """``bus.command`` with the bytes counted in the frame's statistics once the bus has taken them."""
         self.wiring.bus.command(*cmd)
+        self._frame.bytes += sum(1 if isinstance(c, int) else len(c) for c in cmd)
 
     def _data(self, data: bytes) -> None:
-        """``bus.data`` with the bytes counted."""
-        self._frame.bytes += len(data)
+        """``bus.data`` with the bytes counted once the bus has taken them."""
         self.wiring.bus.data(data)
+        self._frame.bytes += len(data)
 
 
 def _turned(size: tuple[int, int] | None, profile: PanelProfile) -> bool:

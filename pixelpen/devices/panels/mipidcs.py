@@ -108,34 +108,38 @@ class MipiDcsDisplay(PanelDisplay):
 
     def _write_windows(self, windows: list[Rect], packed: list[bytes]) -> None:
         """Per window CASET and RASET (each left out when the window before set the same columns or rows: the
-        controller keeps them, and RAMWR starts again at the window's first pixel), RAMWR and the pixels; the rows
-        mapped through the hardware scroll, a window wrapping its ring sent as two."""
+        controller keeps them), RAMWR and the pixels; the rows mapped through the hardware scroll, a window
+        wrapping its ring sent as two.  Each call's bytes are counted once the bus has taken them."""
         bus = self.wiring.bus
-        command, data, ring = bus.command, bus.data, self._scroll.rows
+        command, data, pair, ring = bus.command, bus.data, _PAIR.pack, self._scroll.rows
         x, y = self._offsets
         columns: tuple[int, int] | None = None
         rows: tuple[int, int] | None = None
         sent = 0
         try:
             for (x0, y0, x1, y1), pixels in zip(windows, packed, strict=True):
+                if columns != (x0, x1):
+                    columns = (x0, x1)
+                    command(CASET)
+                    sent += 1
+                    data(pair(x0 + x, x1 - 1 + x))
+                    sent += 4
                 spans = ring(y0, y1)
                 row_bytes = len(pixels) // (y1 - y0)
                 start = 0
                 for span in spans:
-                    if columns != (x0, x1):
-                        columns = (x0, x1)
-                        sent += 5
-                        command(CASET)
-                        data(_PAIR.pack(x0 + x, x1 - 1 + x))
                     if rows != span:
                         rows = span
-                        sent += 5
                         command(RASET)
-                        data(_PAIR.pack(span[0] + y, span[1] - 1 + y))
-                    end = start + (span[1] - span[0]) * row_bytes
-                    sent += 1 + end - start
+                        sent += 1
+                        data(pair(span[0] + y, span[1] - 1 + y))
+                        sent += 4
                     command(RAMWR)
-                    data(pixels if len(spans) == 1 else pixels[start:end])
+                    sent += 1
+                    end = start + (span[1] - span[0]) * row_bytes
+                    chunk = pixels if len(spans) == 1 else pixels[start:end]
+                    data(chunk)
+                    sent += len(chunk)
                     start = end
         finally:
             self._frame.bytes += sent

@@ -128,11 +128,16 @@ class SSD1306Display(PanelDisplay):
         return p.ram_size[0] - p.size[0] - p.column_offset
 
     def _write_windows(self, windows: list[Rect], packed: list[bytes]) -> None:
-        """Per window its column and page window (``21 cs ce 22 ps pe``), then its page bytes."""
-        x = self.column_start
-        for (x0, y0, x1, y1), pixels in zip(windows, packed, strict=True):
-            self._command(COLUMN_ADDRESS, x0 + x, x1 - 1 + x, PAGE_ADDRESS, y0 // 8, (y1 - 1) // 8)
-            self._data(pixels)
+        """Per window its column and page window (``21 cs ce 22 ps pe``), then its page bytes (counted once sent)."""
+        bus, x, sent = self.wiring.bus, self.column_start, 0
+        try:
+            for (x0, y0, x1, y1), pixels in zip(windows, packed, strict=True):
+                bus.command(COLUMN_ADDRESS, x0 + x, x1 - 1 + x, PAGE_ADDRESS, y0 // 8, (y1 - 1) // 8)
+                sent += 6
+                bus.data(pixels)
+                sent += len(pixels)
+        finally:
+            self._frame.bytes += sent
 
     def _power(self, on: bool) -> None:
         self._command(DISPLAY_ON if on else DISPLAY_OFF)
