@@ -226,7 +226,7 @@ def clip_faces_homogeneous(vertices: ArrayLike, faces: ArrayLike) -> FaceClip:
 def _clip_faces(rows: np.ndarray, faces: np.ndarray) -> FaceClip:
     """clip_faces_homogeneous of validated vertices (N, 4) and faces (T, 3)."""
     inside = _inside(rows)
-    whole = inside[faces].all(axis=1)
+    whole = np.take(inside, faces[:, 0]) & np.take(inside, faces[:, 1]) & np.take(inside, faces[:, 2])
     rest = np.flatnonzero(~whole)
     tri = rows[faces[rest]]  # (R, 3, 4)
     slack = _slack(tri)

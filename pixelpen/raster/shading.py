@@ -94,6 +94,14 @@ def _polygon_means(group: np.ndarray, size: int, weight: np.ndarray, centroids: 
     return centroid / total[:, None], normal
 
 
+def _used_vertices(faces: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """The vertices (U,) ascending that (T, 3) faces over ``count`` vertices use, and the faces renumbered to them."""
+    used = np.zeros(count, dtype=bool)
+    used[faces.reshape(-1)] = True
+    renumber = np.cumsum(used) - 1
+    return np.flatnonzero(used), np.take(renumber, faces, mode="clip")
+
+
 class Shader:
     """One mesh's shading, prepared once (validation, lighting per polygon or vertex) for any number of fragment
     sets: ``Shader(vertices, faces, ...)(fragments)`` -> intensities (F, 3) in [0, 1] (see :func:`shade`)."""
@@ -136,10 +144,11 @@ class Shader:
             return
         given = _normals(vertex_normals, verts.shape[0], "vertex_normals")
         normals = Mesh(verts, tris).vertex_normals() if given is None else given
-        if self.mode == "gouraud":
-            scale, specular = illumination_terms(verts, normals, *self._terms)
-            self._values = [Interpolant(combine(base, scale, specular), tris) if colours is None else Interpolant(
-                combine(colours[:, None, :], scale[tris], specular[tris]))]
+        if self.mode == "gouraud":  # lit once at each vertex the faces use (a mesh's back half is often unused)
+            used, corners = _used_vertices(tris, verts.shape[0])
+            scale, specular = illumination_terms(verts[used], normals[used], *self._terms)
+            self._values = [Interpolant(combine(base, scale, specular), corners) if colours is None else Interpolant(
+                combine(colours[:, None, :], scale[corners], specular[corners]))]
         else:
             self._values = [Interpolant(verts, tris), Interpolant(normals, tris)]
 

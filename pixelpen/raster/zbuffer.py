@@ -22,8 +22,9 @@ Conventions:
   index (absolute error about 1e-16·|dz/dx|·width·height); weights as planes in x along each row.
 
 Algorithm: per triangle, vertices sorted by y (A, B, C); the long edge AC bounds one side of every row, the
-edges AB and BC the other (the nearer of their two crossings, as the triangle is convex).  Triangles are
-bucketed by (row count, side) and each bucket's rows are one (rows x triangles) broadcast of exact crossings.
+edges AB and BC the other (the nearer of their two crossings, as the triangle is convex).  Every (triangle, row)
+is one entry of flat arrays (the triangles' values gathered to their rows) and all rows' exact crossings are one
+vectorised pass, with no loop over triangle shapes.
 Rows become pixel runs by a ragged expansion in chunks of about :data:`CHUNK` pixels (cache-sized buffers);
 pass 1 takes ``np.minimum.at`` of the depths into the buffer; pass 2 (on pass 1's chunks, or regenerated ones
 past :data:`KEEP_PIXELS`) keeps the fragments equal to the new depth and strictly nearer than before - all of
@@ -250,8 +251,8 @@ def _planes(v: np.ndarray, det: np.ndarray, z: np.ndarray, inv_w: np.ndarray | N
 
 def _setup(xy: np.ndarray, z: np.ndarray, inv_w: np.ndarray | None, width: int, height: int,
            top: int) -> tuple[np.ndarray, _Rows]:
-    """Snap, sort and bucket the triangles (frame rows from ``top`` on): the weight slopes (K, T) of
-    :func:`_planes` and the pixel runs of every row the triangles cover."""
+    """Snap the triangles (frame rows from ``top`` on): the weight slopes (K, T) of :func:`_planes` and the pixel
+    runs of every row the triangles cover, triangle by triangle."""
     snapped = np.empty((2, 3, len(xy)))  # x and y rows of each vertex, in 1/SUBPIXEL px, centres at integers
     np.multiply(xy.transpose(2, 1, 0), SUBPIXEL, out=snapped)
     np.rint(snapped, out=snapped)
@@ -268,68 +269,42 @@ def _setup(xy: np.ndarray, z: np.ndarray, inv_w: np.ndarray | None, width: int, 
     slope = np.zeros((2 if inv_w is None else 3, len(xy)))
     if keep.size == 0:
         return slope, _no_rows()
-    key = count[keep] * 2 + pair_left[keep]
-    if int(key.max()) <= np.iinfo(np.uint16).max:
-        key = key.astype(np.uint16)  # a radix sort
-    order = keep[np.argsort(key, kind="stable")]
-    # per selected triangle, in bucket order
-    v = np.take(snapped, order, axis=2, mode="clip")
-    r0, xmin, xmax, count, left_side = (np.take(a, order, mode="clip") for a in (r0, xmin, xmax, count, pair_left))
+    v = np.take(snapped, keep, axis=2, mode="clip")
+    r0, xmin, xmax, count, left_side = (np.take(a, keep, mode="clip") for a in (r0, xmin, xmax, count, pair_left))
     # the determinant in pixels² is the exact one in snapped units scaled by a power of two: exact too
-    det_px = np.take(det, order, mode="clip") / (SUBPIXEL * SUBPIXEL)
-    gx, gy, zc, slope_o, rise_w, const = _planes(v / SUBPIXEL, det_px, np.take(z.T, order, axis=1, mode="clip"),
-                                               None if inv_w is None else np.take(inv_w.T, order, axis=1, mode="clip"))
-    slope[:, order] = slope_o
-    n_planes = slope.shape[0]
+    det_px = np.take(det, keep, mode="clip") / (SUBPIXEL * SUBPIXEL)
+    gx, gy, zc, slope_k, rise_w, const = _planes(v / SUBPIXEL, det_px, np.take(z.T, keep, axis=1, mode="clip"),
+                                               None if inv_w is None else np.take(inv_w.T, keep, axis=1, mode="clip"))
+    slope[:, keep] = slope_k
     # rows carry K + 1 planes along the frame rows: depth at the flat index 0 of the row, then the weights
     rise = np.concatenate([(gy - gx * width)[None], rise_w])
     plane0 = np.concatenate([zc[None], const])
     plane0 += rise * r0
-    key = count * 2 + left_side
     n0, step, den = _edges(*_sorted_by_y(v), np.where(left_side, -_NEUTRAL, _NEUTRAL))
     n0 += step * r0
-    base = r0 * width
-    cuts = np.concatenate(([0], np.flatnonzero(np.diff(key)) + 1))
-    inside = np.minimum.reduceat((xmin >= 0) & (xmax <= width * SUBPIXEL - SUBPIXEL), cuts).tolist()
-    bounds = [*cuts.tolist(), key.size]
-    total = int(count.sum())
-    planes = np.empty((n_planes + 1, total))
-    rows = _Rows(np.empty(total), np.empty(total), planes[0], np.empty(total),
-                 np.empty(total, dtype=np.int64), planes[1:])
-    j = np.arange(int(count[-1]), dtype=np.float64)[:, None]
-    cross = np.empty(3 * total)
-    pos = 0
-    for (lo, hi), within in zip(itertools.pairwise(bounds), inside, strict=True):
-        n, left = divmod(int(key[lo]), 2)
-        size = n * (hi - lo)
-        jj = j[:n]
-        sl = slice(lo, hi)
-        shape = (n, hi - lo)
-        c = cross[:3 * size].reshape((3, *shape))
-        np.multiply(step[:, None, sl], jj, out=c)
-        c += n0[:, None, sl]
-        c /= den[:, None, sl]
-        np.ceil(c, out=c)
-        first = rows.start[pos:pos + size].reshape(shape)
-        if left:
-            np.maximum(c[0], c[1], out=first)
-            last = c[2]
-        else:
-            np.minimum(c[0], c[1], out=c[1])
-            first[...] = c[2]
-            last = c[1]
-        if not within:
-            np.clip(first, 0, width, out=first)
-            np.clip(last, 0, width, out=last)
-        np.subtract(last, first, out=rows.length[pos:pos + size].reshape(shape))
-        first += base[sl]
-        first += jj * width
-        rows.gz[pos:pos + size].reshape(shape)[...] = gx[sl]
-        rows.face[pos:pos + size].reshape(shape)[...] = order[sl]
-        p0 = planes[:, pos:pos + size].reshape((-1, *shape))
-        np.multiply(rise[:, None, sl], jj, out=p0)
-        p0 += plane0[:, None, sl]
-        pos += size
+    # one row per (triangle, row): its triangle (in keep order) and its row j from the triangle's first
+    tri = np.repeat(np.arange(keep.size), count)
+    j = np.arange(tri.size, dtype=np.float64)
+    j -= np.take(np.cumsum(count) - count, tri, mode="clip")
+    cross = np.take(step, tri, axis=1, mode="clip")  # the crossing of row j: ceil((n0 + step·j) / den)
+    cross *= j
+    cross += np.take(n0, tri, axis=1, mode="clip")
+    cross /= np.take(den, tri, axis=1, mode="clip")
+    np.ceil(cross, out=cross)
+    left = np.take(left_side, tri, mode="clip")
+    first = np.where(left, np.maximum(cross[0], cross[1]), cross[2])
+    last = np.where(left, cross[2], np.minimum(cross[0], cross[1], out=cross[1]))
+    if not ((xmin >= 0) & (xmax <= width * SUBPIXEL - SUBPIXEL)).all():
+        np.clip(first, 0, width, out=first)
+        np.clip(last, 0, width, out=last)
+    length = np.subtract(last, first, out=last)
+    first += np.take(r0 * width, tri, mode="clip")
+    first += j * width
+    planes = np.take(rise, tri, axis=1, mode="clip")
+    planes *= j
+    planes += np.take(plane0, tri, axis=1, mode="clip")
+    rows = _Rows(first, length, planes[0], np.take(gx, tri, mode="clip"), np.take(keep, tri, mode="clip"),
+                 planes[1:])
     return slope, rows
 
 

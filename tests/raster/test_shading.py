@@ -365,3 +365,21 @@ def test_ambient_alone_with_ka_one_shows_exactly_the_face_colours_through_the_zb
     expected = [[round(255 * c) for c in row] for row in colours.tolist()]
     assert len(frags) > 300
     np.testing.assert_array_equal(canvas.array[frags.ys, frags.xs], np.array(expected)[frags.face])
+
+
+@pytest.mark.parametrize("face_colours", [None, [[0.3, 0.6, 0.9]]])
+def test_gouraud_lights_only_the_vertices_the_faces_use_with_the_same_values(face_colours):
+    # one face over vertices 1, 3, 2 of four (vertex 0 unused): each fragment is the barycentric mix of the scalar
+    # reference at the corners it uses
+    normals = np.array([[0.0, 0.0, 1.0], [0.3, 0.1, 1.0], [-0.2, 0.4, 1.0], [0.1, -0.3, 1.0]])
+    lights = [Light("ambient", (0.2, 0.2, 0.2)), Light("point", (0.9, 0.8, 0.7), position=(0.3, 0.2, 2.0))]
+    material = Material(colour=(0.9, 0.5, 0.1), ka=0.5, kd=0.6, ks=0.4, n=7)
+    viewer = Viewer(position=(0.5, 0.5, 3.0))
+    bary = random_bary(np.random.default_rng(9), 25)
+    out = shade(fragments([0] * 25, bary), VERTICES, [[1, 3, 2]], mode="gouraud", material=material, lights=lights,
+                viewer=viewer, vertex_normals=normals, face_colours=face_colours)
+    colour = material if face_colours is None else Material(colour=tuple(face_colours[0]), ka=0.5, kd=0.6, ks=0.4,
+                                                             n=7)
+    corners = [np.array(reference_intensity(list(VERTICES[i]), list(normals[i]), colour, lights, viewer))
+               for i in (1, 3, 2)]
+    np.testing.assert_allclose(out, bary @ np.array(corners), rtol=1e-12, atol=1e-15)
