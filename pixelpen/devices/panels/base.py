@@ -28,7 +28,7 @@ import numpy as np
 
 from pixelpen.clock import REAL_CLOCK, Clock, SimulatedClock
 from pixelpen.devices.panels.frames import FrameStats, PanelStats
-from pixelpen.devices.panels.packing import pack_windows, to_units, update_units
+from pixelpen.devices.panels.packing import keep_windows, pack_windows, to_units, update_units
 from pixelpen.devices.panels.scrolling import HardwareScroll
 from pixelpen.devices.panels.trim import trim_damage
 from pixelpen.devices.panels.windows import MAX_WINDOWS, WindowCost, window_cost
@@ -496,17 +496,20 @@ class PanelDisplay(RasterDisplay):
         is timed once, host seconds up to the first bus call, bus seconds (the display's clock) from there."""
         started = time.perf_counter()
         frame = self._frame = FrameStats(full=self._full or self.refresh_mode == "full")
+        cost, fmt = self.cost, self.pixel_format
         native = self._native(canvas.array)
         height, width = native.shape[:2]
         shadow = self._shadow
         if frame.full or shadow is None or shadow.shape[:2] != (height, width):
             rects = [Rect(0, 0, width, height)]
             frame.full = True
-            self._units = to_units(native, self.pixel_format)
+            self._units = to_units(native, fmt)
             units = native if self._units is None else self._units
             shadow = self._shadow = np.empty_like(units)
         else:
-            damage = [self._native_rect(r, canvas.width, canvas.height) for r in canvas.damage()]
+            damage = canvas.damage()
+            if self._soft_turn():
+                damage = [self._native_rect(r, canvas.width, canvas.height) for r in damage]
             damage = self._scroll.detect(native, damage, shadow, self._units)
             native, damage = self._scroll.to_ram(native, damage)
             if self._units is None:
@@ -514,21 +517,19 @@ class PanelDisplay(RasterDisplay):
             else:
                 units = self._units
                 update_units(units, native, damage)
-            rects = trim_damage(damage, units, shadow, self.cost)
+            rects = trim_damage(damage, units, shadow, cost)
         if not rects and not self._scroll.pending:
             return
         if frame.full or not rects:
             windows = rects
         elif len(rects) <= MAX_WINDOWS:  # trim's cut is already planned by the cost model
-            windows = self.cost.cut_or_bounding(rects)
+            windows = cost.cut_or_bounding(rects)
         else:
-            windows = self.cost.plan(rects, width=width, height=height)
+            windows = cost.plan(rects, width=width, height=height)
         self._full = True  # until the last window is out
-        fmt = self.pixel_format
         packed = pack_windows(units.view(np.bool_) if self.canvas_mode == "1" else units, windows, fmt,
-                              self.cost.align[1] if fmt == "mono-pages" else 1)
-        for x0, y0, x1, y1 in windows:
-            shadow[y0:y1, x0:x1] = units[y0:y1, x0:x1]
+                              cost.align[1] if fmt == "mono-pages" else 1)
+        keep_windows(shadow, units, windows)
         frame.host_seconds = time.perf_counter() - started
         self._wait_te()
         on_bus = self.clock.now()

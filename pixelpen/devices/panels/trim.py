@@ -116,7 +116,7 @@ def _row_bands(mask: np.ndarray, band: int) -> tuple[np.ndarray, np.ndarray, np.
     run_top = np.flatnonzero(new_run)
     if run_top.size > MAX_WINDOWS:  # too many runs: one from the first changed row to the last
         lit, run_top = np.arange(top, top + span), run_top[:1]
-    run_rows = np.diff(run_top, append=lit.size)
+    run_rows = _lengths(run_top, lit.size)
     while int((-(-run_rows // band)).sum()) > MAX_WINDOWS:
         band += 1
     per_run = -(-run_rows // band)
@@ -124,9 +124,20 @@ def _row_bands(mask: np.ndarray, band: int) -> tuple[np.ndarray, np.ndarray, np.
     row_band = np.repeat(np.cumsum(per_run) - per_run, run_rows) + from_top // band
     grouped = np.zeros((int(per_run.sum()), band, mask.shape[1]), dtype=bool)
     grouped[row_band, from_top % band] = mask[lit]
-    firsts = np.flatnonzero(np.diff(row_band, prepend=-1))
+    starts = np.ones(lit.size, dtype=bool)
+    np.not_equal(row_band[1:], row_band[:-1], out=starts[1:])
+    firsts = np.flatnonzero(starts)
     ored = np.asarray(grouped.any(axis=1))
-    return ored, lit[firsts], np.diff(firsts, append=lit.size)
+    return ored, lit[firsts], _lengths(firsts, lit.size)
+
+
+def _lengths(starts: np.ndarray, end: int) -> np.ndarray:
+    """Lengths of the runs starting at ``starts`` (increasing), the last one ending at ``end`` (np.diff with an
+    appended ``end``, without its concatenation)."""
+    out = np.empty_like(starts)
+    np.subtract(starts[1:], starts[:-1], out=out[:-1])
+    out[-1] = end - starts[-1]
+    return out
 
 
 def _band_runs(mask: np.ndarray, band: int, unit_bytes: float, window_bytes: int) -> np.ndarray:

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pixelpen.devices.panels.packing import PACK_ONCE, pack_windows, to_units, update_units
+from pixelpen.devices.panels.packing import PACK_ONCE, keep_windows, pack_windows, to_units, update_units
 from pixelpen.raster.damage import Rect
 from pixelpen.raster.formats import pack
 
@@ -87,3 +87,19 @@ def test_units_are_rgb565_values_updated_only_inside_the_damage() -> None:
     expected = np.zeros((6, 8), np.uint16)
     expected[2:4, 1:3] = 0xF800 | 0x0020 | 0x0001
     np.testing.assert_array_equal(units, expected)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 95), st.integers(0, 63), st.integers(1, 40), st.integers(1, 30)),
+                min_size=1, max_size=6), st.integers(0, 2**32 - 1))
+def test_keep_windows_makes_the_shadow_the_sent_frame_whether_copied_by_box_or_per_window(boxes, seed):
+    """Where the new frame differs from the shadow only inside the windows, the shadow afterwards is the new frame
+    (a copy of the windows' bounding box touches outside them only pixels already equal)."""
+    rng = np.random.default_rng(seed)
+    shadow = rng.integers(0, 1 << 16, (64, 96), dtype=np.uint16)
+    units = shadow.copy()
+    windows = [Rect(x, y, min(x + w, 96), min(y + h, 64)) for x, y, w, h in boxes]
+    for x0, y0, x1, y1 in windows:
+        units[y0:y1, x0:x1] = rng.integers(0, 1 << 16, (y1 - y0, x1 - x0), dtype=np.uint16)
+    keep_windows(shadow, units, windows)
+    assert np.array_equal(shadow, units)
