@@ -6,7 +6,7 @@ that broke parsers before: huge numbers, ``1e400``, ``nan``, deep nesting, NUL, 
 calls the target on each.  A case fails when the target raises anything but the allowed errors
 (``PixelpenError`` by default), runs longer than ``seconds_per_case``, or allocates more than
 ``memory_mb`` (tracemalloc peak).  The default suite runs :data:`QUICK_CASES` cases per parser;
-``pytest -m slow`` runs the :data:`SLOW_CASES` campaigns.
+``pytest -m slow`` runs the :data:`SLOW_CASES` campaigns (:func:`depths` parametrizes a test for both).
 """
 
 from __future__ import annotations
@@ -18,6 +18,8 @@ import traceback
 import tracemalloc
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+
+import pytest
 
 from pixelpen.errors import PixelpenError
 
@@ -32,6 +34,15 @@ TOKENS: tuple[bytes, ...] = (
     b"1e-300", b"-0", b"4294967296", b"18446744073709551617", b"\r\n", b"\x1b.", b"\x03", b"%",
 )
 """Byte strings inserted by the ``token`` mutation."""
+
+
+def depths(quick_seed: int = 1, slow_seed: int = 2) -> pytest.MarkDecorator:
+    """A campaign test parametrized by ``cases`` and ``seed``: :data:`QUICK_CASES` in the default suite,
+    :data:`SLOW_CASES` under ``pytest -m slow``."""
+    return pytest.mark.parametrize(("cases", "seed"), [
+        pytest.param(QUICK_CASES, quick_seed, id="quick"),
+        pytest.param(SLOW_CASES, slow_seed, id="slow", marks=pytest.mark.slow),
+    ])
 
 
 class _CaseTimeout(Exception):
@@ -64,7 +75,8 @@ class CampaignResult:
     peak_mb: float = 0.0
 
     def check(self) -> None:
-        """Fail the test with the first few failing inputs, if any."""
+        """Print the summary; fail the test with the first few failing inputs, if any."""
+        print(self.summary())
         if self.failures:
             shown = "\n".join(str(f) for f in self.failures[:5])
             raise AssertionError(f"{self.name}: {len(self.failures)} of {self.cases} cases failed\n{shown}")

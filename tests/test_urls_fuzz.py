@@ -4,12 +4,10 @@ from __future__ import annotations
 
 import contextlib
 
-import pytest
-
 from pixelpen.errors import PixelpenError
 from pixelpen.options import OptionSpec, boolean
 from pixelpen.urls import check_path, format_url, parse_size, parse_url
-from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
+from tests.fuzzing import campaign, depths
 
 SEEDS = [
     url.encode() for url in (
@@ -43,12 +41,6 @@ def test_the_seeds_are_valid_urls():
         parse_and_read(seed)
 
 
-def test_url_fuzz_quick():
-    campaign("urls", parse_and_read, SEEDS, QUICK_CASES, seed=1).check()
-
-
-@pytest.mark.slow
-def test_url_fuzz_slow():
-    result = campaign("urls", parse_and_read, SEEDS, SLOW_CASES, seed=2)
-    print(result.summary())
-    result.check()
+@depths()
+def test_url_fuzz(cases, seed):
+    campaign("urls", parse_and_read, SEEDS, cases, seed=seed).check()

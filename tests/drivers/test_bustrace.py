@@ -11,7 +11,7 @@ from pixelpen.drivers.bus import PanelBus, command_bytes
 from pixelpen.drivers.bustrace import RecordingBus, ReplayBus, parse_bus_trace, read_bus_trace
 from pixelpen.drivers.trace import read_trace
 from pixelpen.errors import LinkError, ParseError, TraceMismatch
-from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
+from tests.fuzzing import campaign, depths
 
 
 class StubBus:
@@ -317,12 +317,6 @@ def read_and_replay(data: bytes) -> None:
     replay.check_complete()
 
 
-def test_bus_trace_reader_fuzz_quick():
-    campaign("bus traces", read_and_replay, _seeds(), QUICK_CASES, seed=3).check()
-
-
-@pytest.mark.slow
-def test_bus_trace_reader_fuzz_slow():
-    result = campaign("bus traces", read_and_replay, _seeds(), SLOW_CASES, seed=4)
-    print(result.summary())
-    result.check()
+@depths(3, 4)
+def test_bus_trace_reader_fuzz(cases, seed):
+    campaign("bus traces", read_and_replay, _seeds(), cases, seed=seed).check()

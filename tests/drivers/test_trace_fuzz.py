@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import io
 
-import pytest
-
 from pixelpen.drivers.trace import ReplayLink, format_chunk, format_header, read_trace
-from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
+from tests.fuzzing import campaign, depths
 
 
 def _seeds() -> list[bytes]:
@@ -41,12 +39,6 @@ def test_the_seeds_are_valid_traces():
         read_and_replay(seed)
 
 
-def test_trace_reader_fuzz_quick():
-    campaign("traces", read_and_replay, SEEDS, QUICK_CASES, seed=1).check()
-
-
-@pytest.mark.slow
-def test_trace_reader_fuzz_slow():
-    result = campaign("traces", read_and_replay, SEEDS, SLOW_CASES, seed=2)
-    print(result.summary())
-    result.check()
+@depths()
+def test_trace_reader_fuzz(cases, seed):
+    campaign("traces", read_and_replay, SEEDS, cases, seed=seed).check()

@@ -5,11 +5,9 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
-import pytest
-
 from pixelpen.profiles import load_profile, load_vpype_config
 from pixelpen.profiles.model import MAX_PAPERS, MAX_PENS
-from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
+from tests.fuzzing import campaign, depths
 from tests.profiles.test_model import VPYPE
 
 SEEDS = [
@@ -46,12 +44,6 @@ def test_the_seeds_are_valid(tmp_path):
     assert set(load_vpype_config(path)) == {"hp7475a", "roland"}
 
 
-def test_profile_reader_fuzz_quick(tmp_path):
-    campaign("profiles", reader(tmp_path / "p.toml"), SEEDS, QUICK_CASES, seed=1).check()
-
-
-@pytest.mark.slow
-def test_profile_reader_fuzz_slow(tmp_path):
-    result = campaign("profiles", reader(tmp_path / "p.toml"), SEEDS, SLOW_CASES, seed=2)
-    print(result.summary())
-    result.check()
+@depths()
+def test_profile_reader_fuzz(tmp_path, cases, seed):
+    campaign("profiles", reader(tmp_path / "p.toml"), SEEDS, cases, seed=seed).check()

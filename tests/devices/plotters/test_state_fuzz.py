@@ -9,7 +9,7 @@ import pytest
 
 from pixelpen.devices.plotters.state import PlotState
 from pixelpen.errors import ParseError
-from tests.fuzzing import QUICK_CASES, SLOW_CASES, campaign
+from tests.fuzzing import campaign, depths
 
 SEEDS = [
     json.dumps(fields).encode() for fields in (
@@ -38,15 +38,9 @@ def test_the_seeds_are_valid_state_files(tmp_path):
         reader(tmp_path / "s.json")(seed)
 
 
-def test_state_fuzz_quick(tmp_path):
-    campaign("plot state", reader(tmp_path / "s.json"), SEEDS, QUICK_CASES, seed=1).check()
-
-
-@pytest.mark.slow
-def test_state_fuzz_slow(tmp_path):
-    result = campaign("plot state", reader(tmp_path / "s.json"), SEEDS, SLOW_CASES, seed=2)
-    print(result.summary())
-    result.check()
+@depths()
+def test_state_fuzz(tmp_path, cases, seed):
+    campaign("plot state", reader(tmp_path / "s.json"), SEEDS, cases, seed=seed).check()
 
 
 @pytest.mark.parametrize(("data", "message"), [
